@@ -1,0 +1,46 @@
+// Errors and invariant checks shared by the whole renderer.
+//
+// Setup failures throw bounce::Error with a formatted message and the source location;
+// BOUNCE_CHECK guards invariants and prints the values that broke them.
+#pragma once
+
+#include <fmt/format.h>
+
+#include <source_location>
+#include <stdexcept>
+#include <string>
+
+namespace bounce {
+
+class Error : public std::runtime_error {
+public:
+    explicit Error(const std::string& message) : std::runtime_error(message) {}
+};
+
+// Thrown for input a caller supplied (a scene file, a knob value): the message names the fault.
+class InputError : public Error {
+public:
+    using Error::Error;
+};
+
+namespace detail {
+[[noreturn]] void throw_error(const std::string& message, const std::source_location& where);
+}
+
+template <typename... Args>
+[[noreturn]] void fail(const std::source_location& where, fmt::format_string<Args...> format,
+                       Args&&... args) {
+    detail::throw_error(fmt::format(format, std::forward<Args>(args)...), where);
+}
+
+}  // namespace bounce
+
+#define BOUNCE_FAIL(...) ::bounce::fail(std::source_location::current(), __VA_ARGS__)
+
+#define BOUNCE_CHECK(condition, ...)                                                          \
+    do {                                                                                      \
+        if (!(condition)) {                                                                   \
+            ::bounce::fail(std::source_location::current(), "check failed: {}: {}", #condition, \
+                           fmt::format(__VA_ARGS__));                                         \
+        }                                                                                     \
+    } while (false)

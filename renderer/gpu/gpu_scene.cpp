@@ -1,0 +1,121 @@
+#include "renderer/gpu/gpu_scene.hpp"
+
+#include "common/shared_layout.h"
+
+#include <cstddef>
+
+namespace bounce::gpu {
+namespace {
+
+struct Vertex {
+    glm::vec3 position;
+    glm::vec3 normal;
+    glm::vec4 tangent;
+    glm::vec2 uv0;
+    glm::vec2 uv1;
+};
+
+GpuPrimitive upload(const scene::Primitive& source) {
+    std::vector<Vertex> vertices(source.positions.size());
+    for (std::size_t i = 0; i < vertices.size(); ++i) {
+        Vertex& v = vertices[i];
+        v.position = source.positions[i];
+        v.normal = i < source.normals.size() ? source.normals[i] : glm::vec3(0.0f, 1.0f, 0.0f);
+        v.tangent = i < source.tangents.size() ? source.tangents[i] : glm::vec4(1.0f, 0.0f, 0.0f, 1.0f);
+        v.uv0 = i < source.uv0.size() ? source.uv0[i] : glm::vec2(0.0f);
+        v.uv1 = i < source.uv1.size() ? source.uv1[i] : v.uv0;
+    }
+    GpuPrimitive primitive;
+    primitive.vertices = Buffer(vertices.size() * sizeof(Vertex), vertices.data());
+    primitive.indices = Buffer(source.indices.size() * sizeof(std::uint32_t), source.indices.data());
+    primitive.index_count = static_cast<GLsizei>(source.indices.size());
+    primitive.material = source.material;
+    primitive.vertex_array = make_vertex_array();
+
+    const GLuint vao = primitive.vertex_array.id();
+    glVertexArrayVertexBuffer(vao, 0, primitive.vertices.id(), 0, sizeof(Vertex));
+    glVertexArrayElementBuffer(vao, primitive.indices.id());
+    auto attribute = [vao](GLuint location, GLint components, std::size_t offset) {
+        glEnableVertexArrayAttrib(vao, location);
+        glVertexArrayAttribFormat(vao, location, components, GL_FLOAT, GL_FALSE, static_cast<GLuint>(offset));
+        glVertexArrayAttribBinding(vao, location, 0);
+    };
+    attribute(BOUNCE_ATTR_POSITION, 3, offsetof(Vertex, position));
+    attribute(BOUNCE_ATTR_NORMAL, 3, offsetof(Vertex, normal));
+    attribute(BOUNCE_ATTR_TANGENT, 4, offsetof(Vertex, tangent));
+    attribute(BOUNCE_ATTR_UV0, 2, offsetof(Vertex, uv0));
+    attribute(BOUNCE_ATTR_UV1, 2, offsetof(Vertex, uv1));
+    return primitive;
+}
+
+Texture upload(const scene::Texture& source) {
+    const GLenum format = source.srgb ? GL_SRGB8_ALPHA8 : GL_RGBA8;
+    Texture texture({GL_TEXTURE_2D, format, source.width, source.height, 1, 0});
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    glTextureSubImage2D(texture.id(), 0, 0, 0, source.width, source.height, GL_RGBA, GL_UNSIGNED_BYTE,
+                        source.rgba8.data());
+    glGenerateTextureMipmap(texture.id());
+    return texture;
+}
+
+}  // namespace
+
+GpuScene::GpuScene(const scene::Scene& scene) : scene_(&scene) {
+    for (const scene::Mesh& mesh : scene.meshes) {
+        auto& primitives = meshes_.emplace_back();
+        for (const scene::Primitive& source : mesh.primitives) {
+            primitives.push_back(upload(source));
+            geometry_bytes_ += primitives.back().vertices.bytes() + primitives.back().indices.bytes();
+        }
+    }
+    for (const scene::Texture& source : scene.textures) {
+        if (source.width <= 0 || source.height <= 0 || source.rgba8.empty()) {
+            textures_.emplace_back();  // decoding failed at import: the material uses its factors only
+            continue;
+        }
+        textures_.push_back(upload(source));
+        texture_bytes_ += textures_.back().bytes();
+    }
+    material_sampler_ = make_sampler();
+    glSamplerParameteri(material_sampler_.id(), GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
+    glSamplerParameteri(material_sampler_.id(), GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glSamplerParameteri(material_sampler_.id(), GL_TEXTURE_WRAP_S, GL_REPEAT);
+    glSamplerParameteri(material_sampler_.id(), GL_TEXTURE_WRAP_T, GL_REPEAT);
+}
+
+void GpuScene::draw(const GpuPrimitive& primitive) {
+    if (primitive.index_count == 0) return;
+    glBindVertexArray(primitive.vertex_array.id());
+    glDrawElements(GL_TRIANGLES, primitive.index_count, GL_UNSIGNED_INT, nullptr);
+}
+
+void GpuScene::bind_material(const ShaderProgram& program, int material_index) const {
+    const scene::Material& material = scene_->material(material_index);
+    program.set("u_base_color", material.base_color);
+    program.set("u_metallic", material.metallic);
+    program.set("u_roughness", material.roughness);
+    program.set("u_specular", material.specular);
+    program.set("u_emissive", material.emissive);
+    program.set("u_normal_scale", material.normal_scale);
+    program.set("u_double_sided", material.double_sided ? 1 : 0);
+    auto bind = [&](const scene::TextureRef& ref, GLuint unit, const char* uv_uniform) {
+        const bool usable = ref.valid() && ref.texture < static_cast<int>(textures_.size()) &&
+                            static_cast<bool>(textures_[ref.texture]);
+        program.set(uv_uniform, usable ? ref.uv_set : -1);
+        if (usable) {
+            glBindTextureUnit(unit, textures_[ref.texture].id());
+            glBindSampler(unit, material_sampler_.id());
+        }
+    };
+    bind(material.base_color_texture, BOUNCE_UNIT_BASE_COLOR, "u_base_color_uv");
+    bind(material.metallic_roughness_texture, BOUNCE_UNIT_METALLIC_ROUGHNESS, "u_metallic_roughness_uv");
+    bind(material.normal_texture, BOUNCE_UNIT_NORMAL, "u_normal_uv");
+    bind(material.emissive_texture, BOUNCE_UNIT_EMISSIVE, "u_emissive_uv");
+}
+
+void set_object_transform(const ShaderProgram& program, const glm::mat4& model) {
+    program.set("u_model", model);
+    program.set("u_normal_matrix", glm::mat3(glm::transpose(glm::inverse(model))));
+}
+
+}  // namespace bounce::gpu

@@ -1,0 +1,71 @@
+// GLSL programs built from the shaders embedded at build time, with `#include "common/x.glsl"`
+// resolved from the same set. Compile errors name the file and line they come from.
+#pragma once
+
+#include "renderer/gpu/gl_objects.hpp"
+
+#include <glm/glm.hpp>
+
+#include <map>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <unordered_map>
+#include <vector>
+
+namespace bounce::gpu {
+
+struct ProgramSource {
+    std::string vertex;    // path relative to shaders/, e.g. "passes/gbuffer.vert"
+    std::string fragment;  // may be empty for depth-only programs
+    std::vector<std::string> defines;  // "NAME" or "NAME VALUE"
+
+    std::string key() const;
+};
+
+// A GLSL source with its includes expanded, and the file name behind each `#line` source number.
+struct ExpandedSource {
+    std::string text;
+    std::vector<std::string> files;
+};
+
+// Expands `path` from the embedded files (each include once). Throws Error naming the missing file
+// and who included it.
+ExpandedSource expand_shader_source(const std::string& path, const std::vector<std::string>& defines);
+
+// Rewrites a driver's info log so "0:12(3)" and "0(12)" name the file: "common/brdf.glsl:12(3)".
+std::string annotate_info_log(const std::string& log, const std::vector<std::string>& files);
+
+class ShaderProgram {
+public:
+    // Throws Error with the annotated compile or link log.
+    explicit ShaderProgram(const ProgramSource& source);
+    GLuint id() const { return program_.id(); }
+    void use() const { glUseProgram(program_.id()); }
+
+    // Uniform setters; unknown names (optimized away) are ignored.
+    void set(std::string_view name, int value) const;
+    void set(std::string_view name, float value) const;
+    void set(std::string_view name, const glm::vec2& value) const;
+    void set(std::string_view name, const glm::vec3& value) const;
+    void set(std::string_view name, const glm::vec4& value) const;
+    void set(std::string_view name, const glm::mat3& value) const;
+    void set(std::string_view name, const glm::mat4& value) const;
+
+private:
+    GLint location(std::string_view name) const;
+    ProgramObject program_;
+    mutable std::unordered_map<std::string, GLint> locations_;
+};
+
+// Programs compiled once per context and shared by every pass and method.
+class ShaderCache {
+public:
+    const ShaderProgram& get(const ProgramSource& source);
+    std::size_t size() const { return programs_.size(); }
+
+private:
+    std::map<std::string, std::unique_ptr<ShaderProgram>> programs_;
+};
+
+}  // namespace bounce::gpu

@@ -1,0 +1,48 @@
+// The interface every global-illumination method implements, and what a frame hands it.
+//
+// A method is a plug-in: one folder under renderer/methods/, one class behind this interface,
+// registered by name in registry.cpp with its knobs and presets. Nothing outside its folder knows
+// its internals. A method instance lives as long as its scene is resident, so it keeps its
+// precomputed structures between frames and rebuilds only what a change invalidates.
+#pragma once
+
+#include "renderer/passes/pass_context.hpp"
+
+#include <map>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace bounce::methods {
+
+// Knob values by name, after presets and overrides are resolved and validated.
+using KnobValues = std::map<std::string, double>;
+
+// A structure a method keeps resident, its size, and why the scene needs it.
+struct ResidentStructure {
+    std::string name;
+    std::size_t bytes = 0;
+    std::string reason;
+};
+
+// Everything a method needs to render one frame: the pass context plus the resolved knobs. The
+// method draws linear HDR radiance into `output` (RGBA32F, width x height, alpha = coverage),
+// clearing it first.
+struct FrameContext : passes::PassContext {
+    const KnobValues& knobs;
+
+    // A knob's value (validated by the registry, so present for every knob the method declares).
+    double knob(std::string_view name) const;
+    int knob_int(std::string_view name) const { return static_cast<int>(knob(name)); }
+};
+
+class Method {
+public:
+    virtual ~Method() = default;
+    virtual std::string_view name() const = 0;
+    virtual void render(const FrameContext& frame) = 0;
+    // The structures held right now, with their bytes and the reason each exists.
+    virtual std::vector<ResidentStructure> resident() const = 0;
+};
+
+}  // namespace bounce::methods

@@ -1,0 +1,50 @@
+// The string-keyed factory of methods: each method's knobs (with ranges), its presets from
+// `draft` to `ultra`, and how to create it. Unknown methods, presets, knobs or out-of-range values
+// are InputErrors that name what was wrong and what is accepted.
+#pragma once
+
+#include "renderer/methods/method.hpp"
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace bounce::methods {
+
+struct KnobSpec {
+    std::string name;
+    double min = 0.0;
+    double max = 1.0;
+    bool integer = false;
+    std::string description;
+};
+
+// Presets every method defines, from fastest to most accurate.
+const std::vector<std::string>& preset_names();
+
+struct MethodInfo {
+    std::string name;
+    std::string description;
+    std::vector<KnobSpec> knobs;
+    std::map<std::string, KnobValues> presets;  // every name of preset_names(), every knob set
+    std::function<std::unique_ptr<Method>()> create;
+};
+
+class MethodRegistry {
+public:
+    // The registry with every built-in method.
+    static const MethodRegistry& builtin();
+
+    void add(MethodInfo info);  // throws Error if the info is incomplete
+    const MethodInfo& find(const std::string& method) const;
+    std::vector<std::string> names() const;
+    // The preset's values with `overrides` applied, every value validated.
+    KnobValues resolve(const std::string& method, const std::string& preset, const KnobValues& overrides) const;
+    std::unique_ptr<Method> create(const std::string& method) const;
+
+private:
+    std::vector<MethodInfo> methods_;
+};
+
+}  // namespace bounce::methods

@@ -1,0 +1,38 @@
+// Shadow maps for punctual lights: a cube map per point light, a perspective map per spot light,
+// an orthographic map fitted to the scene per directional light. A light with no power gets no
+// map (it cannot reach the view).
+#pragma once
+
+#include "renderer/passes/pass_context.hpp"
+
+#include <vector>
+
+namespace bounce::passes {
+
+class ShadowMaps {
+public:
+    // Renders a map of `size` texels per side for every light of the scene that has power.
+    void render(const PassContext& context, int size);
+    // Whether light `index` has a map (false for lights without power).
+    bool has_map(std::size_t light_index) const;
+    // Sets the shadow uniforms of common/shadows.glsl on `program` and binds the light's map.
+    void bind(const gpu::ShaderProgram& program, std::size_t light_index) const;
+    std::size_t bytes() const;
+    std::size_t map_count() const;
+
+private:
+    struct LightMap {
+        scene::LightType type = scene::LightType::point;
+        gpu::Texture depth;
+        glm::mat4 view_projection{1.0f};
+        float far = 1.0f;
+        float texel_angle = 0.0f;  // world texel size per unit distance (perspective maps)
+        float texel_world = 0.0f;  // world texel size (orthographic maps)
+        bool valid = false;
+    };
+    void render_view(const PassContext& context, const gpu::ShaderProgram& program, const glm::mat4& view_projection);
+    std::vector<LightMap> maps_;
+    gpu::Framebuffer framebuffer_;
+};
+
+}  // namespace bounce::passes

@@ -1,0 +1,123 @@
+#include "renderer/renderer.hpp"
+
+#include "renderer/base/error.hpp"
+#include "renderer/base/log.hpp"
+
+#include <chrono>
+
+namespace bounce {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point start) {
+    return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+// Reads a texture back into rows top to bottom (GL's origin is bottom-left).
+template <typename T>
+std::vector<T> read_texture(const gpu::Texture& texture, GLenum type) {
+    const std::size_t row = static_cast<std::size_t>(texture.width()) * 4;
+    std::vector<T> bottom_up(row * texture.height());
+    glPixelStorei(GL_PACK_ALIGNMENT, 1);
+    glGetTextureImage(texture.id(), 0, GL_RGBA, type, static_cast<GLsizei>(bottom_up.size() * sizeof(T)),
+                      bottom_up.data());
+    std::vector<T> top_down(bottom_up.size());
+    for (int y = 0; y < texture.height(); ++y) {
+        std::copy_n(bottom_up.begin() + static_cast<std::ptrdiff_t>(row * y), row,
+                    top_down.begin() + static_cast<std::ptrdiff_t>(row * (texture.height() - 1 - y)));
+    }
+    return top_down;
+}
+
+}  // namespace
+
+std::vector<methods::ResidentStructure> SceneResources::resident() const {
+    std::vector<methods::ResidentStructure> structures = {
+        {"geometry", gpu_scene.geometry_bytes(), "vertex and index buffers of every mesh"},
+        {"textures", gpu_scene.texture_bytes(), "material textures with mipmaps"}};
+    for (const auto& [name, method] : methods) {
+        for (auto structure : method->resident()) {
+            structure.name = name + "." + structure.name;
+            structures.push_back(std::move(structure));
+        }
+    }
+    return structures;
+}
+
+scene::Camera camera_for(const scene::Scene& scene, const RenderRequest& request) {
+    if (request.camera) return *request.camera;
+    if (!scene.cameras.empty()) return scene.cameras.front();
+    const scene::Aabb bounds = scene.world_bounds();
+    if (bounds.empty()) return scene::Camera::look_at({0, 0, 1}, {0, 0, 0}, {0, 1, 0}, 0.8f);
+    const float radius = std::max(0.5f * glm::length(bounds.extent()), 1e-6f);
+    const float distance = radius / std::sin(0.4f) * 1.1f;
+    return scene::Camera::look_at(bounds.center() + glm::vec3(0, 0, distance), bounds.center(), {0, 1, 0}, 0.8f);
+}
+
+Renderer::Renderer(const gpu::DeviceChoice& device) : context_(gpu::EglContext::create(device)) {}
+
+Renderer::~Renderer() {
+    // GL objects must go while the context is current; members are destroyed before context_.
+    context_->make_current();
+}
+
+std::unique_ptr<SceneResources> Renderer::upload(const scene::Scene& scene) {
+    return std::make_unique<SceneResources>(scene);
+}
+
+RenderResult Renderer::render(SceneResources& resources, const RenderRequest& request) {
+    const auto start = Clock::now();
+    if (request.width < 1 || request.height < 1 || request.width > kMaxDimension || request.height > kMaxDimension) {
+        throw InputError(fmt::format("frame size {}x{} is outside 1..{} per side", request.width, request.height,
+                                     kMaxDimension));
+    }
+    const auto& registry = methods::MethodRegistry::builtin();
+    const methods::KnobValues knobs = registry.resolve(request.method, request.preset, request.knobs);
+    auto& method = resources.methods[request.method];
+    if (!method) method = registry.create(request.method);
+
+    if (!output_ || output_.width() != request.width || output_.height() != request.height) {
+        output_ = gpu::Texture({GL_TEXTURE_2D, GL_RGBA32F, request.width, request.height});
+        output_.set_filter(GL_NEAREST, GL_NEAREST);
+        output_framebuffer_ = gpu::Framebuffer();
+        output_framebuffer_.attach_color(0, output_);
+        output_framebuffer_.set_draw_buffers(1);
+        output_framebuffer_.check_complete("the HDR output");
+    }
+
+    const scene::Scene& scene = resources.gpu_scene.scene();
+    const scene::Camera camera = camera_for(scene, request);
+    const float aspect = static_cast<float>(request.width) / static_cast<float>(request.height);
+    const glm::mat4 view = camera.view();
+    const glm::mat4 projection = camera.projection(aspect, camera.far_plane_for(scene.world_bounds()));
+    const methods::FrameContext frame{
+        {scene, resources.gpu_scene, shaders_, state_, timers_, output_framebuffer_, request.width, request.height,
+         camera, view, projection, projection * view},
+        knobs};
+
+    timers_.begin_frame();
+    method->render(frame);
+    const gpu::Texture* display = nullptr;
+    if (request.make_display_image) display = &tonemap_.run(shaders_, state_, timers_, output_, request.display);
+
+    RenderResult result;
+    const auto readback_start = Clock::now();
+    result.frame.width = request.width;
+    result.frame.height = request.height;
+    result.frame.rgba = read_texture<float>(output_, GL_FLOAT);
+    if (display) result.frame.display_rgba8 = read_texture<std::uint8_t>(*display, GL_UNSIGNED_BYTE);
+    result.stats.readback_ms = ms_since(readback_start);
+
+    FrameStats& stats = result.stats;
+    stats.method = request.method;
+    stats.preset = request.preset;
+    stats.knobs = knobs;
+    stats.passes = timers_.resolve();
+    for (const auto& pass : stats.passes) stats.gpu_ms += pass.gpu_ms;
+    stats.resident = resources.resident();
+    for (const auto& structure : stats.resident) stats.resident_bytes += structure.bytes;
+    stats.render_ms = ms_since(start);
+    return result;
+}
+
+}  // namespace bounce

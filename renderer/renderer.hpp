@@ -1,0 +1,89 @@
+// The render entry point: owns the EGL context and what every method shares (shader cache, state
+// owner, timers, tone mapping, the output target), and renders a scene with a method into a frame.
+// One thread, the render thread, creates a Renderer and makes every call on it.
+#pragma once
+
+#include "renderer/gpu/egl_device.hpp"
+#include "renderer/image/frame.hpp"
+#include "renderer/image/tone.hpp"
+#include "renderer/methods/registry.hpp"
+#include "renderer/passes/tonemap_pass.hpp"
+
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+
+namespace bounce {
+
+struct RenderRequest {
+    std::string method = "direct";
+    std::string preset = "medium";
+    methods::KnobValues knobs;  // overrides of the preset
+    int width = 512;
+    int height = 512;
+    std::optional<scene::Camera> camera;  // default: the scene's first camera
+    image::DisplayTransform display;
+    bool make_display_image = true;  // tone-map to 8-bit sRGB as well (PNG, JPEG)
+};
+
+struct FrameStats {
+    std::string method;
+    std::string preset;
+    methods::KnobValues knobs;
+    std::vector<gpu::PassTiming> passes;
+    double gpu_ms = 0.0;       // sum of the passes
+    double render_ms = 0.0;    // wall time of render() on the render thread
+    double readback_ms = 0.0;  // part of render_ms spent reading pixels back
+    std::vector<methods::ResidentStructure> resident;
+    std::size_t resident_bytes = 0;
+};
+
+struct RenderResult {
+    image::Frame frame;
+    FrameStats stats;
+};
+
+// A scene's resident GPU state: its geometry and textures and the methods that rendered it (with
+// their precomputed structures). Destroy it on the render thread, before the Renderer.
+class SceneResources {
+public:
+    explicit SceneResources(const scene::Scene& scene) : gpu_scene(scene) {}
+    gpu::GpuScene gpu_scene;
+    std::map<std::string, std::unique_ptr<methods::Method>> methods;
+
+    std::vector<methods::ResidentStructure> resident() const;
+};
+
+class Renderer {
+public:
+    explicit Renderer(const gpu::DeviceChoice& device);
+    ~Renderer();
+    Renderer(const Renderer&) = delete;
+    Renderer& operator=(const Renderer&) = delete;
+
+    const gpu::GpuInfo& gpu_info() const { return context_->info(); }
+
+    // Uploads a scene; the Scene must outlive the returned resources (they read its transforms,
+    // lights and materials at every frame).
+    std::unique_ptr<SceneResources> upload(const scene::Scene& scene);
+
+    // Throws InputError for bad requests (unknown method, preset or knob, size out of range).
+    RenderResult render(SceneResources& resources, const RenderRequest& request);
+
+    static constexpr int kMaxDimension = 16384;
+
+private:
+    std::unique_ptr<gpu::EglContext> context_;  // first member: destroyed last
+    gpu::ShaderCache shaders_;
+    gpu::StateCache state_;
+    gpu::GpuTimers timers_;
+    passes::TonemapPass tonemap_;
+    gpu::Texture output_;
+    gpu::Framebuffer output_framebuffer_;
+};
+
+// The camera a request renders with: its own, the scene's first, or one that frames the scene.
+scene::Camera camera_for(const scene::Scene& scene, const RenderRequest& request);
+
+}  // namespace bounce

@@ -1,0 +1,154 @@
+#include "renderer/scene/builtin.hpp"
+
+#include "renderer/base/error.hpp"
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include <array>
+#include <cmath>
+
+namespace bounce::scene {
+namespace {
+
+using Quad = std::array<glm::vec3, 4>;
+
+constexpr float kMillimetre = 0.001f;
+
+// Appends a quad as two triangles, wound so its geometric normal points along `facing` (the
+// published data does not give a consistent winding).
+void add_quad(Primitive& primitive, const Quad& corners_mm, const glm::vec3& facing, const glm::vec3& origin) {
+    Quad q;
+    for (int i = 0; i < 4; ++i) q[i] = corners_mm[i] * kMillimetre - origin;
+    glm::vec3 normal = glm::normalize(glm::cross(q[1] - q[0], q[2] - q[0]));
+    if (glm::dot(normal, facing) < 0.0f) {
+        std::swap(q[1], q[3]);
+        normal = -normal;
+    }
+    const auto base = static_cast<std::uint32_t>(primitive.positions.size());
+    const glm::vec2 uvs[4] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+    const glm::vec3 tangent = glm::normalize(q[1] - q[0]);
+    for (int i = 0; i < 4; ++i) {
+        primitive.positions.push_back(q[i]);
+        primitive.normals.push_back(normal);
+        primitive.tangents.emplace_back(tangent, 1.0f);
+        primitive.uv0.push_back(uvs[i]);
+        primitive.bounds.extend(q[i]);
+    }
+    for (std::uint32_t index : {0u, 1u, 2u, 0u, 2u, 3u}) primitive.indices.push_back(base + index);
+}
+
+Material lambertian(const std::string& name, const glm::vec3& reflectance) {
+    Material material;
+    material.name = name;
+    material.base_color = glm::vec4(reflectance, 1.0f);
+    material.metallic = 0.0f;
+    material.roughness = 1.0f;
+    material.specular = 0.0f;  // the measured surfaces are matte: pure Lambertian
+    return material;
+}
+
+// A block from its five published faces (mm), as an object whose origin is its base centre.
+Object add_block(Scene& scene, const std::string& name, const std::array<Quad, 5>& faces_mm, int material) {
+    glm::vec3 centre_mm(0.0f);
+    for (const Quad& face : faces_mm)
+        for (const glm::vec3& p : face) centre_mm += p / 20.0f;
+    const glm::vec3 origin{centre_mm.x * kMillimetre, 0.0f, centre_mm.z * kMillimetre};
+
+    Mesh mesh;
+    mesh.name = name;
+    Primitive primitive;
+    primitive.material = material;
+    for (const Quad& face : faces_mm) {
+        const glm::vec3 face_centre = (face[0] + face[1] + face[2] + face[3]) * 0.25f;
+        add_quad(primitive, face, face_centre - centre_mm, origin);  // outward
+    }
+    mesh.bounds = primitive.bounds;
+    mesh.primitives.push_back(std::move(primitive));
+    scene.meshes.push_back(std::move(mesh));
+
+    Object object;
+    object.name = name;
+    object.mesh = static_cast<int>(scene.meshes.size()) - 1;
+    object.initial_transform = object.transform = glm::translate(glm::mat4(1.0f), origin);
+    return object;
+}
+
+}  // namespace
+
+Scene make_cornell_box() {
+    Scene scene;
+    scene.name = "cornell";
+    // Published RGB reflectances of the Cornell box surfaces.
+    scene.materials = {lambertian("white", {0.725f, 0.71f, 0.68f}), lambertian("red", {0.63f, 0.065f, 0.05f}),
+                       lambertian("green", {0.14f, 0.45f, 0.091f})};
+    constexpr int white = 0, red = 1, green = 2;
+
+    // The room (published measured geometry, mm), normals facing into the box.
+    const glm::vec3 inside{278.0f, 274.4f, 279.6f};
+    const Quad floor{{{552.8f, 0, 0}, {0, 0, 0}, {0, 0, 559.2f}, {549.6f, 0, 559.2f}}};
+    const Quad ceiling{{{556.0f, 548.8f, 0}, {556.0f, 548.8f, 559.2f}, {0, 548.8f, 559.2f}, {0, 548.8f, 0}}};
+    const Quad back{{{549.6f, 0, 559.2f}, {0, 0, 559.2f}, {0, 548.8f, 559.2f}, {556.0f, 548.8f, 559.2f}}};
+    const Quad right{{{0, 0, 559.2f}, {0, 0, 0}, {0, 548.8f, 0}, {0, 548.8f, 559.2f}}};
+    const Quad left{{{552.8f, 0, 0}, {549.6f, 0, 559.2f}, {556.0f, 548.8f, 559.2f}, {556.0f, 548.8f, 0}}};
+    Mesh room;
+    room.name = "room";
+    auto wall_primitive = [&](std::initializer_list<Quad> quads, int material) {
+        Primitive primitive;
+        primitive.material = material;
+        for (const Quad& quad : quads) {
+            const glm::vec3 centre = (quad[0] + quad[1] + quad[2] + quad[3]) * 0.25f;
+            add_quad(primitive, quad, inside - centre, glm::vec3(0.0f));
+        }
+        room.bounds.extend(primitive.bounds);
+        room.primitives.push_back(std::move(primitive));
+    };
+    wall_primitive({floor, ceiling, back}, white);
+    wall_primitive({left}, red);
+    wall_primitive({right}, green);
+    scene.meshes.push_back(std::move(room));
+    Object room_object;
+    room_object.name = "room";
+    room_object.mesh = 0;
+    scene.objects.push_back(room_object);
+
+    scene.objects.push_back(add_block(scene, "short_block",
+        {{{{{130.0f, 165.0f, 65.0f}, {82.0f, 165.0f, 225.0f}, {240.0f, 165.0f, 272.0f}, {290.0f, 165.0f, 114.0f}}},
+          {{{290.0f, 0.0f, 114.0f}, {290.0f, 165.0f, 114.0f}, {240.0f, 165.0f, 272.0f}, {240.0f, 0.0f, 272.0f}}},
+          {{{130.0f, 0.0f, 65.0f}, {130.0f, 165.0f, 65.0f}, {290.0f, 165.0f, 114.0f}, {290.0f, 0.0f, 114.0f}}},
+          {{{82.0f, 0.0f, 225.0f}, {82.0f, 165.0f, 225.0f}, {130.0f, 165.0f, 65.0f}, {130.0f, 0.0f, 65.0f}}},
+          {{{240.0f, 0.0f, 272.0f}, {240.0f, 165.0f, 272.0f}, {82.0f, 165.0f, 225.0f}, {82.0f, 0.0f, 225.0f}}}}},
+        white));
+    scene.objects.push_back(add_block(scene, "tall_block",
+        {{{{{423.0f, 330.0f, 247.0f}, {265.0f, 330.0f, 296.0f}, {314.0f, 330.0f, 456.0f}, {472.0f, 330.0f, 406.0f}}},
+          {{{423.0f, 0.0f, 247.0f}, {423.0f, 330.0f, 247.0f}, {472.0f, 330.0f, 406.0f}, {472.0f, 0.0f, 406.0f}}},
+          {{{472.0f, 0.0f, 406.0f}, {472.0f, 330.0f, 406.0f}, {314.0f, 330.0f, 456.0f}, {314.0f, 0.0f, 456.0f}}},
+          {{{314.0f, 0.0f, 456.0f}, {314.0f, 330.0f, 456.0f}, {265.0f, 330.0f, 296.0f}, {265.0f, 0.0f, 296.0f}}},
+          {{{265.0f, 0.0f, 296.0f}, {265.0f, 330.0f, 296.0f}, {423.0f, 330.0f, 247.0f}, {423.0f, 0.0f, 247.0f}}}}},
+        white));
+
+    // A white point light 10 mm below the centre of the published ceiling light (343..213 x 227..332).
+    Light light;
+    light.name = "ceiling_light";
+    light.type = LightType::point;
+    light.position = glm::vec3(278.0f, 538.8f, 279.5f) * kMillimetre;
+    light.color = glm::vec3(1.0f);
+    light.intensity = 0.5f;  // W/sr: about 0.4 W/(m^2 sr) off the floor under it
+    scene.lights.push_back(light);
+
+    // The published camera: at (278, 273, -800) mm looking along +z, 35 mm lens on a 25 mm film.
+    Camera camera = Camera::look_at(glm::vec3(278.0f, 273.0f, -800.0f) * kMillimetre,
+                                    glm::vec3(278.0f, 273.0f, 0.0f) * kMillimetre, {0.0f, 1.0f, 0.0f},
+                                    2.0f * std::atan(12.5f / 35.0f));
+    camera.name = "default";
+    scene.cameras.push_back(camera);
+    return scene;
+}
+
+std::vector<std::string> builtin_scene_names() { return {"cornell"}; }
+
+Scene make_builtin_scene(const std::string& name) {
+    if (name == "cornell") return make_cornell_box();
+    throw InputError(fmt::format("unknown built-in scene '{}' (known: cornell)", name));
+}
+
+}  // namespace bounce::scene

@@ -1,0 +1,43 @@
+// The material model and punctual lights on the CPU: the twin of shaders/common/brdf.glsl and
+// shaders/common/lights.glsl, used by the reference path tracer and by tests as the analytic
+// answer. docs/methods.md states the model; both implementations must agree.
+#pragma once
+
+#include "renderer/scene/scene.hpp"
+
+#include <glm/glm.hpp>
+
+namespace bounce::scene {
+
+struct SurfaceMaterial {
+    glm::vec3 base_color{0.8f};
+    float metallic = 0.0f;
+    float roughness = 1.0f;
+    float specular = 1.0f;
+
+    static SurfaceMaterial from(const Material& material);
+};
+
+inline constexpr float kMinGgxAlpha = 1e-3f;
+inline constexpr float kDielectricF0 = 0.04f;
+
+float ggx_alpha(float roughness);
+float ggx_distribution(float n_dot_h, float alpha);
+float smith_visibility(float n_dot_l, float n_dot_v, float alpha);
+
+// f(l, v): n, v, l unit vectors, v towards the viewer, l towards the light.
+glm::vec3 evaluate_brdf(const SurfaceMaterial& material, const glm::vec3& n, const glm::vec3& v,
+                        const glm::vec3& l);
+
+// glTF's spot falloff for the cosine of the angle from the spot axis.
+float spot_attenuation(const Light& light, float cos_angle);
+
+struct LightIncidence {
+    glm::vec3 l{0.0f};       // unit direction towards the light
+    float distance = 0.0f;   // infinite for directional lights
+    glm::vec3 irradiance{0.0f};  // on a surface facing the light, before cos and visibility
+};
+
+LightIncidence light_incidence(const Light& light, const glm::vec3& p);
+
+}  // namespace bounce::scene

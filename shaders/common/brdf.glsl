@@ -1,0 +1,65 @@
+// The one BRDF every method uses (docs/methods.md; C++ twin: renderer/scene/shading.cpp).
+// glTF metallic-roughness with KHR_materials_specular: Lambertian diffuse and a GGX lobe
+// (height-correlated Smith visibility, Schlick Fresnel); the diffuse part is weighted by what the
+// specular interface transmits in and out, so energy is conserved.
+#include "common/math.glsl"
+
+struct SurfaceMaterial {
+    vec3 base_color;
+    float metallic;
+    float roughness;  // perceptual; alpha = roughness^2
+    float specular;   // 0 turns the dielectric lobe off (pure Lambertian)
+};
+
+const float MIN_GGX_ALPHA = 1e-3;
+const float DIELECTRIC_F0 = 0.04;
+
+float ggx_alpha(float roughness) { return max(roughness * roughness, MIN_GGX_ALPHA); }
+
+float ggx_distribution(float n_dot_h, float alpha) {
+    float a2 = alpha * alpha;
+    float d = n_dot_h * n_dot_h * (a2 - 1.0) + 1.0;
+    return a2 / (PI * d * d);
+}
+
+// Smith height-correlated visibility V = G / (4 n.l n.v).
+float smith_visibility(float n_dot_l, float n_dot_v, float alpha) {
+    float a2 = alpha * alpha;
+    float gv = n_dot_l * sqrt(n_dot_v * n_dot_v * (1.0 - a2) + a2);
+    float gl = n_dot_v * sqrt(n_dot_l * n_dot_l * (1.0 - a2) + a2);
+    return 0.5 / max(gv + gl, 1e-12);
+}
+
+float schlick_weight(float v_dot_h) {
+    float m = saturate(1.0 - v_dot_h);
+    float m2 = m * m;
+    return m2 * m2 * m;
+}
+
+float dielectric_fresnel(float specular, float cos_angle) {
+    return specular * (DIELECTRIC_F0 + (1.0 - DIELECTRIC_F0) * schlick_weight(cos_angle));
+}
+
+// f(l, v) for unit vectors; zero when either is below the surface.
+vec3 evaluate_brdf(SurfaceMaterial m, vec3 n, vec3 v, vec3 l) {
+    float n_dot_l = dot(n, l);
+    float n_dot_v = dot(n, v);
+    if (n_dot_l <= 0.0) return vec3(0.0);
+    // Shading normals can face away from the viewer (normal maps); keep the lobe finite.
+    n_dot_v = max(n_dot_v, 1e-4);
+    vec3 h = safe_normalize(l + v, n);
+    float n_dot_h = saturate(dot(n, h));
+    float v_dot_h = saturate(dot(v, h));
+    float alpha = ggx_alpha(m.roughness);
+    float specular_lobe = ggx_distribution(n_dot_h, alpha) * smith_visibility(n_dot_l, n_dot_v, alpha);
+    float fw = schlick_weight(v_dot_h);
+
+    // The diffuse part keeps what specular reflection leaves on the way in and on the way out;
+    // weighting it by 1 - F(v.h) instead (glTF's mix) creates energy at grazing view.
+    float diffuse_weight = (1.0 - dielectric_fresnel(m.specular, n_dot_l)) *
+                           (1.0 - dielectric_fresnel(m.specular, n_dot_v));
+    vec3 dielectric = diffuse_weight * m.base_color * INV_PI + dielectric_fresnel(m.specular, v_dot_h) * specular_lobe;
+    vec3 metal_fresnel = m.base_color + (1.0 - m.base_color) * fw;
+    vec3 metal = metal_fresnel * specular_lobe;
+    return mix(dielectric, metal, m.metallic);
+}

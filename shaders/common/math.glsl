@@ -1,0 +1,18 @@
+// Constants and numerically safe helpers shared by every shader.
+const float PI = 3.14159265358979323846;
+const float INV_PI = 0.31830988618379067154;
+
+// normalize() of a zero vector is NaN; fall back to a given direction instead.
+vec3 safe_normalize(vec3 v, vec3 fallback) {
+    float len2 = dot(v, v);
+    return len2 > 1e-30 ? v * inversesqrt(len2) : fallback;
+}
+
+float saturate(float x) { return clamp(x, 0.0, 1.0); }
+
+// Replaces NaN and infinities so that no non-finite value can reach a frame.
+vec3 finite_or_zero(vec3 v) {
+    return vec3(isnan(v.x) || isinf(v.x) ? 0.0 : v.x,
+                isnan(v.y) || isinf(v.y) ? 0.0 : v.y,
+                isnan(v.z) || isinf(v.z) ? 0.0 : v.z);
+}

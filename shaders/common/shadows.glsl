@@ -1,0 +1,36 @@
+// Shadow-map visibility for the light types of lights.glsl, with hardware depth comparison.
+// Point lights use a cube map and spot lights a 2D map, both storing distance / far (uniform
+// precision over the range); directional lights an orthographic depth map.
+#include "common/shared_layout.h"
+
+layout(binding = BOUNCE_UNIT_SHADOW_2D) uniform sampler2DShadow u_shadow_map;
+layout(binding = BOUNCE_UNIT_SHADOW_CUBE) uniform samplerCubeShadow u_shadow_cube;
+
+uniform bool u_shadows_enabled;
+uniform mat4 u_light_view_proj;   // spot and directional
+uniform float u_shadow_far;       // point and spot: distance stored as distance / far
+uniform float u_shadow_texel_angle;  // world size of one texel at unit distance (perspective maps)
+uniform float u_shadow_texel_world;  // world size of one texel (orthographic maps)
+
+// Surfaces are pushed towards their normal by about one texel before the lookup: a slope-free
+// bias that removes acne without detaching contact shadows.
+float shadow_visibility(int type, vec3 p, vec3 n, vec3 light_position, float distance) {
+    if (!u_shadows_enabled) return 1.0;
+    float texel = type == BOUNCE_LIGHT_DIRECTIONAL ? u_shadow_texel_world : u_shadow_texel_angle * distance;
+    vec3 offset_p = p + n * (1.5 * texel);
+    if (type == BOUNCE_LIGHT_POINT) {
+        vec3 from_light = offset_p - light_position;
+        float stored_ref = (length(from_light) - texel) / u_shadow_far;
+        return texture(u_shadow_cube, vec4(from_light, stored_ref));
+    }
+    vec4 clip = u_light_view_proj * vec4(offset_p, 1.0);
+    if (clip.w <= 0.0) return 0.0;
+    vec3 uvz = (clip.xyz / clip.w) * 0.5 + 0.5;
+    if (any(lessThan(uvz.xy, vec2(0.0))) || any(greaterThan(uvz.xy, vec2(1.0)))) {
+        // Outside a directional map nothing was drawn to occlude; outside a spot map the cone is 0.
+        return type == BOUNCE_LIGHT_DIRECTIONAL ? 1.0 : 0.0;
+    }
+    float reference = type == BOUNCE_LIGHT_SPOT ? (length(offset_p - light_position) - texel) / u_shadow_far
+                                                : uvz.z;
+    return texture(u_shadow_map, vec3(uvz.xy, min(reference, 1.0)));
+}

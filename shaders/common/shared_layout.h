@@ -1,0 +1,44 @@
+// Binding slots and constants shared by C++ and GLSL: this file compiles as both.
+#ifndef BOUNCE_SHARED_LAYOUT_H
+#define BOUNCE_SHARED_LAYOUT_H
+
+// Vertex attribute locations (renderer/gpu/gpu_scene.cpp sets up the matching vertex format).
+#define BOUNCE_ATTR_POSITION 0
+#define BOUNCE_ATTR_NORMAL 1
+#define BOUNCE_ATTR_TANGENT 2
+#define BOUNCE_ATTR_UV0 3
+#define BOUNCE_ATTR_UV1 4
+
+// Texture units: material textures.
+#define BOUNCE_UNIT_BASE_COLOR 0
+#define BOUNCE_UNIT_METALLIC_ROUGHNESS 1
+#define BOUNCE_UNIT_NORMAL 2
+#define BOUNCE_UNIT_EMISSIVE 3
+// Texture units: G-buffer.
+#define BOUNCE_UNIT_GBUFFER_POSITION 4
+#define BOUNCE_UNIT_GBUFFER_NORMAL 5
+#define BOUNCE_UNIT_GBUFFER_ALBEDO 6
+#define BOUNCE_UNIT_GBUFFER_EMISSIVE 7
+// Texture units: light-view maps and frame inputs.
+#define BOUNCE_UNIT_SHADOW_2D 8
+#define BOUNCE_UNIT_SHADOW_CUBE 9
+#define BOUNCE_UNIT_HDR_INPUT 10
+
+// G-buffer colour attachments.
+#define BOUNCE_GBUFFER_POSITION 0   // RGBA32F: world position, w = 1 where geometry was drawn
+#define BOUNCE_GBUFFER_NORMAL 1     // RGBA16F: shading normal, w = perceptual roughness
+#define BOUNCE_GBUFFER_ALBEDO 2     // RGBA16F: base colour, w = metallic
+#define BOUNCE_GBUFFER_EMISSIVE 3   // RGBA32F: emitted radiance, w = specular factor
+#define BOUNCE_GBUFFER_TARGETS 4
+
+// Light types (scene::LightType in the same order).
+#define BOUNCE_LIGHT_POINT 0
+#define BOUNCE_LIGHT_SPOT 1
+#define BOUNCE_LIGHT_DIRECTIONAL 2
+
+// Tone curves (image::ToneCurve in the same order).
+#define BOUNCE_TONE_NONE 0
+#define BOUNCE_TONE_REINHARD 1
+#define BOUNCE_TONE_ACES 2
+
+#endif

@@ -1,0 +1,18 @@
+// Display transform: exposure, a tone curve, then sRGB encoding.
+#include "common/shared_layout.h"
+
+vec3 tone_curve(vec3 x, int curve) {
+    x = max(x, vec3(0.0));
+    if (curve == BOUNCE_TONE_REINHARD) return x / (1.0 + x);
+    if (curve == BOUNCE_TONE_ACES) {
+        // Narkowicz's fit of the ACES filmic reference rendering transform.
+        return clamp((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14), 0.0, 1.0);
+    }
+    return clamp(x, 0.0, 1.0);
+}
+
+vec3 linear_to_srgb(vec3 c) {
+    vec3 low = c * 12.92;
+    vec3 high = 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055;
+    return mix(high, low, lessThanEqual(c, vec3(0.0031308)));
+}

@@ -1,0 +1,13 @@
+#version 450 core
+// Depth for light-view maps. Point-light cube faces store distance / far, so one comparison works
+// for every face; perspective and orthographic maps keep the rasterized depth.
+in vec3 v_world;
+
+uniform bool u_store_distance;
+uniform vec3 u_light_position;
+uniform float u_far;
+
+void main() {
+    gl_FragDepth = u_store_distance ? clamp(length(v_world - u_light_position) / u_far, 0.0, 1.0)
+                                    : gl_FragCoord.z;
+}

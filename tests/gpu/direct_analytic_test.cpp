@@ -1,0 +1,210 @@
+// `direct` against closed-form radiance: a Lambertian or glossy plane under each light type, a
+// blocker's shadow where geometry puts it, and emission. Tolerance: 1% relative at pixel centres
+// (the G-buffer stores positions in float and normals/material in half precision).
+#include "gpu_fixture.hpp"
+#include "renderer/scene/shading.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+namespace bounce::test {
+namespace {
+
+constexpr int kSize = 96;
+constexpr float kRelativeTolerance = 0.01f;
+
+struct PlaneSetup {
+    scene::Scene scene;
+    RenderRequest request;
+};
+
+PlaneSetup plane_under(const scene::Material& material, const scene::Light& light) {
+    PlaneSetup setup;
+    setup.scene.name = "plane";
+    setup.scene.materials.push_back(material);
+    add_square(setup.scene, "floor", glm::vec3(0.0f), 2.0f, {0, 1, 0}, 0);
+    setup.scene.lights.push_back(light);
+    setup.request.width = setup.request.height = kSize;
+    setup.request.camera = top_down_camera(2.0f, 1.2f);
+    setup.request.preset = "medium";
+    return setup;
+}
+
+scene::Light point_light(const glm::vec3& position, float intensity) {
+    scene::Light light;
+    light.name = "point";
+    light.type = scene::LightType::point;
+    light.position = position;
+    light.intensity = intensity;
+    return light;
+}
+
+// Expected radiance at a ground point from the C++ twin of the shaders' BRDF and lights.
+glm::vec3 expected_radiance(const scene::Material& material, const scene::Light& light,
+                            const scene::Camera& camera, const glm::vec3& p) {
+    const glm::vec3 n{0, 1, 0};
+    const auto incidence = scene::light_incidence(light, p);
+    const float cos_theta = std::max(glm::dot(n, incidence.l), 0.0f);
+    const glm::vec3 v = glm::normalize(camera.position - p);
+    return scene::evaluate_brdf(scene::SurfaceMaterial::from(material), n, v, incidence.l) * incidence.irradiance *
+           cos_theta;
+}
+
+// Compares every 8th pixel with the closed form; returns how many were compared.
+int expect_matches_closed_form(const PlaneSetup& setup, const RenderResult& result, float absolute_floor = 1e-6f) {
+    const auto& material = setup.scene.materials[0];
+    const auto& light = setup.scene.lights[0];
+    int compared = 0;
+    for (int y = 4; y < kSize; y += 8) {
+        for (int x = 4; x < kSize; x += 8) {
+            const glm::vec3 p = pixel_on_ground(*setup.request.camera, kSize, kSize, x, y);
+            const glm::vec3 expected = expected_radiance(material, light, *setup.request.camera, p);
+            const glm::vec3 actual{result.frame.at(x, y)};
+            for (int c = 0; c < 3; ++c) {
+                const float tolerance = std::max(kRelativeTolerance * expected[c], absolute_floor);
+                EXPECT_NEAR(actual[c], expected[c], tolerance) << "pixel " << x << "," << y << " channel " << c
+                                                               << " ground point " << p.x << "," << p.z;
+            }
+            ++compared;
+        }
+    }
+    return compared;
+}
+
+TEST(DirectAnalytic, LambertianPlaneUnderPointLight) {
+    const auto material = matte({0.5f, 0.25f, 0.8f});
+    const auto setup = plane_under(material, point_light({0.3f, 1.0f, -0.2f}, 2.0f));
+    const auto result = render_scene(setup.scene, setup.request);
+    EXPECT_EQ(expect_matches_closed_form(setup, result), 144);
+
+    // The closed form itself, independent of the BRDF code: albedo / pi * I cos(theta) / d^2.
+    const glm::vec3 p = pixel_on_ground(*setup.request.camera, kSize, kSize, 48, 48);
+    const glm::vec3 to_light = glm::vec3(0.3f, 1.0f, -0.2f) - p;
+    const float d2 = glm::dot(to_light, to_light);
+    const float cos_theta = to_light.y / std::sqrt(d2);
+    const float expected_red = 0.5f / std::numbers::pi_v<float> * 2.0f * cos_theta / d2;
+    EXPECT_NEAR(result.frame.at(48, 48).r, expected_red, kRelativeTolerance * expected_red);
+}
+
+TEST(DirectAnalytic, GlossyDielectricAndMetalMatchTheBrdf) {
+    scene::Material dielectric = matte({0.6f, 0.6f, 0.6f});
+    dielectric.roughness = 0.5f;
+    dielectric.specular = 1.0f;
+    scene::Material metal = matte({0.9f, 0.6f, 0.3f});
+    metal.metallic = 1.0f;
+    metal.roughness = 0.6f;
+    metal.specular = 1.0f;
+    for (const auto& material : {dielectric, metal}) {
+        const auto setup = plane_under(material, point_light({0.2f, 0.8f, 0.1f}, 1.0f));
+        const auto result = render_scene(setup.scene, setup.request);
+        EXPECT_EQ(expect_matches_closed_form(setup, result), 144) << "metallic " << material.metallic;
+    }
+}
+
+TEST(DirectAnalytic, SpotConeInnerRampAndOutside) {
+    scene::Light spot = point_light({0.0f, 1.0f, 0.0f}, 3.0f);
+    spot.type = scene::LightType::spot;
+    spot.direction = {0.0f, -1.0f, 0.0f};
+    spot.inner_cone = glm::radians(20.0f);
+    spot.outer_cone = glm::radians(35.0f);
+    const auto setup = plane_under(matte({0.7f, 0.7f, 0.7f}), spot);
+    const auto result = render_scene(setup.scene, setup.request);
+    expect_matches_closed_form(setup, result, 1e-4f);
+
+    // Some compared pixels must lie in each region, or the test would not test the cone.
+    int inside = 0, ramp = 0, outside = 0;
+    for (int y = 4; y < kSize; y += 8) {
+        for (int x = 4; x < kSize; x += 8) {
+            const glm::vec3 p = pixel_on_ground(*setup.request.camera, kSize, kSize, x, y);
+            const float angle = std::atan2(glm::length(glm::vec2(p.x, p.z)), 1.0f);
+            if (angle < spot.inner_cone) ++inside;
+            else if (angle < spot.outer_cone) ++ramp;
+            else {
+                ++outside;
+                EXPECT_EQ(result.frame.at(x, y).r, 0.0f) << "outside the cone at " << x << "," << y;
+            }
+        }
+    }
+    EXPECT_GT(inside, 4);
+    EXPECT_GT(ramp, 4);
+    EXPECT_GT(outside, 4);
+}
+
+TEST(DirectAnalytic, DirectionalIrradiance) {
+    scene::Light sun;
+    sun.name = "sun";
+    sun.type = scene::LightType::directional;
+    sun.direction = glm::normalize(glm::vec3(0.3f, -1.0f, 0.2f));
+    sun.intensity = 3.0f;  // W/m^2 on a surface facing it
+    const auto setup = plane_under(matte({0.4f, 0.5f, 0.6f}), sun);
+    const auto result = render_scene(setup.scene, setup.request);
+    expect_matches_closed_form(setup, result);
+    const float cos_theta = -sun.direction.y;
+    EXPECT_NEAR(result.frame.at(40, 52).g, 0.5f / std::numbers::pi_v<float> * 3.0f * cos_theta,
+                0.5f / std::numbers::pi_v<float> * 3.0f * cos_theta * kRelativeTolerance);
+}
+
+TEST(DirectAnalytic, BlockerCastsTheShadowGeometryPredicts) {
+    // A square blocker (half size 0.2) at height 0.5 under a light at height 1.5: its shadow on the
+    // ground is a square of half size 0.2 * 1.5 / (1.5 - 0.5) = 0.3. The blocker faces down, so
+    // the camera above sees through its culled back face to the ground (it still casts shadows).
+    auto material = matte({0.6f, 0.6f, 0.6f});
+    auto setup = plane_under(material, point_light({0.0f, 1.5f, 0.0f}, 2.0f));
+    add_square(setup.scene, "blocker", {0.0f, 0.5f, 0.0f}, 0.2f, {0, -1, 0}, 0);
+    const auto result = render_scene(setup.scene, setup.request);
+
+    int umbra = 0, lit = 0;
+    for (int y = 0; y < kSize; y += 3) {
+        for (int x = 0; x < kSize; x += 3) {
+            const glm::vec3 p = pixel_on_ground(*setup.request.camera, kSize, kSize, x, y);
+            const float chebyshev = std::max(std::abs(p.x), std::abs(p.z));
+            const float actual = result.frame.at(x, y).r;
+            if (chebyshev < 0.27f) {
+                EXPECT_EQ(actual, 0.0f) << "expected umbra at ground " << p.x << "," << p.z;
+                ++umbra;
+            } else if (chebyshev > 0.33f && chebyshev < 1.9f) {
+                const float expected = expected_radiance(material, setup.scene.lights[0], *setup.request.camera, p).r;
+                EXPECT_NEAR(actual, expected, kRelativeTolerance * expected) << "expected light at " << p.x << "," << p.z;
+                ++lit;
+            }
+        }
+    }
+    EXPECT_GT(umbra, 20);
+    EXPECT_GT(lit, 200);
+}
+
+TEST(DirectAnalytic, EmissionIsSeenAsItsRadiance) {
+    scene::Scene scene;
+    scene::Material glow = matte({0.0f, 0.0f, 0.0f});
+    glow.emissive = {2.0f, 1.0f, 0.5f};
+    scene.materials.push_back(glow);
+    add_square(scene, "glow", glm::vec3(0.0f), 2.0f, {0, 1, 0}, 0);
+    RenderRequest request;
+    request.width = request.height = 32;
+    request.camera = top_down_camera(2.0f, 1.0f);
+    const auto result = render_scene(scene, request);
+    for (int y = 0; y < 32; y += 5) {
+        for (int x = 0; x < 32; x += 5) {
+            EXPECT_FLOAT_EQ(result.frame.at(x, y).r, 2.0f);
+            EXPECT_FLOAT_EQ(result.frame.at(x, y).g, 1.0f);
+            EXPECT_FLOAT_EQ(result.frame.at(x, y).b, 0.5f);
+            EXPECT_FLOAT_EQ(result.frame.at(x, y).a, 1.0f);
+        }
+    }
+}
+
+TEST(DirectAnalytic, DoublingIntensityDoublesRadiance) {
+    const auto material = matte({0.5f, 0.5f, 0.5f});
+    const auto single = plane_under(material, point_light({0.1f, 1.2f, 0.3f}, 1.0f));
+    const auto doubled = plane_under(material, point_light({0.1f, 1.2f, 0.3f}, 2.0f));
+    const auto a = render_scene(single.scene, single.request);
+    const auto b = render_scene(doubled.scene, doubled.request);
+    for (std::size_t i = 0; i < a.frame.rgba.size(); i += 4) {
+        EXPECT_NEAR(b.frame.rgba[i], 2.0f * a.frame.rgba[i], 1e-5f + 1e-5f * a.frame.rgba[i]);
+    }
+}
+
+}  // namespace
+}  // namespace bounce::test

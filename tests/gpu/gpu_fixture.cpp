@@ -1,0 +1,79 @@
+#include "gpu_fixture.hpp"
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include <memory>
+
+namespace bounce::test {
+
+Renderer& shared_renderer() {
+    static const std::unique_ptr<Renderer> renderer =
+        std::make_unique<Renderer>(gpu::DeviceChoice::resolve(std::nullopt));
+    return *renderer;
+}
+
+RenderResult render_scene(const scene::Scene& scene, const RenderRequest& request) {
+    auto resources = shared_renderer().upload(scene);
+    return shared_renderer().render(*resources, request);
+}
+
+scene::Material matte(const glm::vec3& albedo) {
+    scene::Material material;
+    material.name = "matte";
+    material.base_color = glm::vec4(albedo, 1.0f);
+    material.metallic = 0.0f;
+    material.roughness = 1.0f;
+    material.specular = 0.0f;
+    return material;
+}
+
+void add_square(scene::Scene& scene, const std::string& name, const glm::vec3& centre, float half_size,
+                const glm::vec3& normal, int material) {
+    const glm::vec3 n = glm::normalize(normal);
+    const glm::vec3 helper = std::abs(n.y) > 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0);
+    const glm::vec3 u = glm::normalize(glm::cross(helper, n)) * half_size;
+    const glm::vec3 v = glm::cross(n, u);  // u x v = n |u|^2: counter-clockwise seen from the front
+    scene::Primitive primitive;
+    primitive.material = material;
+    primitive.positions = {-u - v, u - v, u + v, -u + v};
+    primitive.normals.assign(4, n);
+    primitive.tangents.assign(4, glm::vec4(glm::normalize(u), 1.0f));
+    primitive.uv0 = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+    primitive.indices = {0, 1, 2, 0, 2, 3};
+    for (const auto& p : primitive.positions) primitive.bounds.extend(p);
+    scene::Mesh mesh;
+    mesh.name = name;
+    mesh.bounds = primitive.bounds;
+    mesh.primitives.push_back(std::move(primitive));
+    scene.meshes.push_back(std::move(mesh));
+    scene::Object object;
+    object.name = name;
+    object.mesh = static_cast<int>(scene.meshes.size()) - 1;
+    object.initial_transform = object.transform = glm::translate(glm::mat4(1.0f), centre);
+    scene.objects.push_back(object);
+}
+
+scene::Camera top_down_camera(float height, float vertical_fov) {
+    return scene::Camera::look_at({0.0f, height, 0.0f}, {0.0f, 0.0f, 0.0f}, {0.0f, 0.0f, -1.0f}, vertical_fov);
+}
+
+glm::vec3 pixel_on_ground(const scene::Camera& camera, int width, int height, int x, int y) {
+    const float aspect = static_cast<float>(width) / static_cast<float>(height);
+    const glm::mat4 inverse = glm::inverse(camera.projection(aspect, 100.0f) * camera.view());
+    const float ndc_x = (static_cast<float>(x) + 0.5f) / static_cast<float>(width) * 2.0f - 1.0f;
+    const float ndc_y = 1.0f - (static_cast<float>(y) + 0.5f) / static_cast<float>(height) * 2.0f;
+    glm::vec4 far_point = inverse * glm::vec4(ndc_x, ndc_y, 1.0f, 1.0f);
+    const glm::vec3 direction = glm::normalize(glm::vec3(far_point) / far_point.w - camera.position);
+    const float t = -camera.position.y / direction.y;
+    return camera.position + t * direction;
+}
+
+glm::ivec2 project_to_pixel(const scene::Camera& camera, int width, int height, const glm::vec3& world) {
+    const float aspect = static_cast<float>(width) / static_cast<float>(height);
+    const glm::vec4 clip = camera.projection(aspect, 100.0f) * camera.view() * glm::vec4(world, 1.0f);
+    const glm::vec2 ndc = glm::vec2(clip) / clip.w;
+    return {static_cast<int>((ndc.x * 0.5f + 0.5f) * static_cast<float>(width)),
+            static_cast<int>((0.5f - ndc.y * 0.5f) * static_cast<float>(height))};
+}
+
+}  // namespace bounce::test

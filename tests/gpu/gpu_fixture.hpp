@@ -1,0 +1,32 @@
+// Shared helpers for GPU tests: one Renderer per test process (llvmpipe where there is no GPU),
+// small analytic scenes, and the world point a pixel centre sees.
+#pragma once
+
+#include "renderer/renderer.hpp"
+#include "renderer/scene/scene.hpp"
+
+#include <string>
+
+namespace bounce::test {
+
+Renderer& shared_renderer();
+
+// Renders `scene` once with fresh resources.
+RenderResult render_scene(const scene::Scene& scene, const RenderRequest& request);
+
+scene::Material matte(const glm::vec3& albedo);
+
+// Adds a one-primitive object: a square of `half_size` centred at `centre`, facing `normal`.
+void add_square(scene::Scene& scene, const std::string& name, const glm::vec3& centre, float half_size,
+                const glm::vec3& normal, int material);
+
+// A camera at height `height` above the origin looking straight down (+x right, -z up on screen).
+scene::Camera top_down_camera(float height, float vertical_fov);
+
+// The point where the ray through pixel (x, y)'s centre (rows top to bottom) meets the plane y = 0.
+glm::vec3 pixel_on_ground(const scene::Camera& camera, int width, int height, int x, int y);
+
+// The pixel whose centre sees `world` (rows top to bottom).
+glm::ivec2 project_to_pixel(const scene::Camera& camera, int width, int height, const glm::vec3& world);
+
+}  // namespace bounce::test

@@ -1,0 +1,53 @@
+#include "renderer/base/error.hpp"
+#include "renderer/methods/registry.hpp"
+
+#include <gtest/gtest.h>
+
+namespace bounce::methods {
+namespace {
+
+std::string message_of(const std::function<void()>& action) {
+    try {
+        action();
+    } catch (const InputError& error) {
+        return error.what();
+    }
+    return "(no error)";
+}
+
+TEST(MethodRegistry, PresetsResolveAndOverridesApply) {
+    const auto& registry = MethodRegistry::builtin();
+    EXPECT_EQ(registry.resolve("direct", "draft", {}).at("shadow_map_size"), 256.0);
+    EXPECT_EQ(registry.resolve("direct", "ultra", {}).at("shadow_map_size"), 4096.0);
+    EXPECT_EQ(registry.resolve("direct", "low", {{"shadow_map_size", 300}}).at("shadow_map_size"), 300.0);
+}
+
+TEST(MethodRegistry, FailsLoudlyNamingTheFault) {
+    const auto& registry = MethodRegistry::builtin();
+    EXPECT_NE(message_of([&] { registry.find("photon"); }).find("unknown method 'photon' (known: direct"),
+              std::string::npos);
+    EXPECT_NE(message_of([&] { registry.resolve("direct", "insane", {}); }).find("unknown preset 'insane'"),
+              std::string::npos);
+    EXPECT_NE(message_of([&] { registry.resolve("direct", "low", {{"bounces", 2}}); })
+                  .find("unknown knob 'bounces' for method 'direct' (knobs: shadow_map_size)"),
+              std::string::npos);
+    EXPECT_NE(message_of([&] { registry.resolve("direct", "low", {{"shadow_map_size", 1e9}}); }).find("outside"),
+              std::string::npos);
+    EXPECT_NE(message_of([&] { registry.resolve("direct", "low", {{"shadow_map_size", 100.5}}); }).find("integer"),
+              std::string::npos);
+    EXPECT_NE(message_of([&] { registry.resolve("direct", "low", {{"shadow_map_size", std::nan("")}}); }).find("outside"),
+              std::string::npos);
+}
+
+TEST(MethodRegistry, IncompleteMethodsAreRejected) {
+    MethodRegistry registry;
+    MethodInfo info;
+    info.name = "half";
+    info.knobs = {{"k", 0, 1, false, ""}};
+    info.presets = {{"draft", {{"k", 0.5}}}};
+    info.create = [] { return std::unique_ptr<Method>(); };
+    EXPECT_THROW(registry.add(info), Error);
+}
+
+}  // namespace
+}  // namespace bounce::methods
