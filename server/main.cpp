@@ -1,13 +1,12 @@
-// bounced: the Bounce render daemon.
-//
-// This build renders offline: it loads a scene (the built-in Cornell box by default, or a glTF
-// file), renders one frame with the chosen method and writes it as PNG, JPEG or EXR. Serving
-// clients over TCP is the protocol's job (docs/protocol.md) and builds on this same path.
+// bounced: the Bounce render daemon. Serves the protocol of docs/protocol.md; with --render-once
+// it instead renders one frame of a scene to a file and exits (no network at all).
 #include "renderer/base/error.hpp"
 #include "renderer/base/log.hpp"
 #include "renderer/image/codec.hpp"
 #include "renderer/renderer.hpp"
 #include "renderer/scene/builtin.hpp"
+#include "renderer/scene/gltf_import.hpp"
+#include "server/daemon.hpp"
 
 #include <cstdio>
 #include <cstdlib>
@@ -29,12 +28,30 @@ struct Options {
     float exposure = 0.0f;
     std::string tone = "aces";
     std::string render_once;
+    bounce::server::DaemonConfig daemon;
 };
 
-constexpr const char* kUsage = R"(usage: bounced --render-once OUT.(png|jpg|exr) [options]
+constexpr const char* kUsage = R"(usage: bounced [daemon options]
+       bounced --render-once OUT.(png|jpg|exr) [render options]
 
-Renders one frame and exits.
-  --scene NAME          built-in scene name (cornell)                        [cornell]
+Daemon options:
+  --listen HOST:PORT        address to serve on (port 0: any free port)   [127.0.0.1:7878]
+  --port-file F             write the bound port to F once listening
+  --scene-root DIR          scene.load paths resolve inside DIR             [loading by path is off]
+  --cache-dir DIR           where baked structures are cached
+  --token-file F            clients must send this token (required off loopback)
+  --max-clients N           concurrent connections                          [64]
+  --max-message-bytes N     largest frame a client may send                 [268435456]
+  --max-pixels N            largest width*height a render may ask for       [16777216]
+  --max-in-flight N         pending requests per connection                 [8]
+  --queue N                 render jobs waiting across all clients          [64]
+  --metrics-listen HOST:PORT  ops HTTP: /healthz /readyz /metrics           [off]
+  --heartbeat-ms N          ping idle clients; drop them after 3 intervals  [15000]
+  --device D                auto, software or an EGL device index           [auto, or $BOUNCE_DEVICE]
+  --log-level L             debug, info, warn, error                        [info]
+
+Render options (--render-once renders one frame and exits):
+  --scene NAME|FILE     built-in scene name (cornell) or a .gltf/.glb file   [cornell]
   --method M            rendering method (direct)                           [direct]
   --preset P            draft, low, medium, high, ultra                      [medium]
   --set KNOB=VALUE      override one knob of the method (repeatable)
@@ -48,6 +65,18 @@ Renders one frame and exits.
 [[noreturn]] void usage_error(const std::string& message) {
     std::fprintf(stderr, "bounced: %s\n\n%s", message.c_str(), kUsage);
     std::exit(2);
+}
+
+unsigned long long number(const std::string& flag, const std::string& text, unsigned long long min,
+                          unsigned long long max) {
+    try {
+        std::size_t end = 0;
+        const unsigned long long value = std::stoull(text, &end);
+        if (end == text.size() && value >= min && value <= max) return value;
+    } catch (const std::exception&) {
+    }
+    usage_error(flag + " expects a whole number in [" + std::to_string(min) + ", " + std::to_string(max) + "], got '" +
+                text + "'");
 }
 
 Options parse(int argc, char** argv) {
@@ -96,28 +125,52 @@ Options parse(int argc, char** argv) {
             options.render_once = value();
         } else if (flag == "--log-level") {
             bounce::log::set_level(bounce::log::parse_level(value()));
+        } else if (flag == "--listen") {
+            const std::string& listen = value();
+            const auto colon = listen.rfind(':');
+            if (colon == std::string::npos) usage_error("--listen expects HOST:PORT, got '" + listen + "'");
+            options.daemon.listen_host = listen.substr(0, colon);
+            options.daemon.listen_port = static_cast<std::uint16_t>(number(flag, listen.substr(colon + 1), 0, 65535));
+        } else if (flag == "--port-file") {
+            options.daemon.port_file = value();
+        } else if (flag == "--scene-root") {
+            options.daemon.scene_root = value();
+        } else if (flag == "--cache-dir") {
+            options.daemon.cache_dir = value();
+        } else if (flag == "--token-file") {
+            options.daemon.token_file = value();
+        } else if (flag == "--max-clients") {
+            options.daemon.max_clients = number(flag, value(), 1, 100000);
+        } else if (flag == "--max-message-bytes") {
+            options.daemon.max_message_bytes = number(flag, value(), 1024, 4294967295ull);
+        } else if (flag == "--max-pixels") {
+            options.daemon.max_pixels = number(flag, value(), 1, 268435456);
+        } else if (flag == "--max-in-flight") {
+            options.daemon.max_in_flight = number(flag, value(), 1, 1024);
+        } else if (flag == "--queue") {
+            options.daemon.queue_capacity = number(flag, value(), 1, 100000);
+        } else if (flag == "--metrics-listen") {
+            options.daemon.metrics_listen = value();
+        } else if (flag == "--heartbeat-ms") {
+            options.daemon.heartbeat = std::chrono::milliseconds(number(flag, value(), 10, 3600000));
         } else {
             usage_error("unknown flag '" + flag + "'");
         }
     }
-    if (options.render_once.empty()) usage_error("--render-once OUT is required in this build");
+    options.daemon.device = options.device;
     return options;
 }
 
 bounce::scene::Scene load_scene(const std::string& name) {
     const auto builtin = bounce::scene::builtin_scene_names();
     if (std::find(builtin.begin(), builtin.end(), name) != builtin.end()) return bounce::scene::make_builtin_scene(name);
-    throw bounce::InputError(fmt::format("unknown scene '{}': this build serves the built-in scenes", name));
+    return bounce::scene::import_gltf_file(name);
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-    try {
-        const Options options = parse(argc, argv);
+int render_once(const Options& options) {
+    {
         const auto format = bounce::image::image_format_from_path(options.render_once);
         bounce::scene::Scene scene = load_scene(options.scene);
-        for (const auto& warning : scene.warnings) bounce::log::warn("scene", "{}", warning);
 
         bounce::Renderer renderer(bounce::gpu::DeviceChoice::resolve(options.device));
         auto resources = renderer.upload(scene);
@@ -142,6 +195,17 @@ int main(int argc, char** argv) {
                           request.preset, result.stats.render_ms, result.stats.gpu_ms, passes,
                           result.stats.resident_bytes);
         return 0;
+    }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    try {
+        const Options options = parse(argc, argv);
+        if (!options.render_once.empty()) return render_once(options);
+        bounce::server::Daemon daemon(options.daemon);
+        return daemon.run();
     } catch (const bounce::InputError& error) {
         std::fprintf(stderr, "bounced: %s\n", error.what());
         return 2;

@@ -1,0 +1,111 @@
+#include "client/client.hpp"
+
+#include <fstream>
+
+namespace bounce::client {
+namespace {
+namespace asio = boost::asio;
+}
+
+Endpoint Endpoint::parse(const std::string& text) {
+    const auto colon = text.rfind(':');
+    if (colon == std::string::npos || colon == 0) throw std::invalid_argument("expected HOST:PORT, got '" + text + "'");
+    Endpoint endpoint;
+    endpoint.host = text.substr(0, colon);
+    try {
+        const int port = std::stoi(text.substr(colon + 1));
+        if (port <= 0 || port > 65535) throw std::out_of_range("port");
+        endpoint.port = static_cast<std::uint16_t>(port);
+    } catch (const std::exception&) {
+        throw std::invalid_argument("'" + text.substr(colon + 1) + "' is not a port");
+    }
+    return endpoint;
+}
+
+std::string read_token_file(const std::string& path) {
+    std::ifstream in(path);
+    if (!in) throw std::runtime_error("cannot read token file " + path);
+    std::string token;
+    std::getline(in, token);
+    while (!token.empty() && (token.back() == '\r' || token.back() == ' ')) token.pop_back();
+    return token;
+}
+
+Client::Client(const Endpoint& endpoint, std::optional<std::string> token) : socket_(io_) {
+    asio::ip::tcp::resolver resolver(io_);
+    boost::system::error_code error;
+    const auto endpoints = resolver.resolve(endpoint.host, std::to_string(endpoint.port), error);
+    if (error) throw std::runtime_error("cannot resolve " + endpoint.host + ": " + error.message());
+    asio::connect(socket_, endpoints, error);
+    if (error) {
+        throw std::runtime_error("cannot connect to " + endpoint.host + ":" + std::to_string(endpoint.port) + ": " +
+                                 error.message());
+    }
+    socket_.set_option(asio::ip::tcp::no_delay(true));
+    nlohmann::json body = {{"client", "bounce/0.1"}, {"protocol", protocol::kProtocolVersion}};
+    if (token) body["token"] = *token;
+    hello_ = request(protocol::MessageType::hello, body).body;
+    limits_.max_attachment_bytes = UINT32_MAX;  // trust the daemon's replies up to the format's limit
+    limits_.max_json_bytes = 64u << 20;
+}
+
+Client::~Client() {
+    boost::system::error_code ignored;
+    socket_.shutdown(asio::ip::tcp::socket::shutdown_both, ignored);
+    socket_.close(ignored);
+}
+
+void Client::send_raw(std::span<const std::uint8_t> bytes) {
+    boost::system::error_code error;
+    asio::write(socket_, asio::buffer(bytes.data(), bytes.size()), error);
+    if (error) throw std::runtime_error("send failed: " + error.message());
+}
+
+protocol::Message Client::read() {
+    for (;;) {
+        std::array<std::uint8_t, protocol::kHeaderSize> header_bytes{};
+        boost::system::error_code error;
+        asio::read(socket_, asio::buffer(header_bytes), error);
+        if (error) throw std::runtime_error("connection closed by the daemon: " + error.message());
+        const protocol::Header header = protocol::decode_header(header_bytes, limits_);
+        std::vector<std::uint8_t> body(static_cast<std::size_t>(header.json_length) + header.attachment_length);
+        asio::read(socket_, asio::buffer(body), error);
+        if (error) throw std::runtime_error("connection closed mid-frame: " + error.message());
+        protocol::Message message;
+        message.type = header.type;
+        message.request_id = header.request_id;
+        message.body = protocol::parse_body(std::span(body).first(header.json_length), header.request_id);
+        message.attachment.assign(body.begin() + header.json_length, body.end());
+        if (message.type == static_cast<std::uint16_t>(protocol::MessageType::ping)) {
+            const auto pong = protocol::encode({static_cast<std::uint16_t>(protocol::MessageType::pong),
+                                                message.request_id, nlohmann::json::object(), {}});
+            send_raw(pong);
+            continue;
+        }
+        return message;
+    }
+}
+
+protocol::Message Client::send_raw_and_read(std::span<const std::uint8_t> bytes) {
+    send_raw(bytes);
+    return read();
+}
+
+protocol::Message Client::request(protocol::MessageType type, nlohmann::json body, std::vector<std::uint8_t> attachment) {
+    const std::uint64_t id = next_id_++;
+    send_raw(protocol::encode({static_cast<std::uint16_t>(type), id, std::move(body), std::move(attachment)}));
+    for (;;) {
+        protocol::Message reply = read();
+        if (reply.request_id != id) continue;  // a late reply to an earlier, abandoned request
+        if (reply.type == static_cast<std::uint16_t>(protocol::MessageType::error)) {
+            const auto code = protocol::error_code_from_name(reply.body.value("code", "internal"))
+                                  .value_or(protocol::ErrorCode::internal);
+            std::optional<std::string> field;
+            if (reply.body.contains("field") && reply.body["field"].is_string()) field = reply.body["field"].get<std::string>();
+            throw ServerError(code, reply.body.value("message", "error"), field, reply.body.value("retryable", false));
+        }
+        return reply;
+    }
+}
+
+}  // namespace bounce::client

@@ -1,0 +1,71 @@
+// The Bounce client library: one blocking connection to bounced. Every call sends one request and
+// waits for its reply; pings from the daemon are answered while waiting. A reply `error` throws
+// ServerError carrying the daemon's code, message and field.
+#pragma once
+
+#include "protocol/protocol.hpp"
+
+#include <boost/asio.hpp>
+
+#include <chrono>
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace bounce::client {
+
+class ServerError : public std::runtime_error {
+public:
+    ServerError(protocol::ErrorCode code, const std::string& message, std::optional<std::string> field, bool retryable)
+        : std::runtime_error(message), code_(code), field_(std::move(field)), retryable_(retryable) {}
+    protocol::ErrorCode code() const { return code_; }
+    const std::optional<std::string>& field() const { return field_; }
+    bool retryable() const { return retryable_; }
+
+private:
+    protocol::ErrorCode code_;
+    std::optional<std::string> field_;
+    bool retryable_;
+};
+
+struct Endpoint {
+    std::string host = "127.0.0.1";
+    std::uint16_t port = 7878;
+    // "HOST:PORT"; throws std::invalid_argument naming the problem.
+    static Endpoint parse(const std::string& text);
+};
+
+class Client {
+public:
+    // Connects and says hello (with the token when given). Throws on failure.
+    Client(const Endpoint& endpoint, std::optional<std::string> token = {});
+    ~Client();
+
+    const nlohmann::json& hello() const { return hello_; }
+
+    // Sends a request and returns its reply (`ok`, `frame`, `hello` or `pong`); throws ServerError
+    // for an `error` reply and std::runtime_error when the connection fails.
+    protocol::Message request(protocol::MessageType type, nlohmann::json body = nlohmann::json::object(),
+                              std::vector<std::uint8_t> attachment = {});
+    // Sends raw bytes (tests use this to send broken frames) and reads one reply.
+    protocol::Message send_raw_and_read(std::span<const std::uint8_t> bytes);
+    void send_raw(std::span<const std::uint8_t> bytes);
+    // Reads the next message, answering pings; throws when the connection closes.
+    protocol::Message read();
+    bool connected() const { return socket_.is_open(); }
+
+private:
+    boost::asio::io_context io_;
+    boost::asio::ip::tcp::socket socket_;
+    std::uint64_t next_id_ = 1;
+    nlohmann::json hello_;
+    protocol::Limits limits_;
+};
+
+// Reads a token file (first line, trailing whitespace removed).
+std::string read_token_file(const std::string& path);
+
+}  // namespace bounce::client

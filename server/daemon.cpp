@@ -1,0 +1,262 @@
+#include "server/daemon.hpp"
+
+#include "renderer/base/error.hpp"
+#include "renderer/base/log.hpp"
+#include "renderer/scene/builtin.hpp"
+#include "server/session.hpp"
+
+#include <boost/beast/core.hpp>
+#include <boost/beast/http.hpp>
+
+#include <fstream>
+#include <thread>
+
+namespace bounce::server {
+namespace {
+
+namespace asio = boost::asio;
+namespace http = boost::beast::http;
+using asio::ip::tcp;
+
+std::pair<std::string, std::uint16_t> split_host_port(const std::string& text, const char* flag) {
+    const auto colon = text.rfind(':');
+    if (colon == std::string::npos) throw InputError(fmt::format("{} expects HOST:PORT, got '{}'", flag, text));
+    const std::string host = text.substr(0, colon);
+    int port = -1;
+    try {
+        port = std::stoi(text.substr(colon + 1));
+    } catch (const std::exception&) {
+    }
+    if (port < 0 || port > 65535) throw InputError(fmt::format("{}: '{}' is not a port", flag, text.substr(colon + 1)));
+    return {host, static_cast<std::uint16_t>(port)};
+}
+
+bool is_loopback(const std::string& host) {
+    boost::system::error_code error;
+    const auto address = asio::ip::make_address(host, error);
+    return host == "localhost" || (!error && address.is_loopback());
+}
+
+std::string read_token(const std::filesystem::path& path) {
+    std::ifstream in(path);
+    if (!in) throw InputError(fmt::format("--token-file {}: cannot read it", path.string()));
+    std::string token;
+    std::getline(in, token);
+    while (!token.empty() && (token.back() == '\r' || token.back() == ' ')) token.pop_back();
+    if (token.size() < 16) throw InputError(fmt::format("--token-file {}: the token has fewer than 16 characters", path.string()));
+    return token;
+}
+
+// One HTTP exchange on the ops port: /healthz, /readyz, /metrics.
+struct OpsExchange : std::enable_shared_from_this<OpsExchange> {
+    OpsExchange(tcp::socket s, std::function<std::pair<unsigned, std::string>(const std::string&)> router)
+        : socket(std::move(s)), route(std::move(router)) {}
+    void start() {
+        http::async_read(socket, buffer, request, [self = shared_from_this()](boost::system::error_code error, std::size_t) {
+            if (error) return;
+            const auto [status, body] = self->route(std::string(self->request.target()));
+            self->response.result(status);
+            self->response.version(self->request.version());
+            self->response.set(http::field::content_type, "text/plain; version=0.0.4");
+            self->response.body() = body;
+            self->response.keep_alive(false);
+            self->response.prepare_payload();
+            http::async_write(self->socket, self->response, [self](boost::system::error_code, std::size_t) {
+                boost::system::error_code ignored;
+                self->socket.shutdown(tcp::socket::shutdown_both, ignored);
+            });
+        });
+    }
+    tcp::socket socket;
+    boost::beast::flat_buffer buffer;
+    http::request<http::string_body> request;
+    http::response<http::string_body> response;
+    std::function<std::pair<unsigned, std::string>(const std::string&)> route;
+};
+
+}  // namespace
+
+Daemon::Daemon(DaemonConfig config)
+    : config_(std::move(config)), acceptor_(io_), signals_(io_, SIGINT, SIGTERM), drain_timer_(io_) {
+    if (config_.token_file) token_ = read_token(*config_.token_file);
+    if (!is_loopback(config_.listen_host) && !token_) {
+        throw InputError(fmt::format("listening on {} (not loopback) needs --token-file", config_.listen_host));
+    }
+    if (config_.scene_root) {
+        if (!std::filesystem::is_directory(*config_.scene_root)) {
+            throw InputError(fmt::format("--scene-root {} is not a directory", config_.scene_root->string()));
+        }
+        scene_root_.root = std::filesystem::canonical(*config_.scene_root);
+    }
+    render_ = std::make_unique<RenderService>(gpu::DeviceChoice::resolve(config_.device), config_.queue_capacity);
+    // The built-in scene, and one tiny frame so every shader is compiled before we report ready.
+    render_->run_and_wait([](Renderer& renderer, SceneRegistry& registry) {
+        SceneEntry& entry = registry.put("cornell", scene::make_cornell_box(), "builtin");
+        RenderRequest warmup;
+        warmup.width = warmup.height = 8;
+        renderer.render(*entry.resources, warmup);
+    });
+    log::info("daemon", "renderer ready: {}", render_->gpu_info().summary());
+}
+
+Daemon::~Daemon() {
+    render_.reset();  // jobs hold sessions, whose sockets need io_
+    std::lock_guard lock(sessions_mutex_);
+    sessions_.clear();
+}
+
+protocol::Limits Daemon::limits() const {
+    protocol::Limits limits;
+    const auto cap = static_cast<std::uint32_t>(std::min<std::size_t>(config_.max_message_bytes, UINT32_MAX));
+    limits.max_json_bytes = std::min(limits.max_json_bytes, cap);
+    limits.max_attachment_bytes = cap;
+    return limits;
+}
+
+nlohmann::json Daemon::hello_body() const {
+    const auto l = limits();
+    return {{"server", "bounced/0.1"},
+            {"protocol", protocol::kProtocolVersion},
+            {"renderer", render_->gpu_info().renderer},
+            {"limits", {{"max_json_bytes", l.max_json_bytes}, {"max_attachment_bytes", l.max_attachment_bytes},
+                        {"max_in_flight", config_.max_in_flight}, {"max_pixels", config_.max_pixels}}},
+            {"heartbeat_ms", config_.heartbeat.count()},
+            {"methods", methods::MethodRegistry::builtin().names()}};
+}
+
+void Daemon::request_started() { ++in_flight_; }
+void Daemon::request_finished() { --in_flight_; }
+
+void Daemon::forget(Session* session) {
+    std::lock_guard lock(sessions_mutex_);
+    for (auto it = sessions_.begin(); it != sessions_.end(); ++it) {
+        if (it->get() == session) {
+            sessions_.erase(it);
+            break;
+        }
+    }
+    metrics_.set_connections(sessions_.size());
+}
+
+void Daemon::accept() {
+    acceptor_.async_accept(asio::make_strand(io_), [this](boost::system::error_code error, tcp::socket socket) {
+        if (error) {
+            if (error != asio::error::operation_aborted) log::warn("daemon", "accept failed: {}", error.message());
+            if (acceptor_.is_open()) accept();
+            return;
+        }
+        std::shared_ptr<Session> session;
+        {
+            std::lock_guard lock(sessions_mutex_);
+            if (sessions_.size() >= config_.max_clients) {
+                log::warn("daemon", "refusing a client: {} connected (--max-clients)", sessions_.size());
+                boost::system::error_code ignored;
+                socket.close(ignored);
+            } else {
+                session = std::make_shared<Session>(*this, std::move(socket));
+                sessions_.insert(session);
+                metrics_.set_connections(sessions_.size());
+            }
+        }
+        if (session) session->start();
+        accept();
+    });
+}
+
+void Daemon::start_metrics_server() {
+    if (!config_.metrics_listen) return;
+    const auto [host, port] = split_host_port(*config_.metrics_listen, "--metrics-listen");
+    metrics_acceptor_.emplace(io_, tcp::endpoint(asio::ip::make_address(host == "localhost" ? "127.0.0.1" : host), port));
+    log::info("daemon", "ops HTTP on {}:{} (/healthz /readyz /metrics)", host, metrics_acceptor_->local_endpoint().port());
+    auto route = [this](const std::string& target) -> std::pair<unsigned, std::string> {
+        if (target == "/healthz") return {200, "ok\n"};
+        if (target == "/readyz") return ready_ ? std::pair<unsigned, std::string>{200, "ready\n"}
+                                               : std::pair<unsigned, std::string>{503, "not ready\n"};
+        if (target == "/metrics") {
+            metrics_.set_queue_depth(render_->queue_depth());
+            return {200, metrics_.prometheus_text()};
+        }
+        return {404, "not found\n"};
+    };
+    auto serve = std::make_shared<std::function<void()>>();
+    *serve = [this, route, serve] {
+        metrics_acceptor_->async_accept(asio::make_strand(io_), [this, route, serve](boost::system::error_code error,
+                                                                                     tcp::socket socket) {
+            if (error) return;
+            std::make_shared<OpsExchange>(std::move(socket), route)->start();
+            (*serve)();
+        });
+    };
+    (*serve)();
+}
+
+void Daemon::begin_shutdown() {
+    if (shutting_down_.exchange(true)) return;
+    ready_ = false;
+    log::info("daemon", "shutting down: {} requests in flight", in_flight_.load());
+    boost::system::error_code ignored;
+    acceptor_.close(ignored);
+    drain_deadline_ = std::chrono::steady_clock::now() + config_.drain_timeout;
+    auto poll = std::make_shared<std::function<void()>>();
+    *poll = [this, poll] {
+        if (in_flight_.load() == 0 || std::chrono::steady_clock::now() > drain_deadline_) {
+            if (in_flight_.load() != 0) log::warn("daemon", "drain deadline passed with {} in flight", in_flight_.load());
+            std::vector<std::shared_ptr<Session>> open;
+            {
+                std::lock_guard lock(sessions_mutex_);
+                open.assign(sessions_.begin(), sessions_.end());
+            }
+            for (auto& session : open) session->close();
+            // Let the closes and last writes run, then stop.
+            drain_timer_.expires_after(std::chrono::milliseconds(50));
+            drain_timer_.async_wait([this](boost::system::error_code) { io_.stop(); });
+            return;
+        }
+        drain_timer_.expires_after(std::chrono::milliseconds(20));
+        drain_timer_.async_wait([poll](boost::system::error_code error) {
+            if (!error) (*poll)();
+        });
+    };
+    (*poll)();
+}
+
+void Daemon::stop() {
+    asio::post(io_, [this] { begin_shutdown(); });
+}
+
+int Daemon::run() {
+    const tcp::endpoint endpoint(asio::ip::make_address(config_.listen_host == "localhost" ? "127.0.0.1" : config_.listen_host),
+                                 config_.listen_port);
+    acceptor_.open(endpoint.protocol());
+    acceptor_.set_option(tcp::acceptor::reuse_address(true));
+    acceptor_.bind(endpoint);
+    acceptor_.listen();
+    const auto port = acceptor_.local_endpoint().port();
+    if (config_.port_file) {
+        const auto temporary = config_.port_file->string() + ".tmp";
+        std::ofstream(temporary) << port << "\n";
+        std::filesystem::rename(temporary, *config_.port_file);
+    }
+    start_metrics_server();
+    signals_.async_wait([this](boost::system::error_code error, int signal) {
+        if (!error) {
+            log::info("daemon", "signal {} received", signal);
+            begin_shutdown();
+        }
+    });
+    accept();
+    ready_ = true;
+    log::info("daemon", "listening on {}:{} scene_root={} token={}", config_.listen_host, port,
+              scene_root_.root ? scene_root_.root->string() : "none", token_ ? "required" : "not required");
+
+    std::vector<std::thread> threads;
+    for (int i = 1; i < config_.network_threads; ++i) threads.emplace_back([this] { io_.run(); });
+    io_.run();
+    for (auto& thread : threads) thread.join();
+    render_->stop();
+    encode_pool_.join();
+    log::info("daemon", "stopped");
+    return 0;
+}
+
+}  // namespace bounce::server

@@ -1,0 +1,41 @@
+// The scenes a daemon holds. Lives on the render thread only: every access, mutation or render
+// runs there, in arrival order, so a render always sees one consistent scene state.
+#pragma once
+
+#include "renderer/renderer.hpp"
+#include "renderer/scene/scene.hpp"
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace bounce::server {
+
+struct SceneEntry {
+    std::unique_ptr<scene::Scene> scene;  // stable address: SceneResources reads it every frame
+    std::unique_ptr<SceneResources> resources;
+    std::uint64_t version = 0;  // increases with every mutation
+    std::string source;         // "builtin", a path under the scene root, or "upload"
+};
+
+class SceneRegistry {
+public:
+    explicit SceneRegistry(Renderer& renderer) : renderer_(renderer) {}
+    ~SceneRegistry();
+
+    // Adds or replaces `name`; uploads its geometry to the GPU.
+    SceneEntry& put(const std::string& name, scene::Scene scene, std::string source);
+    // Throws NotFound naming the scene and the scenes there are.
+    SceneEntry& get(const std::string& name);
+    bool remove(const std::string& name);
+    std::vector<std::string> names() const;
+    const std::map<std::string, SceneEntry>& entries() const { return scenes_; }
+
+private:
+    Renderer& renderer_;
+    std::map<std::string, SceneEntry> scenes_;
+};
+
+}  // namespace bounce::server

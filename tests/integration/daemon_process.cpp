@@ -1,0 +1,79 @@
+#include "daemon_process.hpp"
+
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <fstream>
+#include <random>
+#include <stdexcept>
+#include <thread>
+
+extern char** environ;
+
+namespace bounce::test {
+
+DaemonProcess::DaemonProcess(std::vector<std::string> extra) {
+    std::random_device random;
+    directory_ = std::filesystem::temp_directory_path() / ("bounced-test-" + std::to_string(random()));
+    std::filesystem::create_directories(directory_);
+    const auto port_file = directory_ / "port";
+    std::vector<std::string> args = {BOUNCED_PATH, "--listen", "127.0.0.1:0", "--port-file", port_file.string(),
+                                     "--log-level", "warn"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    std::vector<char*> argv;
+    for (auto& arg : args) argv.push_back(arg.data());
+    argv.push_back(nullptr);
+    if (posix_spawn(&pid_, BOUNCED_PATH, nullptr, nullptr, argv.data(), environ) != 0) {
+        throw std::runtime_error("cannot start " + std::string(BOUNCED_PATH));
+    }
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+    while (std::chrono::steady_clock::now() < deadline) {
+        int status = 0;
+        if (waitpid(pid_, &status, WNOHANG) == pid_) {
+            pid_ = -1;
+            throw std::runtime_error("bounced exited during startup with status " + std::to_string(status));
+        }
+        std::ifstream in(port_file);
+        int port = 0;
+        if (in >> port && port > 0) {
+            port_ = static_cast<std::uint16_t>(port);
+            return;
+        }
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    throw std::runtime_error("bounced did not start listening within 120 s");
+}
+
+bool DaemonProcess::running() const {
+    if (pid_ <= 0) return false;
+    int status = 0;
+    return waitpid(pid_, &status, WNOHANG) == 0;
+}
+
+int DaemonProcess::terminate_and_wait() {
+    if (pid_ <= 0) return -1;
+    kill(pid_, SIGTERM);
+    int status = 0;
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+    while (waitpid(pid_, &status, WNOHANG) == 0) {
+        if (std::chrono::steady_clock::now() > deadline) {
+            kill(pid_, SIGKILL);
+            waitpid(pid_, &status, 0);
+            break;
+        }
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    pid_ = -1;
+    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+DaemonProcess::~DaemonProcess() {
+    terminate_and_wait();
+    std::error_code ignored;
+    std::filesystem::remove_all(directory_, ignored);
+}
+
+}  // namespace bounce::test

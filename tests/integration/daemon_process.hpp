@@ -1,0 +1,31 @@
+// Runs a real bounced on an ephemeral loopback port for the duration of a test.
+#pragma once
+
+#include "client/client.hpp"
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace bounce::test {
+
+class DaemonProcess {
+public:
+    // Starts bounced with `extra` flags plus --listen 127.0.0.1:0 and a port file; waits until it
+    // listens (or throws with its exit status).
+    explicit DaemonProcess(std::vector<std::string> extra = {});
+    ~DaemonProcess();  // SIGTERM, then SIGKILL after 20 s
+
+    client::Endpoint endpoint() const { return {"127.0.0.1", port_}; }
+    // Sends SIGTERM and returns the exit status (the process's exit code, or 128 + signal).
+    int terminate_and_wait();
+    bool running() const;
+    const std::filesystem::path& directory() const { return directory_; }
+
+private:
+    int pid_ = -1;
+    std::uint16_t port_ = 0;
+    std::filesystem::path directory_;
+};
+
+}  // namespace bounce::test

@@ -1,0 +1,301 @@
+// A real bounced on an ephemeral loopback port, driven through the client library.
+#include "daemon_process.hpp"
+#include "renderer/image/codec.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <thread>
+
+namespace bounce::test {
+namespace {
+
+using client::Client;
+using client::ServerError;
+using protocol::ErrorCode;
+using protocol::MessageType;
+using nlohmann::json;
+
+const std::string kModels = "/usr/share/assimp/models/glTF2";
+
+image::DecodedImage render(Client& client, json body) {
+    const auto reply = client.request(MessageType::render, std::move(body));
+    EXPECT_EQ(reply.type, static_cast<std::uint16_t>(MessageType::frame));
+    return image::decode_image(reply.attachment);
+}
+
+// Asserts `action` fails with `code` (and `field` when given).
+template <typename Action>
+void expect_error(Action&& action, ErrorCode code, const std::string& field = "") {
+    try {
+        action();
+        ADD_FAILURE() << "expected error " << protocol::error_code_name(code);
+    } catch (const ServerError& error) {
+        EXPECT_EQ(error.code(), code) << error.what();
+        if (!field.empty()) {
+            EXPECT_EQ(error.field().value_or(""), field) << error.what();
+        }
+    }
+}
+
+// A frame is still served, and right: the floor under the light has the radiance of the direct test.
+void expect_still_serving(const client::Endpoint& endpoint) {
+    Client client(endpoint);
+    const auto exr = render(client, {{"scene", "cornell"}, {"width", 32}, {"height", 32}, {"format", "exr"}});
+    ASSERT_EQ(exr.width, 32);
+    double sum = 0.0;
+    for (float value : exr.pixels) sum += value;
+    EXPECT_GT(sum, 1.0);
+}
+
+TEST(Daemon, HelloAnnouncesLimitsAndRenderer) {
+    DaemonProcess daemon;
+    Client client(daemon.endpoint());
+    const json& hello = client.hello();
+    EXPECT_EQ(hello["protocol"], 1);
+    EXPECT_FALSE(hello["renderer"].get<std::string>().empty());
+    EXPECT_GT(hello["limits"]["max_json_bytes"].get<std::uint64_t>(), 0u);
+    EXPECT_EQ(client.request(MessageType::ping).type, static_cast<std::uint16_t>(MessageType::pong));
+}
+
+TEST(Daemon, RendersEveryFormatAndDescribes) {
+    DaemonProcess daemon;
+    Client client(daemon.endpoint());
+    const auto described = client.request(MessageType::scene_describe, {{"name", "cornell"}}).body;
+    EXPECT_EQ(described["objects"].size(), 3u);
+    EXPECT_EQ(described["lights"].size(), 1u);
+    for (const std::string format : {"png", "jpeg", "exr"}) {
+        const auto reply = client.request(MessageType::render, {{"scene", "cornell"}, {"width", 40}, {"height", 30},
+                                                                {"format", format}});
+        const auto decoded = image::decode_image(reply.attachment);
+        EXPECT_EQ(decoded.width, 40) << format;
+        EXPECT_EQ(decoded.height, 30) << format;
+        const json& stats = reply.body;
+        EXPECT_EQ(stats["format"], format);
+        EXPECT_GT(stats["timings_ms"]["passes"]["gbuffer"].get<double>(), 0.0);
+        for (const char* key : {"queue", "render", "readback", "encode", "total"}) {
+            EXPECT_GE(stats["timings_ms"][key].get<double>(), 0.0) << key;
+        }
+        EXPECT_GT(stats["resident_bytes"].get<std::uint64_t>(), 0u);
+    }
+}
+
+TEST(Daemon, LoadsFromTheSceneRootAndUploads) {
+    DaemonProcess daemon({"--scene-root", kModels});
+    Client client(daemon.endpoint());
+    const auto loaded = client.request(MessageType::scene_load, {{"name", "box"}, {"path", "BoxTextured-glTF/BoxTextured.gltf"}});
+    EXPECT_EQ(loaded.body["objects"], 1);
+    std::ifstream in(kModels + "/BoxTextured-glTF-Binary/BoxTextured.glb", std::ios::binary);
+    std::vector<std::uint8_t> glb{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+    ASSERT_FALSE(glb.empty());
+    client.request(MessageType::scene_load, {{"name", "uploaded"}}, glb);
+    const auto list = client.request(MessageType::scene_list).body["scenes"];
+    EXPECT_EQ(list.size(), 3u);
+    const auto image = render(client, {{"scene", "uploaded"}, {"width", 16}, {"height", 16}});
+    EXPECT_EQ(image.width, 16);
+    client.request(MessageType::scene_unload, {{"name", "uploaded"}});
+    expect_error([&] { render(client, {{"scene", "uploaded"}}); }, ErrorCode::not_found, "scene");
+}
+
+TEST(Daemon, PathsEscapingTheSceneRootAreRefused) {
+    DaemonProcess daemon({"--scene-root", kModels});
+    // A link inside a root of our own that points outside it.
+    const auto root = daemon.directory();
+    Client client(daemon.endpoint());
+    for (const std::string path : {"../glTF2/BoxTextured-glTF/BoxTextured.gltf", "/etc/passwd",
+                                   "BoxTextured-glTF/../../../../etc/passwd"}) {
+        expect_error([&] { client.request(MessageType::scene_load, {{"name", "x"}, {"path", path}}); },
+                     ErrorCode::bad_request, "path");
+    }
+    expect_error([&] { client.request(MessageType::scene_load, {{"name", "x"}, {"path", "nothing/here.gltf"}}); },
+                 ErrorCode::not_found, "path");
+    expect_still_serving(daemon.endpoint());
+}
+
+TEST(Daemon, SymlinkOutOfTheSceneRootIsRefused) {
+    const auto root = std::filesystem::temp_directory_path() / "bounce-root-test";
+    std::filesystem::remove_all(root);
+    std::filesystem::create_directories(root);
+    std::filesystem::create_symlink(kModels + "/BoxTextured-glTF/BoxTextured.gltf", root / "escape.gltf");
+    DaemonProcess daemon({"--scene-root", root.string()});
+    Client client(daemon.endpoint());
+    expect_error([&] { client.request(MessageType::scene_load, {{"name", "x"}, {"path", "escape.gltf"}}); },
+                 ErrorCode::bad_request, "path");
+    std::filesystem::remove_all(root);
+}
+
+TEST(Daemon, MovingABlockChangesTheFrameWhereItWasAndIs) {
+    DaemonProcess daemon;
+    Client client(daemon.endpoint());
+    const json request = {{"scene", "cornell"}, {"width", 64}, {"height", 64}, {"format", "exr"}};
+    const auto before = render(client, request);
+    const auto moved = client.request(MessageType::object_set_transform,
+                                      {{"scene", "cornell"}, {"object", "short_block"}, {"translation", {0.0, 0.0, 0.15}}});
+    EXPECT_EQ(moved.body["scene_version"], 1);
+    json after_request = request;
+    after_request["min_scene_version"] = 1;
+    const auto after = render(client, after_request);
+    // The block's old top (left-bottom quarter of the image) changed; the top-left wall did not.
+    auto at = [](const image::DecodedImage& image, int x, int y) { return image.at(x, y, 0) + image.at(x, y, 1); };
+    EXPECT_EQ(at(before, 4, 10), at(after, 4, 10));
+    int changed = 0;
+    for (int y = 32; y < 64; ++y)
+        for (int x = 16; x < 40; ++x) changed += std::abs(at(before, x, y) - at(after, x, y)) > 1e-4f;
+    EXPECT_GT(changed, 40);
+    expect_error([&] { client.request(MessageType::render, {{"scene", "cornell"}, {"min_scene_version", 9}}); },
+                 ErrorCode::bad_request, "min_scene_version");
+}
+
+TEST(Daemon, DoublingLightIntensityDoublesRadiance) {
+    DaemonProcess daemon;
+    Client client(daemon.endpoint());
+    const json request = {{"scene", "cornell"}, {"width", 48}, {"height", 48}, {"format", "exr"}};
+    client.request(MessageType::light_set, {{"scene", "cornell"}, {"light", "ceiling_light"}, {"intensity", 0.5}});
+    const auto single = render(client, request);
+    client.request(MessageType::light_set, {{"scene", "cornell"}, {"light", "ceiling_light"}, {"intensity", 1.0}});
+    const auto doubled = render(client, request);
+    int compared = 0;
+    for (std::size_t i = 0; i < single.pixels.size(); ++i) {
+        if (i % 4 == 3 || single.pixels[i] < 1e-3f) continue;
+        EXPECT_NEAR(doubled.pixels[i], 2.0f * single.pixels[i], 0.01f * 2.0f * single.pixels[i]) << "value " << i;
+        ++compared;
+    }
+    EXPECT_GT(compared, 1000);
+}
+
+TEST(Daemon, EightClientsRenderAndMoveConcurrently) {
+    DaemonProcess daemon;
+    std::atomic<int> frames{0}, failures{0};
+    std::vector<std::thread> clients;
+    for (int c = 0; c < 8; ++c) {
+        clients.emplace_back([&, c] {
+            try {
+                Client client(daemon.endpoint());
+                for (int f = 0; f < 4; ++f) {
+                    client.request(MessageType::object_set_transform,
+                                   {{"scene", "cornell"}, {"object", c % 2 ? "short_block" : "tall_block"},
+                                    {"translation", {0.01 * f, 0.0, 0.0}}});
+                    const auto reply = client.request(MessageType::render,
+                                                      {{"scene", "cornell"}, {"width", 24}, {"height", 24}});
+                    if (image::decode_image(reply.attachment).width == 24) ++frames;
+                }
+            } catch (const std::exception& error) {
+                ++failures;
+                ADD_FAILURE() << "client " << c << ": " << error.what();
+            }
+        });
+    }
+    for (auto& thread : clients) thread.join();
+    EXPECT_EQ(failures.load(), 0);
+    EXPECT_EQ(frames.load(), 32);
+}
+
+TEST(Daemon, BadRequestsGetTheRightErrorAndServingContinues) {
+    DaemonProcess daemon;
+    Client client(daemon.endpoint());
+    expect_error([&] { client.request(MessageType::render, {{"scene", "nope"}}); }, ErrorCode::not_found, "scene");
+    expect_error([&] { client.request(MessageType::render, {{"scene", "cornell"}, {"width", 0}}); },
+                 ErrorCode::bad_request, "width");
+    expect_error([&] { client.request(MessageType::render, {{"scene", "cornell"}, {"method", "magic"}}); },
+                 ErrorCode::bad_request);
+    expect_error([&] { client.request(MessageType::render, {{"scene", "cornell"}, {"knobs", {{"bogus", 1}}}}); },
+                 ErrorCode::bad_request);
+    expect_error([&] { client.request(MessageType::render, {{"scene", "cornell"}, {"width", 16384}, {"height", 16384}}); },
+                 ErrorCode::too_large, "width");
+    // NaN cannot be written in JSON; a client sends null or a number past float range instead.
+    expect_error([&] {
+        client.request(MessageType::object_set_transform,
+                       {{"scene", "cornell"}, {"object", "short_block"}, {"translation", {nullptr, 0, 0}}});
+    }, ErrorCode::bad_request, "translation");
+    expect_error([&] {
+        json matrix = json::array();
+        for (int i = 0; i < 16; ++i) matrix.push_back(i == 5 ? 1e39 : 1.0);
+        client.request(MessageType::object_set_transform, {{"scene", "cornell"}, {"object", "short_block"}, {"matrix", matrix}});
+    }, ErrorCode::bad_request, "matrix");
+    expect_error([&] { client.request(MessageType::object_set_transform, {{"scene", "cornell"}, {"object", "ghost"}, {"scale", 2}}); },
+                 ErrorCode::not_found, "object");
+    expect_error([&] { client.request(MessageType::light_set, {{"scene", "cornell"}, {"light", "l"}, {"intensity", -1}}); },
+                 ErrorCode::bad_request, "intensity");
+    expect_error([&] { client.request(static_cast<MessageType>(999)); }, ErrorCode::unsupported);
+    expect_error([&] { client.request(MessageType::scene_load, {{"name", "x"}, {"path", "a.gltf"}}); },
+                 ErrorCode::unsupported, "path");  // no --scene-root
+    // The same connection still renders correctly.
+    const auto image = render(client, {{"scene", "cornell"}, {"width", 8}, {"height", 8}});
+    EXPECT_EQ(image.width, 8);
+    expect_still_serving(daemon.endpoint());
+}
+
+TEST(Daemon, BrokenFramesCloseOnlyThatConnection) {
+    DaemonProcess daemon({"--max-message-bytes", "65536"});
+    Client bystander(daemon.endpoint());
+    auto header = [](std::uint32_t json_length, std::uint32_t attachment_length, std::uint16_t version = 1) {
+        protocol::Header h{version, static_cast<std::uint16_t>(MessageType::render), 77, json_length, attachment_length};
+        std::vector<std::uint8_t> bytes(protocol::kHeaderSize);
+        protocol::encode_header(h, bytes.data());
+        return bytes;
+    };
+    struct Case {
+        std::string name;
+        std::vector<std::uint8_t> bytes;
+        ErrorCode code;
+    };
+    std::vector<std::uint8_t> garbage(100);
+    for (std::size_t i = 0; i < garbage.size(); ++i) garbage[i] = static_cast<std::uint8_t>(i * 37 + 11);
+    auto invalid_json = header(5, 0);
+    for (char c : std::string("{nope")) invalid_json.push_back(static_cast<std::uint8_t>(c));
+    const std::vector<Case> cases = {
+        {"random bytes", garbage, ErrorCode::broken_frame},
+        {"json past the cap", header(1u << 30, 0), ErrorCode::too_large},
+        {"attachment past the cap", header(2, 1u << 20), ErrorCode::too_large},
+        {"wrong version", header(2, 0, 9), ErrorCode::version_mismatch},
+        {"invalid json", invalid_json, ErrorCode::broken_frame},
+    };
+    for (const auto& c : cases) {
+        Client victim(daemon.endpoint());
+        const auto reply = victim.send_raw_and_read(c.bytes);
+        EXPECT_EQ(reply.type, static_cast<std::uint16_t>(MessageType::error)) << c.name;
+        EXPECT_EQ(reply.body.value("code", ""), protocol::error_code_name(c.code)) << c.name;
+        EXPECT_THROW(victim.read(), std::runtime_error) << c.name << ": the connection should be closed";
+    }
+    {
+        // A truncated header followed by a hang-up: nothing to answer, nothing else affected.
+        Client truncated(daemon.endpoint());
+        const auto partial = header(2, 0);
+        truncated.send_raw(std::span(partial).first(10));
+    }
+    const auto image = render(bystander, {{"scene", "cornell"}, {"width", 8}, {"height", 8}});
+    EXPECT_EQ(image.width, 8);
+    expect_still_serving(daemon.endpoint());
+}
+
+TEST(Daemon, TokenIsRequiredWhenConfigured) {
+    const auto token_file = std::filesystem::temp_directory_path() / "bounce-token-test";
+    std::ofstream(token_file) << "correct-horse-battery-staple\n";
+    DaemonProcess daemon({"--token-file", token_file.string()});
+    try {
+        Client wrong(daemon.endpoint(), std::string("wrong-token-wrong-token"));
+        ADD_FAILURE() << "a wrong token was accepted";
+    } catch (const ServerError& error) {
+        EXPECT_EQ(error.code(), ErrorCode::unauthorized);
+    }
+    Client right(daemon.endpoint(), std::string("correct-horse-battery-staple"));
+    EXPECT_EQ(render(right, {{"scene", "cornell"}, {"width", 8}, {"height", 8}}).width, 8);
+    std::filesystem::remove(token_file);
+}
+
+TEST(Daemon, NonLoopbackListenWithoutTokenIsRefused) {
+    EXPECT_THROW(DaemonProcess({"--listen", "0.0.0.0:0"}), std::runtime_error);
+}
+
+TEST(Daemon, SigtermExitsCleanly) {
+    DaemonProcess daemon;
+    {
+        Client client(daemon.endpoint());
+        render(client, {{"scene", "cornell"}, {"width", 16}, {"height", 16}});
+    }
+    EXPECT_EQ(daemon.terminate_and_wait(), 0);
+}
+
+}  // namespace
+}  // namespace bounce::test

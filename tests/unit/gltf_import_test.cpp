@@ -1,0 +1,483 @@
+#include "renderer/scene/gltf_import.hpp"
+
+#include "renderer/base/error.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <string>
+#include <vector>
+
+namespace bounce::scene {
+namespace {
+
+const std::filesystem::path assimp_dir = BOUNCE_ASSIMP_MODELS_DIR;
+const std::filesystem::path own_dir = std::filesystem::path(BOUNCE_TEST_DATA_DIR) / "gltf";
+
+// The message of the InputError that importing `path` throws ("" when it loads).
+std::string import_error(const std::filesystem::path& path) {
+    try {
+        import_gltf_file(path);
+    } catch (const InputError& error) {
+        return error.what();
+    }
+    return "";
+}
+
+std::vector<std::uint8_t> read_bytes(const std::filesystem::path& path) {
+    std::ifstream stream(path, std::ios::binary);
+    return {std::istreambuf_iterator<char>(stream), std::istreambuf_iterator<char>()};
+}
+
+// The warnings other than "no lights" (which every unlit test file also earns).
+std::vector<std::string> warnings_besides_unlit(const Scene& scene) {
+    std::vector<std::string> rest;
+    for (const std::string& warning : scene.warnings) {
+        if (warning.find("no lights and no emissive") == std::string::npos) rest.push_back(warning);
+    }
+    return rest;
+}
+
+std::size_t warnings_mentioning(const Scene& scene, const std::string& text) {
+    std::size_t count = 0;
+    for (const std::string& warning : scene.warnings) count += warning.find(text) != std::string::npos;
+    return count;
+}
+
+void expect_near(const glm::vec3& actual, const glm::vec3& expected, float tolerance = 1e-5f) {
+    EXPECT_NEAR(actual.x, expected.x, tolerance);
+    EXPECT_NEAR(actual.y, expected.y, tolerance);
+    EXPECT_NEAR(actual.z, expected.z, tolerance);
+}
+
+void expect_sound_primitive(const Primitive& primitive) {
+    const std::size_t vertices = primitive.positions.size();
+    ASSERT_EQ(primitive.normals.size(), vertices);
+    ASSERT_EQ(primitive.tangents.size(), vertices);
+    EXPECT_EQ(primitive.indices.size() % 3, 0u);
+    for (std::uint32_t index : primitive.indices) EXPECT_LT(index, vertices);
+    for (std::size_t v = 0; v < vertices; ++v) {
+        const glm::vec3& normal = primitive.normals[v];
+        const glm::vec4& tangent = primitive.tangents[v];
+        EXPECT_TRUE(std::isfinite(normal.x) && std::isfinite(normal.y) && std::isfinite(normal.z));
+        EXPECT_NEAR(glm::length(normal), 1.0f, 1e-5f);
+        EXPECT_NEAR(glm::length(glm::vec3(tangent)), 1.0f, 1e-5f);
+        EXPECT_NEAR(glm::dot(normal, glm::vec3(tangent)), 0.0f, 1e-5f);
+        EXPECT_TRUE(tangent.w == 1.0f || tangent.w == -1.0f);
+    }
+}
+
+// ---- malformed files from the assimp test models: each is refused with its fault named
+
+TEST(GltfImportRejects, IndexOutOfRange) {
+    const std::string message = import_error(assimp_dir / "IndexOutOfRange/IndexOutOfRange.gltf");
+    EXPECT_NE(message.find("IndexOutOfRange.gltf"), std::string::npos) << message;
+    EXPECT_NE(message.find("mesh 0 primitive 0: index"), std::string::npos) << message;
+    EXPECT_NE(message.find("out of range (24 vertices)"), std::string::npos) << message;
+}
+
+TEST(GltfImportRejects, AllIndicesOutOfRange) {
+    const std::string message = import_error(assimp_dir / "IndexOutOfRange/AllIndicesOutOfRange.gltf");
+    EXPECT_NE(message.find("AllIndicesOutOfRange.gltf"), std::string::npos) << message;
+    EXPECT_NE(message.find("at position 0 is out of range (24 vertices)"), std::string::npos) << message;
+}
+
+TEST(GltfImportRejects, MissingBuffer) {
+    const std::string message = import_error(assimp_dir / "MissingBin/BoxTextured.gltf");
+    EXPECT_NE(message.find("BoxTextured.gltf"), std::string::npos) << message;
+    EXPECT_NE(message.find("File not found : BoxTextured0.bin"), std::string::npos) << message;
+}
+
+TEST(GltfImportRejects, PrimitivesNotAnArray) {
+    const std::string message = import_error(assimp_dir / "wrongTypes/badArray.gltf");
+    EXPECT_NE(message.find("meshes[0].primitives must be an array (found object)"), std::string::npos)
+        << message;
+}
+
+TEST(GltfImportRejects, NormalScaleNotANumber) {
+    const std::string message = import_error(assimp_dir / "wrongTypes/badNumber.gltf");
+    EXPECT_NE(message.find("materials[0].normalTexture.scale must be a number"), std::string::npos)
+        << message;
+    // The same file also lacks the required normalTexture.index; the type fault is reported first.
+}
+
+TEST(GltfImportRejects, PbrNotAnObject) {
+    const std::string message = import_error(assimp_dir / "wrongTypes/badObject.gltf");
+    EXPECT_NE(message.find("materials[0].pbrMetallicRoughness must be an object (found array)"),
+              std::string::npos)
+        << message;
+}
+
+TEST(GltfImportRejects, NameNotAString) {
+    const std::string message = import_error(assimp_dir / "wrongTypes/badString.gltf");
+    EXPECT_NE(message.find("scenes[0].name must be a string (found number 42)"), std::string::npos)
+        << message;
+}
+
+TEST(GltfImportRejects, NegativeTextureIndex) {
+    const std::string message = import_error(assimp_dir / "wrongTypes/badUint.gltf");
+    EXPECT_NE(message.find("materials[0].pbrMetallicRoughness.baseColorTexture.index must be a non-negative "
+                           "integer (found number -1)"),
+              std::string::npos)
+        << message;
+}
+
+TEST(GltfImportRejects, SceneNotAnIndex) {
+    const std::string message = import_error(assimp_dir / "SchemaFailures/sceneWrongType.gltf");
+    EXPECT_NE(
+        message.find("sceneWrongType.gltf: scene must be a non-negative integer (found string \"hello\")"),
+        std::string::npos)
+        << message;
+}
+
+TEST(GltfImportRejects, RecursiveNodes) {
+    const std::string message = import_error(assimp_dir / "RecursiveNodes/RecursiveNodes.gltf");
+    EXPECT_NE(message.find("RecursiveNodes.gltf"), std::string::npos) << message;
+    EXPECT_NE(message.find("is its own ancestor: the node hierarchy has a cycle"), std::string::npos)
+        << message;
+}
+
+TEST(GltfImportRejects, InfinitePositions) {
+    const std::string message =
+        import_error(assimp_dir / "BoxWithInfinites-glTF-Binary/BoxWithInfinites.glb");
+    EXPECT_NE(message.find("BoxWithInfinites.glb: mesh 0 primitive 0: vertex"), std::string::npos) << message;
+    EXPECT_NE(message.find("non-finite position"), std::string::npos) << message;
+}
+
+TEST(GltfImportRejects, IncorrectVertexArrays) {
+    // Cube.bin holds 514 bytes, but bufferViews 2 to 4 reach up to byte 1800.
+    const std::string message = import_error(assimp_dir / "IncorrectVertexArrays/Cube.gltf");
+    EXPECT_NE(message.find("Cube.gltf: bufferViews[2] (bytes 504..936) exceeds buffer 0 (514 bytes)"),
+              std::string::npos)
+        << message;
+}
+
+TEST(GltfImportRejects, DracoIsRequiredButUnsupported) {
+    const std::string message = import_error(assimp_dir / "draco/2CylinderEngine.gltf");
+    EXPECT_NE(message.find("requires the unsupported extension KHR_draco_mesh_compression"),
+              std::string::npos)
+        << message;
+}
+
+TEST(GltfImportAccepts, MalformedOptionalExtensionOnlyWarns) {
+    // badExtension.gltf is a valid box except that KHR_texture_transform (optional) is a string.
+    const Scene scene = import_gltf_file(assimp_dir / "wrongTypes/badExtension.gltf");
+    EXPECT_EQ(scene.objects.size(), 1u);
+    EXPECT_EQ(warnings_mentioning(scene, "KHR_texture_transform must be an object"), 1u);
+    EXPECT_TRUE(scene.materials[0].base_color_texture.valid());
+}
+
+// ---- valid files from the assimp test models
+
+TEST(GltfImportAccepts, MorphCube) {
+    const Scene scene =
+        import_gltf_file(assimp_dir / "glTF-Sample-Models/AnimatedMorphCube-glTF/AnimatedMorphCube.gltf");
+    EXPECT_EQ(scene.name, "AnimatedMorphCube");
+    ASSERT_EQ(scene.objects.size(), 1u);
+    EXPECT_EQ(scene.objects[0].name, "AnimatedMorphCube");
+    ASSERT_EQ(scene.meshes.size(), 1u);
+    ASSERT_EQ(scene.meshes[0].primitives.size(), 1u);
+    const Primitive& primitive = scene.meshes[0].primitives[0];
+    EXPECT_EQ(primitive.positions.size(), 24u);
+    EXPECT_EQ(primitive.triangle_count(), 12u);
+    expect_sound_primitive(primitive);
+    // Eight of the file's tangents lie along their normals; they are replaced.
+    EXPECT_EQ(warnings_mentioning(scene, "8 tangents"), 1u);
+    ASSERT_EQ(scene.materials.size(), 1u);
+    EXPECT_NEAR(scene.materials[0].base_color.r, 0.6038274f, 1e-6f);
+    EXPECT_FLOAT_EQ(scene.materials[0].roughness, 0.5f);
+    EXPECT_FLOAT_EQ(scene.materials[0].metallic, 0.0f);
+    // The node scales by 100: the world bounds are 100 times the mesh bounds.
+    EXPECT_NEAR(scene.world_bounds().extent().x, 100.0f * scene.meshes[0].bounds.extent().x, 1e-3f);
+    ASSERT_EQ(scene.cameras.size(), 1u);
+    EXPECT_EQ(scene.cameras[0].name, "default");
+}
+
+void expect_textured_box(const Scene& scene) {
+    ASSERT_EQ(scene.objects.size(), 1u);
+    ASSERT_EQ(scene.meshes.size(), 1u);
+    const Primitive& primitive = scene.meshes[0].primitives.at(0);
+    EXPECT_EQ(primitive.positions.size(), 24u);
+    EXPECT_EQ(primitive.uv0.size(), 24u);
+    EXPECT_EQ(primitive.triangle_count(), 12u);
+    expect_sound_primitive(primitive);
+    ASSERT_EQ(scene.textures.size(), 1u);
+    EXPECT_EQ(scene.textures[0].width, 211);
+    EXPECT_EQ(scene.textures[0].height, 211);
+    EXPECT_EQ(scene.textures[0].rgba8.size(), 211u * 211u * 4u);
+    EXPECT_TRUE(scene.textures[0].srgb);
+    EXPECT_EQ(scene.materials.at(0).base_color_texture.texture, 0);
+    EXPECT_EQ(scene.materials[0].metallic, 0.0f);
+    // The root node's matrix turns the box's Z-up into Y-up.
+    expect_near(scene.world_bounds().min, glm::vec3(-0.5f), 1e-5f);
+    expect_near(scene.world_bounds().max, glm::vec3(0.5f), 1e-5f);
+    EXPECT_TRUE(warnings_besides_unlit(scene).empty());
+}
+
+TEST(GltfImportAccepts, BoxTextured) {
+    const Scene scene = import_gltf_file(assimp_dir / "BoxTextured-glTF/BoxTextured.gltf");
+    EXPECT_EQ(scene.name, "BoxTextured");
+    expect_textured_box(scene);
+}
+
+TEST(GltfImportAccepts, BoxTexturedBinary) {
+    expect_textured_box(import_gltf_file(assimp_dir / "BoxTextured-glTF-Binary/BoxTextured.glb"));
+}
+
+TEST(GltfImportAccepts, Cameras) {
+    const Scene scene = import_gltf_file(assimp_dir / "cameras/Cameras.gltf");
+    // One perspective camera; the orthographic one is skipped with a warning.
+    ASSERT_EQ(scene.cameras.size(), 1u);
+    EXPECT_EQ(scene.cameras[0].name, "camera_0");
+    EXPECT_FLOAT_EQ(scene.cameras[0].vertical_fov, 0.7f);
+    EXPECT_FLOAT_EQ(scene.cameras[0].z_near, 0.01f);
+    EXPECT_FLOAT_EQ(scene.cameras[0].z_far, 100.0f);
+    expect_near(scene.cameras[0].position, {0.5f, 0.5f, 3.0f});
+    expect_near(scene.cameras[0].forward(), {0.0f, 0.0f, -1.0f});
+    EXPECT_EQ(warnings_mentioning(scene, "orthographic"), 1u);
+    EXPECT_EQ(scene.objects.size(), 1u);
+}
+
+TEST(GltfImportAccepts, NoRootNode) {
+    for (const char* file : {"NoScene.gltf", "SceneWithoutNodes.gltf"}) {
+        const Scene scene = import_gltf_file(assimp_dir / "TestNoRootNode" / file);
+        EXPECT_TRUE(scene.objects.empty()) << file;
+        EXPECT_TRUE(scene.meshes.empty()) << file;
+        ASSERT_EQ(scene.cameras.size(), 1u) << file;
+        EXPECT_EQ(scene.cameras[0].name, "default") << file;
+        EXPECT_TRUE(std::isfinite(scene.cameras[0].position.z)) << file;
+    }
+}
+
+// ---- our own files (tests/data/gltf)
+
+TEST(GltfImportOwn, MissingTextureFallsBackToTheFactor) {
+    const Scene scene = import_gltf_file(own_dir / "missing_texture.gltf");
+    ASSERT_EQ(scene.objects.size(), 1u);
+    EXPECT_EQ(warnings_besides_unlit(scene).size(), 1u);
+    EXPECT_EQ(warnings_mentioning(scene, "does_not_exist.png"), 1u);
+    ASSERT_EQ(scene.materials.size(), 1u);
+    EXPECT_FALSE(scene.materials[0].base_color_texture.valid());
+    EXPECT_EQ(scene.materials[0].base_color, glm::vec4(0.2f, 0.4f, 0.6f, 1.0f));
+    EXPECT_TRUE(scene.textures.empty());
+}
+
+TEST(GltfImportOwn, RequiredUnsupportedExtensionIsRefused) {
+    const std::string message = import_error(own_dir / "required_unsupported_extension.gltf");
+    EXPECT_NE(message.find("required_unsupported_extension.gltf: requires the unsupported extension "
+                           "KHR_materials_transmission"),
+              std::string::npos)
+        << message;
+}
+
+TEST(GltfImportOwn, UnknownOptionalExtensionWarns) {
+    const Scene scene = import_gltf_file(own_dir / "unknown_optional_extension.gltf");
+    EXPECT_EQ(scene.objects.size(), 1u);
+    EXPECT_EQ(scene.objects[0].name, "sparkly");
+    EXPECT_EQ(warnings_mentioning(scene, "VENDOR_sparkles"), 1u);
+}
+
+TEST(GltfImportOwn, PunctualLightsInWorldSpace) {
+    // The parent "rig" moves by (10, 0, 0) and turns 90 degrees about +Y, which maps local -Z to -X.
+    const Scene scene = import_gltf_file(own_dir / "lights.gltf");
+    ASSERT_EQ(scene.lights.size(), 3u);
+    const Light& point = scene.lights[0];
+    EXPECT_EQ(point.name, "bulb");
+    EXPECT_EQ(point.type, LightType::point);
+    EXPECT_FLOAT_EQ(point.intensity, 5.0f);
+    expect_near(point.color, {1.0f, 0.9f, 0.8f});
+    expect_near(point.position, {13.0f, 2.0f, 0.0f});
+
+    const Light& spot = scene.lights[1];
+    EXPECT_EQ(spot.name, "torch");
+    EXPECT_EQ(spot.type, LightType::spot);
+    EXPECT_FLOAT_EQ(spot.intensity, 20.0f);
+    expect_near(spot.radiant(), {20.0f, 10.0f, 5.0f});
+    expect_near(spot.position, {10.0f, 0.0f, -1.0f});
+    expect_near(spot.direction, {-1.0f, 0.0f, 0.0f});
+    EXPECT_FLOAT_EQ(spot.inner_cone, 0.2f);
+    EXPECT_FLOAT_EQ(spot.outer_cone, 0.5f);
+
+    const Light& sun = scene.lights[2];
+    EXPECT_EQ(sun.name, "sun");  // the node's name when the light has none
+    EXPECT_EQ(sun.type, LightType::directional);
+    EXPECT_FLOAT_EQ(sun.intensity, 3.0f);
+    expect_near(sun.color, glm::vec3(1.0f));
+    expect_near(sun.direction, {0.0f, -1.0f, 0.0f});
+}
+
+TEST(GltfImportOwn, EmissiveStrengthAndSpecular) {
+    const Scene scene = import_gltf_file(own_dir / "emissive_strength.gltf");
+    ASSERT_EQ(scene.materials.size(), 1u);
+    const Material& material = scene.materials[0];
+    EXPECT_EQ(material.name, "lamp");
+    expect_near(material.emissive, {4.0f, 2.0f, 1.0f});
+    EXPECT_FLOAT_EQ(material.specular, 0.5f);
+    EXPECT_FLOAT_EQ(material.roughness, 0.3f);
+    EXPECT_FLOAT_EQ(material.metallic, 0.0f);
+    EXPECT_TRUE(material.double_sided);
+    EXPECT_TRUE(warnings_besides_unlit(scene).empty());
+}
+
+TEST(GltfImportOwn, TopologiesAndNames) {
+    const Scene scene = import_gltf_file(own_dir / "topology.gltf");
+    ASSERT_EQ(scene.meshes.size(), 3u);
+
+    const Primitive& flat = scene.meshes[0].primitives.at(0);  // non-indexed: 0..n-1
+    EXPECT_EQ(flat.indices, (std::vector<std::uint32_t>{0, 1, 2, 3, 4, 5}));
+    expect_sound_primitive(flat);
+    expect_near(flat.normals[0], {0.0f, 0.0f, 1.0f});
+    expect_near(scene.meshes[0].bounds.max, {3.0f, 1.0f, 0.0f});
+
+    const Primitive& quad = scene.meshes[1].primitives.at(0);  // u8 indices, normalized u8 UVs
+    EXPECT_EQ(quad.indices, (std::vector<std::uint32_t>{0, 1, 2, 0, 2, 3}));
+    ASSERT_EQ(quad.uv0.size(), 4u);
+    EXPECT_EQ(quad.uv0[1], glm::vec2(1.0f, 1.0f));
+    EXPECT_EQ(quad.uv0[3], glm::vec2(0.0f, 0.0f));
+    expect_sound_primitive(quad);
+
+    // Strip and fan become lists with consistent (counter-clockwise) winding; the lines are skipped.
+    const Mesh& mixed = scene.meshes[2];
+    ASSERT_EQ(mixed.primitives.size(), 2u);
+    EXPECT_EQ(mixed.primitives[0].indices, (std::vector<std::uint32_t>{0, 1, 2, 1, 3, 2}));
+    EXPECT_EQ(mixed.primitives[1].indices, (std::vector<std::uint32_t>{1, 2, 0, 2, 3, 0}));
+    for (const Primitive& primitive : mixed.primitives) {
+        expect_sound_primitive(primitive);
+        for (const glm::vec3& normal : primitive.normals) expect_near(normal, {0.0f, 0.0f, 1.0f});
+    }
+    EXPECT_EQ(warnings_mentioning(scene, "mesh 2 primitive 2: points and lines"), 1u);
+
+    // Meshes are shared; names are unique.
+    ASSERT_EQ(scene.objects.size(), 4u);
+    EXPECT_EQ(scene.objects[0].name, "thing");
+    EXPECT_EQ(scene.objects[1].name, "thing_2");
+    EXPECT_EQ(scene.objects[2].name, "object_2");
+    EXPECT_EQ(scene.objects[3].name, "thing_3");
+    EXPECT_EQ(scene.objects[1].mesh, 1);
+    EXPECT_EQ(scene.objects[3].mesh, 1);
+    EXPECT_EQ(scene.triangle_count(), 2u + 2u + 4u + 2u);
+}
+
+TEST(GltfImportOwn, NanPositionIsRefused) {
+    const std::string message = import_error(own_dir / "nan_position.gltf");
+    EXPECT_NE(message.find("nan_position.gltf: mesh 0 primitive 0: vertex 1 has a non-finite position"),
+              std::string::npos)
+        << message;
+}
+
+TEST(GltfImportOwn, ZeroAreaTrianglesGetFiniteNormals) {
+    const Scene scene = import_gltf_file(own_dir / "zero_area.gltf");
+    const Primitive& primitive = scene.meshes.at(0).primitives.at(0);
+    EXPECT_EQ(primitive.triangle_count(), 3u);
+    expect_sound_primitive(primitive);
+    expect_near(primitive.normals[3], {0.0f, 0.0f, 1.0f});
+}
+
+TEST(GltfImportOwn, BrokenJsonIsRefused) {
+    const std::string message = import_error(own_dir / "broken_json.gltf");
+    EXPECT_NE(message.find("broken_json.gltf: invalid JSON"), std::string::npos) << message;
+}
+
+TEST(GltfImportOwn, TexturesColourSpacesAndTangents) {
+    const Scene scene = import_gltf_file(own_dir / "textured.gltf");
+    // The grey image is used as sRGB base colour and as linear normal map: two Textures.
+    ASSERT_EQ(scene.textures.size(), 3u);
+    const Material& material = scene.materials.at(0);
+    const Texture& base = scene.textures.at(static_cast<std::size_t>(material.base_color_texture.texture));
+    const Texture& normal = scene.textures.at(static_cast<std::size_t>(material.normal_texture.texture));
+    const Texture& packed =
+        scene.textures.at(static_cast<std::size_t>(material.metallic_roughness_texture.texture));
+    EXPECT_TRUE(base.srgb);
+    EXPECT_FALSE(normal.srgb);
+    EXPECT_FALSE(packed.srgb);
+    EXPECT_EQ(base.name, "grey");
+    EXPECT_EQ(base.rgba8, normal.rgba8);
+    // Grey expands to RGB with opaque alpha, rows top to bottom.
+    EXPECT_EQ(base.rgba8, (std::vector<std::uint8_t>{0, 0, 0, 255, 128, 128, 128, 255, 255, 255, 255, 255, 64,
+                                                     64, 64, 255}));
+    // 16-bit samples are scaled to 8 bits.
+    EXPECT_EQ(packed.rgba8, (std::vector<std::uint8_t>{255, 128, 0, 255}));
+    EXPECT_FLOAT_EQ(material.normal_scale, 0.5f);
+
+    // No TANGENT in the file: generated from the UVs (u grows along +X here, v grows along -Y).
+    const Primitive& primitive = scene.meshes.at(0).primitives.at(0);
+    expect_sound_primitive(primitive);
+    for (const glm::vec4& tangent : primitive.tangents) {
+        expect_near(glm::vec3(tangent), {1.0f, 0.0f, 0.0f});
+        EXPECT_EQ(tangent.w, 1.0f);
+    }
+}
+
+TEST(GltfImportOwn, UndecodableImageOnlyWarns) {
+    // external_image.glb's image URI names a .gltf file: found, but not an image.
+    const Scene scene = import_gltf_file(own_dir / "external_image.glb");
+    EXPECT_EQ(scene.objects.size(), 1u);
+    const auto warnings = warnings_besides_unlit(scene);
+    ASSERT_EQ(warnings.size(), 1u);
+    EXPECT_NE(warnings[0].find("'missing_texture.gltf'"), std::string::npos) << warnings[0];
+    EXPECT_NE(warnings[0].find("cannot decode"), std::string::npos) << warnings[0];
+    EXPECT_FALSE(scene.materials.at(0).base_color_texture.valid());
+}
+
+TEST(GltfImportOwn, Limits) {
+    const std::string message = import_error(own_dir / "huge_accessor.gltf");
+    EXPECT_NE(message.find("accessor 0 has 268435457 elements, more than the limit"), std::string::npos)
+        << message;
+    // An oversized image is refused from its header, before decoding; the scene still loads.
+    const Scene scene = import_gltf_file(own_dir / "huge_image.gltf");
+    EXPECT_TRUE(scene.textures.empty());
+    EXPECT_FALSE(scene.materials.at(0).emissive_texture.valid());
+    EXPECT_EQ(warnings_mentioning(scene, "20000x1 pixels exceeds the limit of 16384 per side"), 1u);
+}
+
+// ---- uploads
+
+TEST(GltfImportMemory, LoadsAnEmbeddedGlb) {
+    const std::vector<std::uint8_t> bytes =
+        read_bytes(assimp_dir / "BoxTextured-glTF-Binary/BoxTextured.glb");
+    ASSERT_FALSE(bytes.empty());
+    const Scene scene = import_glb_memory(bytes, "upload");
+    EXPECT_EQ(scene.name, "upload");
+    expect_textured_box(scene);
+}
+
+TEST(GltfImportMemory, RefusesExternalFiles) {
+    for (const char* file : {"external_buffer.glb", "external_image.glb"}) {
+        const std::vector<std::uint8_t> bytes = read_bytes(own_dir / file);
+        ASSERT_FALSE(bytes.empty());
+        try {
+            import_glb_memory(bytes, "upload");
+            ADD_FAILURE() << file << " loaded";
+        } catch (const InputError& error) {
+            EXPECT_NE(std::string(error.what()).find("upload: "), std::string::npos) << error.what();
+            EXPECT_NE(std::string(error.what()).find("refers to the external file"), std::string::npos)
+                << error.what();
+        }
+    }
+    // From disk, the same external buffer is fine.
+    EXPECT_EQ(import_gltf_file(own_dir / "external_buffer.glb").objects.size(), 1u);
+}
+
+TEST(GltfImportMemory, RefusesGarbage) {
+    const std::vector<std::uint8_t> not_glb = {'{', '}'};
+    EXPECT_THROW(import_glb_memory(not_glb, "upload"), InputError);
+    std::vector<std::uint8_t> truncated = read_bytes(assimp_dir / "BoxTextured-glTF-Binary/BoxTextured.glb");
+    truncated.resize(truncated.size() / 2);
+    try {
+        import_glb_memory(truncated, "upload");
+        ADD_FAILURE() << "a truncated GLB loaded";
+    } catch (const InputError& error) {
+        EXPECT_NE(std::string(error.what()).find("truncated GLB"), std::string::npos) << error.what();
+    }
+}
+
+TEST(GltfImportAccepts, UnlitSceneEarnsOneWarning) {
+    const Scene scene = import_gltf_file(assimp_dir / "BoxTextured-glTF/BoxTextured.gltf");
+    EXPECT_EQ(warnings_mentioning(scene, "no lights and no emissive"), 1u);
+}
+
+}  // namespace
+}  // namespace bounce::scene
