@@ -236,9 +236,7 @@ int run(const std::vector<std::string>& words) {
         const std::string out = args.require("-o");
         json body = render_body(args);
         body["format"] = format_of(out);
-        if (auto camera = args.get("--camera")) {
-            client.request(MessageType::camera_set, {{"scene", body["scene"]}, {"camera", *camera}});
-        }
+        if (auto camera = args.get("--camera")) body["camera"] = *camera;
         const auto reply = client.request(MessageType::render, body);
         write_file(out, reply.attachment);
         std::cout << reply.body.dump() << "\n";

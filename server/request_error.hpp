@@ -21,4 +21,13 @@ private:
     std::optional<std::string> field_;
 };
 
+// What an exception thrown while serving a request means to the client: the code, the message and
+// the offending field. Unexpected exceptions are `internal`.
+struct Failure {
+    protocol::ErrorCode code = protocol::ErrorCode::internal;
+    std::string message;
+    std::optional<std::string> field;
+};
+Failure describe_failure(std::exception_ptr error);
+
 }  // namespace bounce::server

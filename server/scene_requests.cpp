@@ -290,6 +290,7 @@ json set_camera(SceneRegistry& registry, const json& body) {
 RenderOrder parse_render(const json& body, std::uint64_t max_pixels) {
     RenderOrder order;
     order.scene = protocol::get_string(body, "scene");
+    order.camera = protocol::get_optional_string(body, "camera");
     RenderRequest& request = order.request;
     request.method = protocol::get_optional_string(body, "method").value_or("direct");
     request.preset = protocol::get_optional_string(body, "preset").value_or("medium");

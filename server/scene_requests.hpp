@@ -38,6 +38,7 @@ struct RenderOrder {
     int jpeg_quality = 90;
     bool exr_half = false;
     std::optional<std::uint64_t> min_scene_version;
+    std::optional<std::string> camera;  // a camera of the scene, for this render only
 };
 RenderOrder parse_render(const nlohmann::json& body, std::uint64_t max_pixels);
 

@@ -241,7 +241,18 @@ void Session::execute(const protocol::Message& message, Clock::time_point receiv
                                                    entry.version, *order.min_scene_version),
                                        "min_scene_version");
                 }
-                auto result = std::make_shared<RenderResult>(renderer.render(*entry.resources, order.request));
+                RenderRequest request = order.request;
+                if (order.camera) {
+                    // A camera of the scene for this render only; the scene's own view is untouched.
+                    const auto index = entry.scene->find_camera(*order.camera);
+                    if (!index) {
+                        throw RequestError(ErrorCode::not_found,
+                                           fmt::format("scene '{}' has no camera '{}'", order.scene, *order.camera),
+                                           "camera");
+                    }
+                    request.camera = entry.scene->cameras[*index];
+                }
+                auto result = std::make_shared<RenderResult>(renderer.render(*entry.resources, request));
                 daemon_.metrics().set_resident_bytes(order.scene, result->stats.resident_bytes);
                 const std::uint64_t version = entry.version;
                 const auto rendered = Clock::now();
@@ -283,21 +294,13 @@ void Session::execute(const protocol::Message& message, Clock::time_point receiv
                 throw RequestError(ErrorCode::unsupported, "not a request the render thread runs");
         }
         done(protocol::make_ok(id, std::move(reply)));
-    } catch (const RequestError& error) {
-        fail(id, error.code(), error.what(), error.field());
-        asio::post(socket_.get_executor(), [self = shared_from_this(), id] { self->finish(id); });
-    } catch (const protocol::FieldError& error) {
-        fail(id, ErrorCode::bad_request, error.what(), error.field);
-        asio::post(socket_.get_executor(), [self = shared_from_this(), id] { self->finish(id); });
-    } catch (const protocol::ProtocolError& error) {
-        fail(id, error.code, error.what());
-        asio::post(socket_.get_executor(), [self = shared_from_this(), id] { self->finish(id); });
-    } catch (const InputError& error) {
-        fail(id, ErrorCode::bad_request, error.what());
-        asio::post(socket_.get_executor(), [self = shared_from_this(), id] { self->finish(id); });
-    } catch (const std::exception& error) {
-        log::error("session", "request {} ({}) failed: {}", id, protocol::message_type_name(message.type), error.what());
-        fail(id, ErrorCode::internal, error.what());
+    } catch (...) {
+        const Failure failure = describe_failure(std::current_exception());
+        if (failure.code == ErrorCode::internal) {
+            log::error("session", "request {} ({}) failed: {}", id, protocol::message_type_name(message.type),
+                       failure.message);
+        }
+        fail(id, failure.code, failure.message, failure.field);
         asio::post(socket_.get_executor(), [self = shared_from_this(), id] { self->finish(id); });
     }
 }

@@ -1,0 +1,23 @@
+#include "server/request_error.hpp"
+
+namespace bounce::server {
+
+Failure describe_failure(std::exception_ptr error) {
+    try {
+        std::rethrow_exception(error);
+    } catch (const RequestError& e) {
+        return {e.code(), e.what(), e.field()};
+    } catch (const protocol::FieldError& e) {
+        return {protocol::ErrorCode::bad_request, e.what(), e.field};
+    } catch (const protocol::ProtocolError& e) {
+        return {e.code, e.what(), std::nullopt};
+    } catch (const InputError& e) {
+        return {protocol::ErrorCode::bad_request, e.what(), std::nullopt};
+    } catch (const std::exception& e) {
+        return {protocol::ErrorCode::internal, e.what(), std::nullopt};
+    } catch (...) {
+        return {protocol::ErrorCode::internal, "unknown failure", std::nullopt};
+    }
+}
+
+}  // namespace bounce::server
