@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <map>
 #include <thread>
 
 namespace bounce::test {
@@ -273,6 +274,42 @@ TEST(Daemon, BrokenFramesCloseOnlyThatConnection) {
     const auto image = render(bystander, {{"scene", "cornell"}, {"width", 8}, {"height", 8}});
     EXPECT_EQ(image.width, 8);
     expect_still_serving(daemon.endpoint(), baseline);
+}
+
+// Pipelined requests past the queue's capacity: each gets exactly one reply, a frame or `busy`;
+// requests whose deadline passes in the queue get `timeout`.
+TEST(Daemon, FullQueueAnswersBusyAndDeadlinesAnswerTimeout) {
+    DaemonProcess daemon({"--queue", "2", "--max-in-flight", "64"});
+    Client client(daemon.endpoint());
+    constexpr int kRequests = 24;
+    std::vector<std::uint8_t> burst;
+    for (int i = 0; i < kRequests; ++i) {
+        json body = {{"scene", "cornell"}, {"width", 192}, {"height", 192}};
+        if (i % 2 == 1) body["timeout_ms"] = 1;
+        const auto frame = protocol::encode(protocol::make_message(MessageType::render, 1000 + i, body));
+        burst.insert(burst.end(), frame.begin(), frame.end());
+    }
+    client.send_raw(burst);
+    std::map<std::uint64_t, std::string> replies;
+    for (int i = 0; i < kRequests; ++i) {
+        const auto reply = client.read();
+        const std::string kind = reply.type == static_cast<std::uint16_t>(MessageType::frame)
+                                     ? "frame"
+                                     : reply.body.value("code", "?");
+        EXPECT_TRUE(replies.emplace(reply.request_id, kind).second) << "two replies to " << reply.request_id;
+    }
+    std::map<std::string, int> counts;
+    for (const auto& [id, kind] : replies) ++counts[kind];
+    EXPECT_EQ(replies.size(), static_cast<std::size_t>(kRequests));
+    EXPECT_GE(counts["frame"], 1);
+    EXPECT_GE(counts["busy"], 1);
+    EXPECT_EQ(counts["frame"] + counts["busy"] + counts["timeout"], kRequests);
+    EXPECT_GE(counts["timeout"], 1) << "queued renders with a 1 ms deadline wait longer than that";
+    for (const auto& [id, kind] : replies) {
+        if (kind == "timeout") {
+            EXPECT_EQ(id % 2, 1u) << "only requests with timeout_ms may time out";
+        }
+    }
 }
 
 TEST(Daemon, TokenIsRequiredWhenConfigured) {
