@@ -39,6 +39,32 @@ gpu::Texture make_depth_map(GLenum target, int size) {
     return texture;
 }
 
+// FNV-1a over everything a shadow map depends on: the lights, every object's transform and mesh,
+// the map size. Geometry itself is immutable once uploaded.
+std::uint64_t shadow_fingerprint(const scene::Scene& scene, int size) {
+    std::uint64_t hash = 1469598103934665603ull;
+    auto mix = [&hash](const void* data, std::size_t bytes) {
+        const auto* p = static_cast<const unsigned char*>(data);
+        for (std::size_t i = 0; i < bytes; ++i) hash = (hash ^ p[i]) * 1099511628211ull;
+    };
+    mix(&size, sizeof(size));
+    for (const scene::Light& light : scene.lights) {
+        mix(&light.type, sizeof(light.type));
+        mix(&light.position, sizeof(light.position));
+        mix(&light.direction, sizeof(light.direction));
+        const glm::vec3 radiant = light.radiant();
+        mix(&radiant, sizeof(radiant));  // power 0 <-> > 0 decides whether a map exists
+        mix(&light.outer_cone, sizeof(light.outer_cone));
+    }
+    for (const scene::Object& object : scene.objects) {
+        mix(&object.mesh, sizeof(object.mesh));
+        mix(&object.transform, sizeof(object.transform));
+    }
+    const std::size_t counts[2] = {scene.lights.size(), scene.objects.size()};
+    mix(counts, sizeof(counts));
+    return hash;
+}
+
 }  // namespace
 
 void ShadowMaps::render_view(const PassContext& context, const gpu::ShaderProgram& program,
@@ -52,6 +78,14 @@ void ShadowMaps::render_view(const PassContext& context, const gpu::ShaderProgra
 
 void ShadowMaps::render(const PassContext& context, int size) {
     gpu::GpuTimers::Scope timing(context.timers, "shadow_maps");
+    const std::uint64_t fingerprint = shadow_fingerprint(context.scene, size);
+    last_reused_ = fingerprint == fingerprint_ && maps_.size() == context.scene.lights.size();
+    if (last_reused_) {
+        ++frames_reused_;
+        return;
+    }
+    fingerprint_ = fingerprint;
+    ++frames_drawn_;
     const auto& lights = context.scene.lights;
     maps_.resize(lights.size());
     const scene::Aabb bounds = context.scene.world_bounds();

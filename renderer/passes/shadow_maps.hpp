@@ -5,14 +5,20 @@
 
 #include "renderer/passes/pass_context.hpp"
 
+#include <cstdint>
 #include <vector>
 
 namespace bounce::passes {
 
 class ShadowMaps {
 public:
-    // Renders a map of `size` texels per side for every light of the scene that has power.
+    // Renders a map of `size` texels per side for every light of the scene that has power. Maps are
+    // kept while the lights, the object transforms and the size stay the same.
     void render(const PassContext& context, int size);
+    // Whether the last render() reused the maps instead of drawing them.
+    bool last_render_reused() const { return last_reused_; }
+    std::size_t frames_drawn() const { return frames_drawn_; }
+    std::size_t frames_reused() const { return frames_reused_; }
     // Whether light `index` has a map (false for lights without power).
     bool has_map(std::size_t light_index) const;
     // Sets the shadow uniforms of common/shadows.glsl on `program` and binds the light's map.
@@ -33,6 +39,10 @@ private:
     void render_view(const PassContext& context, const gpu::ShaderProgram& program, const glm::mat4& view_projection);
     std::vector<LightMap> maps_;
     gpu::Framebuffer framebuffer_;
+    std::uint64_t fingerprint_ = 0;
+    bool last_reused_ = false;
+    std::size_t frames_drawn_ = 0;
+    std::size_t frames_reused_ = 0;
 };
 
 }  // namespace bounce::passes

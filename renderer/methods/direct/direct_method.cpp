@@ -51,7 +51,9 @@ public:
     std::vector<ResidentStructure> resident() const override {
         return {{"gbuffer", gbuffer_.bytes(), "surface attributes at the frame size"},
                 {"shadow_maps", shadows_.bytes(),
-                 fmt::format("{} lights with power, one map each", shadows_.map_count())}};
+                 fmt::format("{} lights with power, one map each; drawn for {} frames, reused for {} "
+                             "(nothing they depend on changed)",
+                             shadows_.map_count(), shadows_.frames_drawn(), shadows_.frames_reused())}};
     }
 
 private:

@@ -1,0 +1,61 @@
+// Shadow maps are drawn again only when something they depend on changed.
+#include "gpu_fixture.hpp"
+#include "renderer/passes/shadow_maps.hpp"
+#include "renderer/scene/builtin.hpp"
+
+#include <gtest/gtest.h>
+
+namespace bounce::test {
+namespace {
+
+TEST(ShadowMaps, ReusedUntilALightOrATransformChanges) {
+    shared_renderer();  // makes the GL context current on this thread
+    scene::Scene scene = scene::make_cornell_box();
+    gpu::GpuScene gpu_scene(scene);
+    gpu::ShaderCache shaders;
+    gpu::StateCache state;
+    gpu::GpuTimers timers;
+    gpu::Framebuffer output;
+    const passes::PassContext context{scene, gpu_scene, shaders, state, timers, output, 16, 16, scene.cameras[0]};
+    passes::ShadowMaps maps;
+    timers.begin_frame();
+
+    maps.render(context, 64);
+    EXPECT_FALSE(maps.last_render_reused());
+    maps.render(context, 64);
+    EXPECT_TRUE(maps.last_render_reused());
+
+    scene.objects[1].transform[3].x += 0.01f;  // a block moved
+    maps.render(context, 64);
+    EXPECT_FALSE(maps.last_render_reused());
+    maps.render(context, 64);
+    EXPECT_TRUE(maps.last_render_reused());
+
+    scene.lights[0].position.y -= 0.01f;  // the light moved
+    maps.render(context, 64);
+    EXPECT_FALSE(maps.last_render_reused());
+    maps.render(context, 128);  // another size
+    EXPECT_FALSE(maps.last_render_reused());
+    EXPECT_EQ(maps.frames_drawn(), 4u);
+    EXPECT_EQ(maps.frames_reused(), 2u);
+    timers.resolve();
+}
+
+// A reused map gives the same frame as a freshly drawn one, and a moved light changes it.
+TEST(ShadowMaps, ReusedMapsRenderTheSameFrame) {
+    scene::Scene scene = scene::make_cornell_box();
+    RenderRequest request;
+    request.width = request.height = 48;
+    auto resources = shared_renderer().upload(scene);
+    const auto first = shared_renderer().render(*resources, request);
+    const auto second = shared_renderer().render(*resources, request);
+    EXPECT_EQ(first.frame.rgba, second.frame.rgba);
+    scene.lights[0].position.x -= 0.1f;
+    const auto moved = shared_renderer().render(*resources, request);
+    EXPECT_NE(first.frame.rgba, moved.frame.rgba);
+    const auto fresh = render_scene(scene, request);
+    EXPECT_EQ(moved.frame.rgba, fresh.frame.rgba);
+}
+
+}  // namespace
+}  // namespace bounce::test
