@@ -1,0 +1,53 @@
+#include "renderer/image/metrics.hpp"
+
+#include "renderer/base/error.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace bounce::image {
+namespace {
+bool finite_rgb(const float* p) { return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]); }
+}  // namespace
+
+ErrorMetrics compare(const Frame& test, const Frame& reference) {
+    BOUNCE_CHECK(test.width == reference.width && test.height == reference.height,
+                 "cannot compare a {}x{} image with a {}x{} reference", test.width, test.height, reference.width,
+                 reference.height);
+    const std::size_t pixels = static_cast<std::size_t>(test.width) * static_cast<std::size_t>(test.height);
+    BOUNCE_CHECK(test.rgba.size() == pixels * 4 && reference.rgba.size() == pixels * 4,
+                 "frame buffers do not match their {}x{} size", test.width, test.height);
+    ErrorMetrics metrics;
+    double rel = 0.0, squared = 0.0, sum_test = 0.0, sum_reference = 0.0, peak = 0.0;
+    std::size_t counted = 0;
+    for (std::size_t i = 0; i < pixels; ++i) {
+        const float* t = &test.rgba[i * 4];
+        const float* r = &reference.rgba[i * 4];
+        const bool t_ok = finite_rgb(t), r_ok = finite_rgb(r);
+        metrics.non_finite_test += !t_ok;
+        metrics.non_finite_reference += !r_ok;
+        if (!t_ok || !r_ok) continue;
+        for (int c = 0; c < 3; ++c) {
+            const double d = static_cast<double>(t[c]) - r[c];
+            rel += d * d / (static_cast<double>(r[c]) * r[c] + 0.01);
+            squared += d * d;
+            sum_test += t[c];
+            sum_reference += r[c];
+            peak = std::max(peak, static_cast<double>(r[c]));
+        }
+        ++counted;
+    }
+    const double values = static_cast<double>(counted) * 3.0;
+    if (counted == 0) return metrics;
+    metrics.rel_mse = rel / values;
+    const double mse = squared / values;
+    metrics.rmse = std::sqrt(mse);
+    metrics.psnr_db = mse > 0.0 ? 10.0 * std::log10(std::max(peak * peak, 1e-30) / mse)
+                                : std::numeric_limits<double>::infinity();
+    metrics.mean_test = sum_test / values;
+    metrics.mean_reference = sum_reference / values;
+    return metrics;
+}
+
+}  // namespace bounce::image

@@ -1,0 +1,25 @@
+// The one error metric of the project (design.md): relMSE, RMSE, PSNR and non-finite counts,
+// over linear HDR RGB. Tests and bench/quality use this implementation and no other.
+#pragma once
+
+#include "renderer/image/frame.hpp"
+
+#include <cstddef>
+
+namespace bounce::image {
+
+struct ErrorMetrics {
+    double rel_mse = 0.0;  // mean over pixels and RGB of (t - r)^2 / (r^2 + 0.01)
+    double rmse = 0.0;     // sqrt(mean over pixels and RGB of (t - r)^2)
+    double psnr_db = 0.0;  // 10 log10(peak^2 / MSE), peak = the reference's largest RGB value
+    double mean_test = 0.0;       // mean RGB radiance of the test image
+    double mean_reference = 0.0;  // of the reference
+    std::size_t non_finite_test = 0;  // pixels with a NaN or Inf channel (excluded from the means)
+    std::size_t non_finite_reference = 0;
+};
+
+// Compares `test` with `reference`; throws Error if their sizes differ. Pixels where either image
+// is non-finite are counted and left out of the error sums.
+ErrorMetrics compare(const Frame& test, const Frame& reference);
+
+}  // namespace bounce::image

@@ -1,0 +1,61 @@
+#include "renderer/base/error.hpp"
+#include "renderer/image/metrics.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+namespace bounce::image {
+namespace {
+
+Frame constant(int w, int h, float value) {
+    Frame frame;
+    frame.width = w;
+    frame.height = h;
+    frame.rgba.assign(static_cast<std::size_t>(w) * h * 4, value);
+    return frame;
+}
+
+TEST(Metrics, IdenticalImagesHaveNoError) {
+    const Frame a = constant(4, 3, 0.5f);
+    const ErrorMetrics m = compare(a, a);
+    EXPECT_EQ(m.rel_mse, 0.0);
+    EXPECT_EQ(m.rmse, 0.0);
+    EXPECT_TRUE(std::isinf(m.psnr_db));
+    EXPECT_DOUBLE_EQ(m.mean_test, 0.5);
+}
+
+TEST(Metrics, MatchesTheDefinition) {
+    // Reference 1.0 everywhere, test 1.1: relMSE = 0.01 / (1 + 0.01), RMSE = 0.1, PSNR = 20 dB.
+    const Frame reference = constant(5, 2, 1.0f);
+    const Frame test = constant(5, 2, 1.1f);
+    const ErrorMetrics m = compare(test, reference);
+    EXPECT_NEAR(m.rel_mse, 0.01 / 1.01, 1e-6);
+    EXPECT_NEAR(m.rmse, 0.1, 1e-6);
+    EXPECT_NEAR(m.psnr_db, 20.0, 1e-4);
+    // Alpha is ignored; one channel off by 0.3 on a black reference: 0.09 / 0.01 / 3 per pixel.
+    Frame black = constant(1, 1, 0.0f);
+    Frame off = black;
+    off.rgba[1] = 0.3f;
+    off.rgba[3] = 7.0f;
+    EXPECT_NEAR(compare(off, black).rel_mse, 0.09 / 0.01 / 3.0, 1e-6);
+}
+
+TEST(Metrics, NonFinitePixelsAreCountedAndLeftOut) {
+    const Frame reference = constant(2, 1, 1.0f);
+    Frame test = reference;
+    test.rgba[0] = std::numeric_limits<float>::quiet_NaN();
+    test.rgba[4] = std::numeric_limits<float>::infinity();
+    const ErrorMetrics m = compare(test, reference);
+    EXPECT_EQ(m.non_finite_test, 2u);
+    EXPECT_EQ(m.non_finite_reference, 0u);
+    EXPECT_EQ(m.rel_mse, 0.0);
+}
+
+TEST(Metrics, SizeMismatchIsAnError) {
+    EXPECT_THROW(compare(constant(2, 2, 0.0f), constant(2, 3, 0.0f)), Error);
+}
+
+}  // namespace
+}  // namespace bounce::image
