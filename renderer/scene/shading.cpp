@@ -63,6 +63,66 @@ glm::vec3 evaluate_brdf(const SurfaceMaterial& m, const glm::vec3& n, const glm:
     return glm::mix(dielectric, metal, m.metallic);
 }
 
+void orthonormal_basis(const glm::vec3& n, glm::vec3& t, glm::vec3& b) {
+    // Duff et al. 2017, "Building an Orthonormal Basis, Revisited".
+    const float sign = std::copysign(1.0f, n.z);
+    const float a = -1.0f / (sign + n.z);
+    const float c = n.x * n.y * a;
+    t = glm::vec3(1.0f + sign * n.x * n.x * a, sign * c, -sign * n.x);
+    b = glm::vec3(c, sign + n.y * n.y * a, -n.y);
+}
+
+float specular_sampling_probability(const SurfaceMaterial& m) {
+    if (m.metallic <= 0.0f && m.specular <= 0.0f) return 0.0f;
+    // Roughly the share of reflected energy in the specular lobe, kept away from 0 and 1 so both
+    // lobes are always explored.
+    const float dielectric_share = m.specular * kDielectricF0 * 2.0f;
+    return std::clamp(dielectric_share + (1.0f - dielectric_share) * m.metallic, 0.1f, 0.9f);
+}
+
+float brdf_pdf(const SurfaceMaterial& m, const glm::vec3& n, const glm::vec3& v, const glm::vec3& l) {
+    const float n_dot_l = glm::dot(n, l);
+    if (n_dot_l <= 0.0f) return 0.0f;
+    const float p_specular = specular_sampling_probability(m);
+    float pdf = (1.0f - p_specular) * n_dot_l / kPi;
+    if (p_specular > 0.0f) {
+        const glm::vec3 half = l + v;
+        const float length = glm::length(half);
+        if (length > 1e-12f) {
+            const glm::vec3 h = half / length;
+            const float v_dot_h = glm::dot(v, h);
+            if (v_dot_h > 0.0f) {
+                const float alpha = ggx_alpha(m.roughness);
+                pdf += p_specular * ggx_distribution(saturate(glm::dot(n, h)), alpha) * saturate(glm::dot(n, h)) /
+                       (4.0f * v_dot_h);
+            }
+        }
+    }
+    return pdf;
+}
+
+BrdfSample sample_brdf(const SurfaceMaterial& m, const glm::vec3& n, const glm::vec3& v, float u1, float u2, float u3) {
+    glm::vec3 t, b;
+    orthonormal_basis(n, t, b);
+    BrdfSample sample;
+    if (u1 < specular_sampling_probability(m)) {
+        // GGX: cos^2(theta_h) = (1 - u) / (1 + (alpha^2 - 1) u), l = reflect(-v, h).
+        const float alpha = ggx_alpha(m.roughness);
+        const float phi = 2.0f * kPi * u2;
+        const float cos_h = std::sqrt((1.0f - u3) / (1.0f + (alpha * alpha - 1.0f) * u3));
+        const float sin_h = std::sqrt(std::max(0.0f, 1.0f - cos_h * cos_h));
+        const glm::vec3 h = t * (sin_h * std::cos(phi)) + b * (sin_h * std::sin(phi)) + n * cos_h;
+        sample.l = 2.0f * glm::dot(v, h) * h - v;
+    } else {
+        const float r = std::sqrt(u2);
+        const float phi = 2.0f * kPi * u3;
+        const float z = std::sqrt(std::max(0.0f, 1.0f - u2));
+        sample.l = t * (r * std::cos(phi)) + b * (r * std::sin(phi)) + n * z;
+    }
+    sample.pdf = brdf_pdf(m, n, v, sample.l);
+    return sample;
+}
+
 float spot_attenuation(const Light& light, float cos_angle) {
     const float cos_inner = std::cos(light.inner_cone);
     const float cos_outer = std::cos(light.outer_cone);

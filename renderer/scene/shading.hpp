@@ -29,6 +29,21 @@ float smith_visibility(float n_dot_l, float n_dot_v, float alpha);
 glm::vec3 evaluate_brdf(const SurfaceMaterial& material, const glm::vec3& n, const glm::vec3& v,
                         const glm::vec3& l);
 
+// Importance sampling of f(l, v) cos: a mixture of GGX normal-distribution sampling (the specular
+// lobe) and cosine-weighted hemisphere sampling (the diffuse lobe).
+struct BrdfSample {
+    glm::vec3 l{0.0f};
+    float pdf = 0.0f;  // solid angle, of the whole mixture
+};
+// The probability of picking the specular lobe: 0 for a pure Lambertian surface.
+float specular_sampling_probability(const SurfaceMaterial& material);
+// u1, u2, u3 uniform in [0, 1). pdf 0 means the sample is below the surface: discard it.
+BrdfSample sample_brdf(const SurfaceMaterial& material, const glm::vec3& n, const glm::vec3& v, float u1, float u2,
+                       float u3);
+float brdf_pdf(const SurfaceMaterial& material, const glm::vec3& n, const glm::vec3& v, const glm::vec3& l);
+// An orthonormal basis (t, b, n) for a unit n, continuous except at n = (0, 0, -1).
+void orthonormal_basis(const glm::vec3& n, glm::vec3& t, glm::vec3& b);
+
 // glTF's spot falloff for the cosine of the angle from the spot axis.
 float spot_attenuation(const Light& light, float cos_angle);
 

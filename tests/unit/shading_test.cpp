@@ -133,3 +133,49 @@ TEST(Lights, InverseSquareAndDirectional) {
 
 }  // namespace
 }  // namespace bounce::scene
+
+namespace bounce::scene {
+namespace {
+
+// The sampling pdf integrates to 1 over the hemisphere (less what falls below it), and estimates
+// of the directional albedo with it agree with quadrature: the sampler and pdf are consistent.
+TEST(BrdfSampling, PdfIntegratesToOneAndEstimatesAgreeWithQuadrature) {
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    const glm::vec3 n{0, 1, 0};
+    for (const SurfaceMaterial& m : {SurfaceMaterial{{0.8f, 0.8f, 0.8f}, 0.0f, 1.0f, 0.0f},
+                                     SurfaceMaterial{{0.9f, 0.9f, 0.9f}, 0.0f, 0.4f, 1.0f},
+                                     SurfaceMaterial{{0.9f, 0.6f, 0.3f}, 1.0f, 0.5f, 1.0f}}) {
+        const glm::vec3 v = glm::normalize(glm::vec3(0.5f, 1.0f, 0.2f));
+        double estimate = 0.0, accepted = 0.0;
+        constexpr int kSamples = 200000;
+        for (int i = 0; i < kSamples; ++i) {
+            const BrdfSample s = sample_brdf(m, n, v, u(rng), u(rng), u(rng));
+            if (s.pdf <= 0.0f) continue;
+            accepted += 1.0;
+            estimate += evaluate_brdf(m, n, v, s.l).g * glm::dot(n, s.l) / s.pdf;
+        }
+        estimate /= kSamples;
+        // Quadrature of the same integral on a fine grid.
+        double quadrature = 0.0, pdf_integral = 0.0;
+        constexpr int kCos = 1000, kPhi = 500;
+        for (int i = 0; i < kCos; ++i) {
+            const float c = (i + 0.5f) / kCos;
+            const float sn = std::sqrt(1.0f - c * c);
+            for (int j = 0; j < kPhi; ++j) {
+                const float phi = (j + 0.5f) / kPhi * 2.0f * 3.14159265f;
+                const glm::vec3 l{sn * std::cos(phi), c, sn * std::sin(phi)};
+                quadrature += evaluate_brdf(m, n, v, l).g * c;
+                pdf_integral += brdf_pdf(m, n, v, l);
+            }
+        }
+        quadrature *= 2.0 * 3.14159265 / (kCos * kPhi);
+        pdf_integral *= 2.0 * 3.14159265 / (kCos * kPhi);
+        EXPECT_NEAR(pdf_integral, accepted / kSamples, 0.01) << "metallic " << m.metallic;
+        EXPECT_LE(pdf_integral, 1.0 + 1e-3);
+        EXPECT_NEAR(estimate, quadrature, 0.01 * quadrature + 1e-3) << "metallic " << m.metallic;
+    }
+}
+
+}  // namespace
+}  // namespace bounce::scene
