@@ -1,0 +1,483 @@
+#include "renderer/reference/path_tracer.hpp"
+
+#include "renderer/base/error.hpp"
+#include "renderer/scene/shading.hpp"
+
+#include <embree3/rtcore.h>
+#include <glm/gtc/matrix_inverse.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <limits>
+
+namespace bounce::reference {
+namespace {
+
+constexpr float kInfinity = std::numeric_limits<float>::infinity();
+
+// A small counter-based generator: sample s of pixel p draws from (seed, p, s) alone.
+class Random {
+public:
+    Random(std::uint64_t seed, std::uint64_t pixel, std::uint64_t sample)
+        : state_(mix(seed ^ mix(pixel * 0x9E3779B97F4A7C15ull ^ mix(sample + 0x632BE59BD9B4E019ull)))) {}
+    float next() {
+        state_ += 0x9E3779B97F4A7C15ull;
+        return static_cast<float>(mix(state_) >> 40) * (1.0f / 16777216.0f);  // [0, 1)
+    }
+
+private:
+    static std::uint64_t mix(std::uint64_t z) {  // splitmix64 finalizer
+        z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+        z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+        return z ^ (z >> 31);
+    }
+    std::uint64_t state_;
+};
+
+float luminance(const glm::vec3& c) { return 0.2126f * c.r + 0.7152f * c.g + 0.0722f * c.b; }
+
+float srgb_to_linear(float c) { return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f); }
+
+// Bilinear lookup with repeat wrapping, as the GL sampler does (without mipmaps: the reference
+// converges over many jittered samples instead).
+glm::vec4 sample_texture(const scene::Texture& texture, const glm::vec2& uv) {
+    if (texture.width <= 0 || texture.height <= 0 || texture.rgba8.empty()) return glm::vec4(1.0f);
+    const float x = uv.x * static_cast<float>(texture.width) - 0.5f;
+    const float y = uv.y * static_cast<float>(texture.height) - 0.5f;
+    const float fx = std::floor(x), fy = std::floor(y);
+    const float tx = x - fx, ty = y - fy;
+    auto texel = [&](int ix, int iy) {
+        ix = ((ix % texture.width) + texture.width) % texture.width;
+        iy = ((iy % texture.height) + texture.height) % texture.height;
+        const std::size_t i = (static_cast<std::size_t>(iy) * texture.width + ix) * 4;
+        glm::vec4 c(texture.rgba8[i], texture.rgba8[i + 1], texture.rgba8[i + 2], texture.rgba8[i + 3]);
+        c /= 255.0f;
+        if (texture.srgb) c = glm::vec4(srgb_to_linear(c.r), srgb_to_linear(c.g), srgb_to_linear(c.b), c.a);
+        return c;
+    };
+    const int ix = static_cast<int>(fx), iy = static_cast<int>(fy);
+    return glm::mix(glm::mix(texel(ix, iy), texel(ix + 1, iy), tx), glm::mix(texel(ix, iy + 1), texel(ix + 1, iy + 1), tx),
+                    ty);
+}
+
+struct Emitter {
+    std::uint32_t object, primitive, triangle;
+    glm::vec3 p0, p1, p2;
+    float area;
+};
+
+struct SurfaceHit {
+    glm::vec3 position;
+    glm::vec3 geometric_normal;  // faces the incoming ray
+    glm::vec3 shading_normal;    // same side as geometric_normal
+    scene::SurfaceMaterial material;
+    glm::vec3 emitted{0.0f};  // radiance towards the incoming ray
+    bool front = true;
+    std::uint32_t object = 0, primitive = 0, triangle = 0;
+};
+
+}  // namespace
+
+struct PathTracer::Impl {
+    const scene::Scene& scene;
+    RTCDevice device = nullptr;
+    std::vector<RTCScene> mesh_scenes;
+    std::vector<RTCGeometry> instances;  // per object; null for objects without a mesh
+    RTCScene top = nullptr;
+    std::vector<glm::mat4> normal_matrices;
+    std::vector<Emitter> emitters;
+    std::vector<float> emitter_cdf;  // by power
+    std::vector<std::vector<int>> emitter_base;  // [object][primitive] -> first emitter index or -1
+    float scene_radius = 1.0f;
+    tbb::task_arena arena;
+    mutable std::atomic<std::uint64_t> rays{0};
+
+    explicit Impl(const scene::Scene& s) : scene(s) {
+        device = rtcNewDevice(nullptr);
+        if (!device) BOUNCE_FAIL("Embree: rtcNewDevice failed (error {})", static_cast<int>(rtcGetDeviceError(nullptr)));
+        for (const scene::Mesh& mesh : scene.meshes) {
+            RTCScene mesh_scene = rtcNewScene(device);
+            for (std::size_t p = 0; p < mesh.primitives.size(); ++p) {
+                const scene::Primitive& primitive = mesh.primitives[p];
+                if (primitive.triangle_count() == 0) continue;
+                RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+                auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(
+                    geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), primitive.positions.size()));
+                for (std::size_t v = 0; v < primitive.positions.size(); ++v) {
+                    vertices[3 * v] = primitive.positions[v].x;
+                    vertices[3 * v + 1] = primitive.positions[v].y;
+                    vertices[3 * v + 2] = primitive.positions[v].z;
+                }
+                auto* indices = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
+                    geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), primitive.triangle_count()));
+                std::copy(primitive.indices.begin(), primitive.indices.end(), indices);
+                rtcCommitGeometry(geometry);
+                rtcAttachGeometryByID(mesh_scene, geometry, static_cast<unsigned>(p));
+                rtcReleaseGeometry(geometry);
+            }
+            rtcCommitScene(mesh_scene);
+            mesh_scenes.push_back(mesh_scene);
+        }
+        top = rtcNewScene(device);
+        for (std::size_t o = 0; o < scene.objects.size(); ++o) {
+            const scene::Object& object = scene.objects[o];
+            if (object.mesh < 0) {
+                instances.push_back(nullptr);
+                continue;
+            }
+            RTCGeometry instance = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_INSTANCE);
+            rtcSetGeometryInstancedScene(instance, mesh_scenes[object.mesh]);
+            rtcAttachGeometryByID(top, instance, static_cast<unsigned>(o));
+            instances.push_back(instance);
+        }
+        update_transforms();
+    }
+
+    ~Impl() {
+        for (RTCGeometry instance : instances)
+            if (instance) rtcReleaseGeometry(instance);
+        if (top) rtcReleaseScene(top);
+        for (RTCScene mesh_scene : mesh_scenes) rtcReleaseScene(mesh_scene);
+        if (device) rtcReleaseDevice(device);
+    }
+
+    void update_transforms() {
+        normal_matrices.assign(scene.objects.size(), glm::mat4(1.0f));
+        for (std::size_t o = 0; o < scene.objects.size(); ++o) {
+            if (!instances[o]) continue;
+            const glm::mat4& transform = scene.objects[o].transform;
+            rtcSetGeometryTransform(instances[o], 0, RTC_FORMAT_FLOAT4X4_COLUMN_MAJOR, &transform[0][0]);
+            rtcCommitGeometry(instances[o]);
+            normal_matrices[o] = glm::inverseTranspose(transform);
+        }
+        rtcCommitScene(top);
+        const scene::Aabb bounds = scene.world_bounds();
+        scene_radius = bounds.empty() ? 1.0f : std::max(0.5f * glm::length(bounds.extent()), 1e-12f);
+        collect_emitters();
+    }
+
+    void collect_emitters() {
+        emitters.clear();
+        emitter_cdf.clear();
+        emitter_base.assign(scene.objects.size(), {});
+        float total = 0.0f;
+        for (std::size_t o = 0; o < scene.objects.size(); ++o) {
+            const scene::Object& object = scene.objects[o];
+            if (object.mesh < 0) continue;
+            const auto& primitives = scene.meshes[object.mesh].primitives;
+            emitter_base[o].assign(primitives.size(), -1);
+            for (std::size_t p = 0; p < primitives.size(); ++p) {
+                const scene::Primitive& primitive = primitives[p];
+                const float power = luminance(scene.material(primitive.material).emissive);
+                if (!(power > 0.0f)) continue;
+                emitter_base[o][p] = static_cast<int>(emitters.size());
+                for (std::size_t t = 0; t < primitive.triangle_count(); ++t) {
+                    Emitter e{static_cast<std::uint32_t>(o), static_cast<std::uint32_t>(p), static_cast<std::uint32_t>(t),
+                              glm::vec3(object.transform * glm::vec4(primitive.positions[primitive.indices[3 * t]], 1.0f)),
+                              glm::vec3(object.transform * glm::vec4(primitive.positions[primitive.indices[3 * t + 1]], 1.0f)),
+                              glm::vec3(object.transform * glm::vec4(primitive.positions[primitive.indices[3 * t + 2]], 1.0f)),
+                              0.0f};
+                    e.area = 0.5f * glm::length(glm::cross(e.p1 - e.p0, e.p2 - e.p0));
+                    total += power * e.area;
+                    emitters.push_back(e);
+                    emitter_cdf.push_back(total);
+                }
+            }
+        }
+        if (total > 0.0f) {
+            for (float& c : emitter_cdf) c /= total;
+        }
+    }
+
+    // Probability (per unit area) of choosing a point on emitter `index` by light sampling.
+    float emitter_area_pdf(int index) const {
+        const float previous = index == 0 ? 0.0f : emitter_cdf[index - 1];
+        const float selection = emitter_cdf[index] - previous;
+        return emitters[index].area > 0.0f ? selection / emitters[index].area : 0.0f;
+    }
+
+    float epsilon(const glm::vec3& p) const {
+        const float magnitude = std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z), scene_radius});
+        return 2e-5f * magnitude;
+    }
+
+    bool intersect(const glm::vec3& origin, const glm::vec3& direction, SurfaceHit& hit) const {
+        RTCIntersectContext context;
+        rtcInitIntersectContext(&context);
+        RTCRayHit ray_hit{};
+        ray_hit.ray.org_x = origin.x;
+        ray_hit.ray.org_y = origin.y;
+        ray_hit.ray.org_z = origin.z;
+        ray_hit.ray.dir_x = direction.x;
+        ray_hit.ray.dir_y = direction.y;
+        ray_hit.ray.dir_z = direction.z;
+        ray_hit.ray.tnear = 0.0f;
+        ray_hit.ray.tfar = kInfinity;
+        ray_hit.ray.mask = 0xFFFFFFFFu;
+        ray_hit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+        ray_hit.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+        rtcIntersect1(top, &context, &ray_hit);
+        rays.fetch_add(1, std::memory_order_relaxed);
+        if (ray_hit.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+        hit.object = ray_hit.hit.instID[0];
+        hit.primitive = ray_hit.hit.geomID;
+        hit.triangle = ray_hit.hit.primID;
+        const scene::Object& object = scene.objects[hit.object];
+        const scene::Primitive& primitive = scene.meshes[object.mesh].primitives[hit.primitive];
+        const std::uint32_t i0 = primitive.indices[3 * hit.triangle], i1 = primitive.indices[3 * hit.triangle + 1],
+                            i2 = primitive.indices[3 * hit.triangle + 2];
+        const float u = ray_hit.hit.u, v = ray_hit.hit.v, w = 1.0f - u - v;
+        const glm::vec3 p0(object.transform * glm::vec4(primitive.positions[i0], 1.0f));
+        const glm::vec3 p1(object.transform * glm::vec4(primitive.positions[i1], 1.0f));
+        const glm::vec3 p2(object.transform * glm::vec4(primitive.positions[i2], 1.0f));
+        hit.position = w * p0 + u * p1 + v * p2;
+        glm::vec3 ng = glm::cross(p1 - p0, p2 - p0);
+        const float ng_length = glm::length(ng);
+        ng = ng_length > 0.0f ? ng / ng_length : -direction;
+        hit.front = glm::dot(ng, direction) < 0.0f;
+        const scene::Material& material = scene.material(primitive.material);
+        glm::vec3 ns = glm::vec3(normal_matrices[hit.object] *
+                                 glm::vec4(w * primitive.normals[i0] + u * primitive.normals[i1] + v * primitive.normals[i2], 0.0f));
+        const float ns_length = glm::length(ns);
+        ns = ns_length > 1e-20f && std::isfinite(ns_length) ? ns / ns_length : ng;
+        if (!hit.front) {
+            ng = -ng;
+            ns = -ns;
+        }
+        if (glm::dot(ns, ng) < 0.0f) ns = ng;  // a shading normal must not point into the surface
+        hit.geometric_normal = ng;
+        hit.shading_normal = ns;
+
+        scene::SurfaceMaterial surface = scene::SurfaceMaterial::from(material);
+        glm::vec3 emitted = material.emissive;
+        auto uv_of = [&](int set) -> glm::vec2 {
+            const auto& uvs = set == 1 && !primitive.uv1.empty() ? primitive.uv1 : primitive.uv0;
+            if (uvs.empty()) return glm::vec2(0.0f);
+            return w * uvs[i0] + u * uvs[i1] + v * uvs[i2];
+        };
+        auto texture = [&](const scene::TextureRef& ref) -> const scene::Texture* {
+            return ref.valid() && ref.texture < static_cast<int>(scene.textures.size()) ? &scene.textures[ref.texture]
+                                                                                        : nullptr;
+        };
+        if (const auto* t = texture(material.base_color_texture)) {
+            surface.base_color *= glm::vec3(sample_texture(*t, uv_of(material.base_color_texture.uv_set)));
+        }
+        if (const auto* t = texture(material.metallic_roughness_texture)) {
+            const glm::vec4 mr = sample_texture(*t, uv_of(material.metallic_roughness_texture.uv_set));
+            surface.roughness *= mr.g;
+            surface.metallic *= mr.b;
+        }
+        if (const auto* t = texture(material.emissive_texture)) {
+            emitted *= glm::vec3(sample_texture(*t, uv_of(material.emissive_texture.uv_set)));
+        }
+        surface.base_color = glm::clamp(surface.base_color, 0.0f, 1.0f);
+        hit.material = surface;
+        // Single-sided surfaces emit from their front only, as the raster path draws them.
+        hit.emitted = hit.front || material.double_sided ? emitted : glm::vec3(0.0f);
+        return true;
+    }
+
+    bool occluded(const glm::vec3& origin, const glm::vec3& direction, float distance) const {
+        RTCIntersectContext context;
+        rtcInitIntersectContext(&context);
+        RTCRay ray{};
+        ray.org_x = origin.x;
+        ray.org_y = origin.y;
+        ray.org_z = origin.z;
+        ray.dir_x = direction.x;
+        ray.dir_y = direction.y;
+        ray.dir_z = direction.z;
+        ray.tnear = 0.0f;
+        ray.tfar = distance;
+        ray.mask = 0xFFFFFFFFu;
+        rtcOccluded1(top, &context, &ray);
+        rays.fetch_add(1, std::memory_order_relaxed);
+        return ray.tfar == -kInfinity;
+    }
+
+    glm::vec3 offset(const SurfaceHit& hit, const glm::vec3& towards) const {
+        const float side = glm::dot(towards, hit.geometric_normal) >= 0.0f ? 1.0f : -1.0f;
+        return hit.position + hit.geometric_normal * (side * epsilon(hit.position));
+    }
+
+    // Direct light at a surface from punctual lights and (MIS) emissive triangles.
+    glm::vec3 direct_light(const SurfaceHit& hit, const glm::vec3& v, Random& random) const {
+        glm::vec3 total(0.0f);
+        const glm::vec3& n = hit.shading_normal;
+        for (const scene::Light& light : scene.lights) {
+            const scene::LightIncidence incidence = scene::light_incidence(light, hit.position);
+            const float cos_theta = glm::dot(n, incidence.l);
+            if (cos_theta <= 0.0f || !(glm::dot(incidence.irradiance, glm::vec3(1.0f)) > 0.0f)) continue;
+            if (glm::dot(hit.geometric_normal, incidence.l) <= 0.0f) continue;
+            const glm::vec3 origin = offset(hit, incidence.l);
+            const float distance = std::isinf(incidence.distance) ? kInfinity
+                                                                  : incidence.distance * (1.0f - 1e-4f);
+            if (occluded(origin, incidence.l, distance)) continue;
+            total += scene::evaluate_brdf(hit.material, n, v, incidence.l) * incidence.irradiance * cos_theta;
+        }
+        if (!emitters.empty()) {
+            const float pick = random.next();
+            const int index = static_cast<int>(std::lower_bound(emitter_cdf.begin(), emitter_cdf.end(), pick) -
+                                               emitter_cdf.begin());
+            const Emitter& e = emitters[std::min<std::size_t>(static_cast<std::size_t>(index), emitters.size() - 1)];
+            float a = random.next(), b = random.next();
+            if (a + b > 1.0f) {
+                a = 1.0f - a;
+                b = 1.0f - b;
+            }
+            const glm::vec3 point = e.p0 + a * (e.p1 - e.p0) + b * (e.p2 - e.p0);
+            glm::vec3 to_light = point - hit.position;
+            const float d2 = glm::dot(to_light, to_light);
+            if (d2 > 0.0f) {
+                const float d = std::sqrt(d2);
+                to_light /= d;
+                const float cos_theta = glm::dot(n, to_light);
+                glm::vec3 emitter_normal = glm::cross(e.p1 - e.p0, e.p2 - e.p0);
+                const float normal_length = glm::length(emitter_normal);
+                const float cos_light = normal_length > 0.0f ? -glm::dot(emitter_normal / normal_length, to_light) : 0.0f;
+                const scene::Material& material =
+                    scene.material(scene.meshes[scene.objects[e.object].mesh].primitives[e.primitive].material);
+                const float facing = material.double_sided ? std::abs(cos_light) : cos_light;
+                if (cos_theta > 0.0f && facing > 0.0f && glm::dot(hit.geometric_normal, to_light) > 0.0f) {
+                    const glm::vec3 origin = offset(hit, to_light);
+                    if (!occluded(origin, to_light, d * (1.0f - 1e-4f))) {
+                        // Emission textures are evaluated where the BRDF-sampled ray hits; here the
+                        // factor stands in (MIS keeps the sum unbiased only for untextured emitters).
+                        const float light_pdf = emitter_area_pdf(static_cast<int>(&e - emitters.data())) * d2 / facing;
+                        const float brdf_pdf = scene::brdf_pdf(hit.material, n, v, to_light);
+                        const float weight = light_pdf * light_pdf / (light_pdf * light_pdf + brdf_pdf * brdf_pdf);
+                        total += scene::evaluate_brdf(hit.material, n, v, to_light) * material.emissive * cos_theta *
+                                 (weight / light_pdf);
+                    }
+                }
+            }
+        }
+        return total;
+    }
+
+    glm::vec3 trace(glm::vec3 origin, glm::vec3 direction, int max_bounces, Random& random) const {
+        glm::vec3 radiance(0.0f), throughput(1.0f);
+        SurfaceHit hit;
+        if (!intersect(origin, direction, hit)) return radiance;
+        radiance += hit.emitted;
+        for (int bounce = 0;; ++bounce) {
+            if (!hit.front && !scene.material(scene.meshes[scene.objects[hit.object].mesh]
+                                                  .primitives[hit.primitive].material).double_sided) {
+                break;  // the back of a single-sided surface absorbs, as it is culled in raster
+            }
+            const glm::vec3 v = -direction;
+            radiance += throughput * direct_light(hit, v, random);
+            // The BRDF-sampled continuation: its emitter hit is weighted against light sampling.
+            const scene::BrdfSample sample =
+                scene::sample_brdf(hit.material, hit.shading_normal, v, random.next(), random.next(), random.next());
+            if (!(sample.pdf > 0.0f) || glm::dot(sample.l, hit.geometric_normal) <= 0.0f) break;
+            const float cos_theta = glm::dot(hit.shading_normal, sample.l);
+            throughput *= scene::evaluate_brdf(hit.material, hit.shading_normal, v, sample.l) * (cos_theta / sample.pdf);
+            if (!(luminance(throughput) > 0.0f)) break;
+            origin = offset(hit, sample.l);
+            direction = sample.l;
+            SurfaceHit next;
+            if (!intersect(origin, direction, next)) break;
+            if (glm::dot(next.emitted, glm::vec3(1.0f)) > 0.0f) {
+                const int base = emitter_base[next.object].empty() ? -1 : emitter_base[next.object][next.primitive];
+                float weight = 1.0f;
+                if (base >= 0) {
+                    const glm::vec3 to = next.position - hit.position;
+                    const float d2 = glm::dot(to, to);
+                    const float cos_light = std::abs(glm::dot(next.geometric_normal, direction));
+                    const float light_pdf = cos_light > 0.0f
+                                                ? emitter_area_pdf(base + static_cast<int>(next.triangle)) * d2 / cos_light
+                                                : 0.0f;
+                    weight = sample.pdf * sample.pdf / (sample.pdf * sample.pdf + light_pdf * light_pdf);
+                }
+                radiance += throughput * next.emitted * weight;
+            }
+            if (bounce >= max_bounces) break;
+            hit = next;
+            if (bounce >= 2) {
+                // Russian roulette: continue with the probability of the path's brightness.
+                const float keep = std::clamp(std::max({throughput.r, throughput.g, throughput.b}), 0.05f, 1.0f);
+                if (random.next() >= keep) break;
+                throughput /= keep;
+            }
+        }
+        return radiance;
+    }
+};
+
+Accumulator::Accumulator(int width, int height)
+    : width_(width), height_(height), sums_(static_cast<std::size_t>(width) * static_cast<std::size_t>(height) * 3, 0.0) {
+    BOUNCE_CHECK(width > 0 && height > 0, "accumulator size {}x{}", width, height);
+}
+
+image::Frame Accumulator::frame() const {
+    image::Frame frame;
+    frame.width = width_;
+    frame.height = height_;
+    frame.rgba.resize(static_cast<std::size_t>(width_) * height_ * 4);
+    const double scale = samples_ > 0 ? 1.0 / samples_ : 0.0;
+    for (std::size_t i = 0; i < static_cast<std::size_t>(width_) * height_; ++i) {
+        for (int c = 0; c < 3; ++c) frame.rgba[i * 4 + c] = static_cast<float>(sums_[i * 3 + c] * scale);
+        frame.rgba[i * 4 + 3] = 1.0f;
+    }
+    return frame;
+}
+
+PathTracer::PathTracer(const scene::Scene& scene) : impl_(std::make_unique<Impl>(scene)) {}
+PathTracer::~PathTracer() = default;
+
+void PathTracer::update_transforms() { impl_->update_transforms(); }
+
+std::uint64_t PathTracer::rays_traced() const { return impl_->rays.load(); }
+
+void PathTracer::render(Accumulator& accumulator, const scene::Camera& camera, int count,
+                        const PathTracerSettings& settings) const {
+    BOUNCE_CHECK(count >= 0, "sample count {}", count);
+    const int width = accumulator.width(), height = accumulator.height();
+    const float aspect = static_cast<float>(width) / static_cast<float>(height);
+    const glm::mat4 inverse = glm::inverse(camera.projection(aspect, camera.far_plane_for(impl_->scene.world_bounds())) *
+                                           camera.view());
+    const int first = accumulator.samples_;
+    impl_->arena.execute([&] {
+        tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
+            for (int y = rows.begin(); y < rows.end(); ++y) {
+                for (int x = 0; x < width; ++x) {
+                    const std::uint64_t pixel = static_cast<std::uint64_t>(y) * width + x;
+                    glm::dvec3 sum(0.0);
+                    for (int s = first; s < first + count; ++s) {
+                        Random random(settings.seed, pixel, static_cast<std::uint64_t>(s));
+                        const float jx = random.next(), jy = random.next();
+                        const float ox = settings.pixel_jitter ? jx : 0.5f, oy = settings.pixel_jitter ? jy : 0.5f;
+                        const float ndc_x = (static_cast<float>(x) + ox) / static_cast<float>(width) * 2.0f - 1.0f;
+                        const float ndc_y = 1.0f - (static_cast<float>(y) + oy) / static_cast<float>(height) * 2.0f;
+                        const glm::vec4 far_point = inverse * glm::vec4(ndc_x, ndc_y, 1.0f, 1.0f);
+                        const glm::vec3 direction = glm::normalize(glm::vec3(far_point) / far_point.w - camera.position);
+                        const glm::vec3 radiance = impl_->trace(camera.position, direction, settings.max_bounces, random);
+                        // A non-finite sample would poison the pixel forever: it is dropped (counted as 0).
+                        if (std::isfinite(radiance.r) && std::isfinite(radiance.g) && std::isfinite(radiance.b)) {
+                            sum += glm::dvec3(radiance);
+                        }
+                    }
+                    double* out = &accumulator.sums_[pixel * 3];
+                    out[0] += sum.x;
+                    out[1] += sum.y;
+                    out[2] += sum.z;
+                }
+            }
+        });
+    });
+    accumulator.samples_ += count;
+}
+
+image::Frame PathTracer::render(const scene::Camera& camera, int width, int height, int spp,
+                                const PathTracerSettings& settings) const {
+    Accumulator accumulator(width, height);
+    render(accumulator, camera, spp, settings);
+    return accumulator.frame();
+}
+
+}  // namespace bounce::reference

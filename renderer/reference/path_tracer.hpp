@@ -1,0 +1,76 @@
+// Method `reference`'s core: a CPU path tracer on Embree 3 and TBB, over the same scene model,
+// units, lights and BRDF (renderer/scene/shading.hpp) as the GL methods. It is the ground truth
+// every method is measured against.
+//
+// - Punctual lights by next-event estimation; emissive triangles as area lights, sampled by power
+//   and combined with BRDF sampling by multiple importance sampling (power heuristic).
+// - max_bounces counts indirect bounces: 0 is direct light only (emission plus one reflection of
+//   every light), as `direct` renders; k adds k further reflections.
+// - Russian roulette from the fourth vertex on; deterministic for a seed: sample s of pixel p uses
+//   random numbers derived from (seed, p, s) alone, so rendering samples 0..N and then N..M gives
+//   exactly the image of 0..M at once (progressive refinement).
+// - Objects are Embree instances of per-mesh scenes: moving an object updates its instance
+//   transform and rebuilds only the top level.
+#pragma once
+
+#include "renderer/image/frame.hpp"
+#include "renderer/scene/scene.hpp"
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+namespace bounce::reference {
+
+struct PathTracerSettings {
+    int max_bounces = 4;  // indirect bounces; 0 = direct light only
+    std::uint64_t seed = 1;
+    // Jittered samples average each pixel's footprint (anti-aliased); false puts every camera ray
+    // through the pixel centre, as raster methods shade, for like-for-like comparisons.
+    bool pixel_jitter = true;
+};
+
+// Running sums of radiance samples per pixel; frame() gives their mean.
+class Accumulator {
+public:
+    Accumulator(int width, int height);
+    int width() const { return width_; }
+    int height() const { return height_; }
+    int samples() const { return samples_; }
+    image::Frame frame() const;
+
+private:
+    friend class PathTracer;
+    int width_;
+    int height_;
+    int samples_ = 0;
+    std::vector<double> sums_;  // RGB per pixel
+};
+
+class PathTracer {
+public:
+    // Builds the acceleration structures; the scene must outlive the tracer.
+    explicit PathTracer(const scene::Scene& scene);
+    ~PathTracer();
+    PathTracer(const PathTracer&) = delete;
+    PathTracer& operator=(const PathTracer&) = delete;
+
+    // Re-reads every object's transform (after objects moved); rebuilds only the top level.
+    void update_transforms();
+
+    // Adds `count` samples per pixel, continuing from the accumulator's sample count.
+    void render(Accumulator& accumulator, const scene::Camera& camera, int count,
+                const PathTracerSettings& settings) const;
+
+    // Convenience: a fresh image of `spp` samples per pixel.
+    image::Frame render(const scene::Camera& camera, int width, int height, int spp,
+                        const PathTracerSettings& settings) const;
+
+    std::uint64_t rays_traced() const;
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace bounce::reference
