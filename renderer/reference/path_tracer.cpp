@@ -359,6 +359,24 @@ struct PathTracer::Impl {
         return total;
     }
 
+    // One cosine-distributed visibility sample of A(p) at the surface a camera ray hits.
+    float ambient_occlusion(const glm::vec3& origin, const glm::vec3& direction, float lambda, Random& random) const {
+        SurfaceHit hit;
+        if (!intersect(origin, direction, hit)) return 0.0f;
+        glm::vec3 t, b;
+        const glm::vec3& n = hit.shading_normal;
+        scene::orthonormal_basis(n, t, b);
+        const float u = random.next(), phi = 2.0f * 3.14159265358979f * random.next();
+        const float r = std::sqrt(u);
+        const glm::vec3 l = t * (r * std::cos(phi)) + b * (r * std::sin(phi)) + n * std::sqrt(std::max(0.0f, 1.0f - u));
+        if (glm::dot(l, hit.geometric_normal) <= 0.0f) return 1.0f;
+        const glm::vec3 from = offset(hit, l);
+        SurfaceHit occluder;
+        if (!intersect(from, l, occluder)) return 1.0f;
+        const float distance = glm::length(occluder.position - from);
+        return 1.0f - 1.0f / (1.0f + lambda * distance);
+    }
+
     glm::vec3 trace(glm::vec3 origin, glm::vec3 direction, int max_bounces, Random& random) const {
         glm::vec3 radiance(0.0f), throughput(1.0f);
         SurfaceHit hit;
@@ -456,7 +474,10 @@ void PathTracer::render(Accumulator& accumulator, const scene::Camera& camera, i
                         const float ndc_y = 1.0f - (static_cast<float>(y) + oy) / static_cast<float>(height) * 2.0f;
                         const glm::vec4 far_point = inverse * glm::vec4(ndc_x, ndc_y, 1.0f, 1.0f);
                         const glm::vec3 direction = glm::normalize(glm::vec3(far_point) / far_point.w - camera.position);
-                        const glm::vec3 radiance = impl_->trace(camera.position, direction, settings.max_bounces, random);
+                        const glm::vec3 radiance =
+                            settings.ambient_occlusion
+                                ? glm::vec3(impl_->ambient_occlusion(camera.position, direction, settings.ao_lambda, random))
+                                : impl_->trace(camera.position, direction, settings.max_bounces, random);
                         // A non-finite sample would poison the pixel forever: it is dropped (counted as 0).
                         if (std::isfinite(radiance.r) && std::isfinite(radiance.g) && std::isfinite(radiance.b)) {
                             sum += glm::dvec3(radiance);

@@ -9,6 +9,7 @@
 // - Russian roulette from the fourth vertex on; deterministic for a seed: sample s of pixel p uses
 //   random numbers derived from (seed, p, s) alone, so rendering samples 0..N and then N..M gives
 //   exactly the image of 0..M at once (progressive refinement).
+// - An ambient-occlusion mode (see PathTracerSettings) measures the AO methods.
 // - Objects are Embree instances of per-mesh scenes: moving an object updates its instance
 //   transform and rebuilds only the top level.
 #pragma once
@@ -28,6 +29,11 @@ struct PathTracerSettings {
     // Jittered samples average each pixel's footprint (anti-aliased); false puts every camera ray
     // through the pixel centre, as raster methods shade, for like-for-like comparisons.
     bool pixel_jitter = true;
+    // Ambient occlusion instead of radiance, as the voxel cone tracing paper defines it (its §6):
+    // A(p) = 1/pi * integral over the hemisphere of (1 - f(r) [the ray hits at distance r]) cos,
+    // with f(r) = 1 / (1 + lambda r). Written to RGB alike; 0 where a camera ray hits nothing.
+    bool ambient_occlusion = false;
+    float ao_lambda = 1.0f;  // per metre
 };
 
 // Running sums of radiance samples per pixel; frame() gives their mean.
