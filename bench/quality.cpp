@@ -1,0 +1,309 @@
+// bench/quality: the speed/accuracy trade, measured. For each scene it renders `reference` once at
+// high spp (cached on disk), then every method at every preset, and records wall and GPU time,
+// resident memory and the error against the reference; it also measures the reference itself
+// (error reached per CPU second). Writes a CSV, a Markdown table (docs/benchmarks.md) and, through
+// bench/plot_quality.py, a plot of error against time.
+#include "bench/scenes.hpp"
+#include "renderer/base/log.hpp"
+#include "renderer/image/codec.hpp"
+#include "renderer/image/metrics.hpp"
+#include "renderer/reference/path_tracer.hpp"
+#include "renderer/renderer.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace bounce;
+using Clock = std::chrono::steady_clock;
+
+struct Options {
+    int size = 128;
+    int reference_spp = 1024;
+    int reference_bounces = 4;
+    int repeats = 3;
+    fs::path out = "bench/results";
+    fs::path cache = "build/bench-cache";
+    fs::path markdown = "docs/benchmarks.md";
+    std::vector<std::string> scenes;  // empty: all
+};
+
+struct Row {
+    std::string scene, method, preset;
+    int bounces = 0;
+    double wall_ms = 0, gpu_ms = 0;
+    std::string passes;
+    std::size_t resident_bytes = 0;
+    double rel_mse = 0, rmse = 0, rel_mse_same_bounces = 0, mean_ratio = 0;
+    double rays_per_second = 0;
+};
+
+double ms_since(Clock::time_point start) { return std::chrono::duration<double, std::milli>(Clock::now() - start).count(); }
+
+// Changes whenever the reference's results may change; part of the cache key.
+constexpr int kReferenceCacheVersion = 1;
+
+std::uint64_t scene_hash(const scene::Scene& scene) {
+    std::uint64_t hash = 1469598103934665603ull;
+    auto mix = [&hash](const void* data, std::size_t bytes) {
+        const auto* p = static_cast<const unsigned char*>(data);
+        for (std::size_t i = 0; i < bytes; ++i) hash = (hash ^ p[i]) * 1099511628211ull;
+    };
+    for (const auto& light : scene.lights) {
+        mix(&light.type, sizeof(light.type));
+        mix(&light.position, sizeof(light.position));
+        mix(&light.direction, sizeof(light.direction));
+        mix(&light.color, sizeof(light.color));
+        mix(&light.intensity, sizeof(light.intensity));
+        mix(&light.inner_cone, sizeof(light.inner_cone));
+        mix(&light.outer_cone, sizeof(light.outer_cone));
+    }
+    for (const auto& material : scene.materials) {
+        mix(&material.base_color, sizeof(material.base_color));
+        mix(&material.metallic, sizeof(material.metallic));
+        mix(&material.roughness, sizeof(material.roughness));
+        mix(&material.specular, sizeof(material.specular));
+        mix(&material.emissive, sizeof(material.emissive));
+    }
+    for (const auto& object : scene.objects) mix(&object.transform, sizeof(object.transform));
+    for (const auto& camera : scene.cameras) {
+        mix(&camera.position, sizeof(camera.position));
+        mix(&camera.orientation, sizeof(camera.orientation));
+        mix(&camera.vertical_fov, sizeof(camera.vertical_fov));
+    }
+    mix(&kReferenceCacheVersion, sizeof(kReferenceCacheVersion));
+    return hash;
+}
+
+// The reference image, from the cache when the same scene, camera, size, bounces and code made it.
+image::Frame reference_image(const bench::BenchScene& bench_scene, const reference::PathTracer& tracer,
+                             const Options& options, int bounces) {
+    const std::string key = fmt::format("{}-{:016x}-{}px-{}b-{}spp.exr", bench_scene.name, scene_hash(bench_scene.scene),
+                                        options.size, bounces, options.reference_spp);
+    const fs::path path = options.cache / key;
+    if (fs::exists(path)) {
+        std::ifstream in(path, std::ios::binary);
+        const std::vector<std::uint8_t> bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+        const auto decoded = image::decode_image(bytes);
+        image::Frame frame;
+        frame.width = decoded.width;
+        frame.height = decoded.height;
+        frame.rgba = decoded.pixels;
+        log::info("bench", "reference {} from the cache", key);
+        return frame;
+    }
+    const auto start = Clock::now();
+    reference::PathTracerSettings settings;
+    settings.max_bounces = bounces;
+    settings.seed = 20260101;
+    reference::Accumulator accumulator(options.size, options.size);
+    // In slices, so a long reference shows progress.
+    const int slice = std::max(1, options.reference_spp / 8);
+    while (accumulator.samples() < options.reference_spp) {
+        tracer.render(accumulator, bench_scene.scene.cameras[0], std::min(slice, options.reference_spp - accumulator.samples()),
+                      settings);
+        log::info("bench", "reference {} bounces={}: {}/{} spp, {:.0f} s", bench_scene.name, bounces, accumulator.samples(),
+                  options.reference_spp, ms_since(start) / 1000.0);
+    }
+    image::Frame frame = accumulator.frame();
+    fs::create_directories(options.cache);
+    image::write_file_atomic(path, image::encode_image(frame, image::ImageFormat::exr));
+    return frame;
+}
+
+std::string machine_description() {
+    std::ifstream cpuinfo("/proc/cpuinfo");
+    std::string line, model = "unknown CPU";
+    while (std::getline(cpuinfo, line)) {
+        if (line.rfind("model name", 0) == 0) {
+            model = line.substr(line.find(':') + 2);
+            break;
+        }
+    }
+    return fmt::format("{}, {} hardware threads", model, std::thread::hardware_concurrency());
+}
+
+void write_csv(const fs::path& path, const std::vector<Row>& rows) {
+    std::ofstream out(path);
+    out << "scene,method,preset,bounces,wall_ms,gpu_ms,passes_ms,resident_bytes,rel_mse,rmse,rel_mse_same_bounces,"
+           "mean_ratio,rays_per_second\n";
+    for (const Row& r : rows) {
+        out << fmt::format("{},{},{},{},{:.3f},{:.3f},{},{},{:.6g},{:.6g},{:.6g},{:.5f},{:.4g}\n", r.scene, r.method, r.preset,
+                           r.bounces, r.wall_ms, r.gpu_ms, r.passes, r.resident_bytes, r.rel_mse, r.rmse,
+                           r.rel_mse_same_bounces, r.mean_ratio, r.rays_per_second);
+    }
+}
+
+void write_markdown(const fs::path& path, const std::vector<Row>& rows, const Options& options, const std::string& gpu,
+                    const std::string& command) {
+    std::ostringstream md;
+    const std::time_t now = std::time(nullptr);
+    char date[32];
+    std::strftime(date, sizeof(date), "%Y-%m-%d", std::gmtime(&now));
+    md << "# Benchmarks\n\n"
+       << "## Speed and accuracy (bench/quality)\n\n"
+       << "Written by `" << command << "` on " << date << ".\n\n"
+       << "- Machine: " << machine_description() << "\n"
+       << "- GPU: " << gpu << "\n"
+       << fmt::format("- Frames {0}x{0}; reference: {1} spp, {2} indirect bounces (cached in {3}).\n", options.size,
+                      options.reference_spp, options.reference_bounces, options.cache.string())
+       << "- Error: relMSE = mean over pixels and RGB of (t−r)²/(r²+0.01) on linear HDR, against the full\n"
+       << "  reference (`rel_mse`) and against the reference at the bounce count the method models\n"
+       << "  (`rel_mse_same_bounces`, which isolates the method's own approximations).\n"
+       << "- GPU method times are the median of " << options.repeats << " renders of a static view after one warm-up\n"
+       << "  (structures that depend only on the scene, such as shadow maps, are then reused); wall time\n"
+       << "  includes readback. Reference times are CPU wall time for a fresh image. `direct`'s presets\n"
+       << "  differ only in shadow-map size, which costs time only in frames where the maps are redrawn.\n\n"
+       << "![error against time](../bench/results/quality.png)\n\n"
+       << "| scene | method | preset | bounces | wall ms | GPU ms | resident MiB | relMSE | relMSE same bounces | RMSE | mean / ref |\n"
+       << "|---|---|---|---|---|---|---|---|---|---|---|\n";
+    for (const Row& r : rows) {
+        md << fmt::format("| {} | {} | {} | {} | {:.1f} | {:.1f} | {:.1f} | {:.4f} | {:.5f} | {:.4f} | {:.3f} |\n", r.scene,
+                          r.method, r.preset, r.bounces, r.wall_ms, r.gpu_ms, r.resident_bytes / 1048576.0, r.rel_mse,
+                          r.rel_mse_same_bounces, r.rmse, r.mean_ratio);
+    }
+    md << "\nReference rows: `preset` is the sample count; its rays per second:\n\n| scene | spp | rays/s |\n|---|---|---|\n";
+    for (const Row& r : rows) {
+        if (r.method == "reference") md << fmt::format("| {} | {} | {:.3g} |\n", r.scene, r.preset, r.rays_per_second);
+    }
+    std::ofstream(path) << md.str();
+}
+
+int parse_int(const std::string& text, const char* flag) {
+    try {
+        return std::stoi(text);
+    } catch (const std::exception&) {
+        std::fprintf(stderr, "quality: %s expects a number, got '%s'\n", flag, text.c_str());
+        std::exit(2);
+    }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    Options options;
+    std::string command = "scripts/bench";
+    for (int i = 1; i < argc; ++i) {
+        const std::string flag = argv[i];
+        command += " " + flag;
+        auto value = [&]() -> std::string {
+            if (i + 1 >= argc) {
+                std::fprintf(stderr, "quality: %s needs a value\n", flag.c_str());
+                std::exit(2);
+            }
+            command += std::string(" ") + argv[i + 1];
+            return argv[++i];
+        };
+        if (flag == "--size") options.size = parse_int(value(), "--size");
+        else if (flag == "--reference-spp") options.reference_spp = parse_int(value(), "--reference-spp");
+        else if (flag == "--reference-bounces") options.reference_bounces = parse_int(value(), "--reference-bounces");
+        else if (flag == "--repeats") options.repeats = std::max(1, parse_int(value(), "--repeats"));
+        else if (flag == "--out") options.out = value();
+        else if (flag == "--cache") options.cache = value();
+        else if (flag == "--markdown") options.markdown = value();
+        else if (flag == "--scene") options.scenes.push_back(value());
+        else {
+            std::fprintf(stderr,
+                         "usage: quality [--size N] [--reference-spp N] [--reference-bounces N] [--repeats N]\n"
+                         "               [--scene NAME ...] [--out DIR] [--cache DIR] [--markdown FILE]\n");
+            return 2;
+        }
+    }
+    try {
+        Renderer renderer(gpu::DeviceChoice::resolve(std::nullopt));
+        std::vector<Row> rows;
+        const auto& registry = methods::MethodRegistry::builtin();
+        for (const auto& bench_scene : bench::quality_scenes()) {
+            if (!options.scenes.empty() &&
+                std::find(options.scenes.begin(), options.scenes.end(), bench_scene.name) == options.scenes.end()) {
+                continue;
+            }
+            reference::PathTracer tracer(bench_scene.scene);
+            const image::Frame truth = reference_image(bench_scene, tracer, options, options.reference_bounces);
+            std::map<int, image::Frame> truth_by_bounces;
+            auto truth_at = [&](int bounces) -> const image::Frame& {
+                if (bounces == options.reference_bounces) return truth;
+                auto it = truth_by_bounces.find(bounces);
+                if (it == truth_by_bounces.end()) {
+                    it = truth_by_bounces.emplace(bounces, reference_image(bench_scene, tracer, options, bounces)).first;
+                }
+                return it->second;
+            };
+            auto resources = renderer.upload(bench_scene.scene);
+            for (const auto& method : registry.names()) {
+                for (const auto& preset : methods::preset_names()) {
+                    RenderRequest request;
+                    request.method = method;
+                    request.preset = preset;
+                    request.width = request.height = options.size;
+                    request.make_display_image = false;
+                    renderer.render(*resources, request);  // warm-up: shaders, structures
+                    std::vector<RenderResult> results;
+                    for (int r = 0; r < options.repeats; ++r) results.push_back(renderer.render(*resources, request));
+                    std::sort(results.begin(), results.end(),
+                              [](const auto& a, const auto& b) { return a.stats.render_ms < b.stats.render_ms; });
+                    const RenderResult& median = results[results.size() / 2];
+                    Row row;
+                    row.scene = bench_scene.name;
+                    row.method = method;
+                    row.preset = preset;
+                    const auto bounces_knob = median.stats.knobs.find("bounces");
+                    row.bounces = bounces_knob == median.stats.knobs.end() ? 0 : static_cast<int>(bounces_knob->second);
+                    row.wall_ms = median.stats.render_ms;
+                    row.gpu_ms = median.stats.gpu_ms;
+                    for (const auto& pass : median.stats.passes) {
+                        row.passes += fmt::format("{}{}={:.2f}", row.passes.empty() ? "" : ";", pass.pass, pass.gpu_ms);
+                    }
+                    row.resident_bytes = median.stats.resident_bytes;
+                    const auto full = image::compare(median.frame, truth);
+                    row.rel_mse = full.rel_mse;
+                    row.rmse = full.rmse;
+                    row.mean_ratio = full.mean_reference > 0 ? full.mean_test / full.mean_reference : 0.0;
+                    row.rel_mse_same_bounces = image::compare(median.frame, truth_at(row.bounces)).rel_mse;
+                    log::info("bench", "{} {} {}: {:.1f} ms relMSE {:.4f} (same bounces {:.5f})", row.scene, method, preset,
+                              row.wall_ms, row.rel_mse, row.rel_mse_same_bounces);
+                    rows.push_back(row);
+                }
+            }
+            resources.reset();
+            // The reference itself: error reached per CPU second.
+            for (const int spp : {1, 4, 16, 64}) {
+                reference::PathTracerSettings settings;
+                settings.max_bounces = options.reference_bounces;
+                settings.seed = 7;
+                const auto rays_before = tracer.rays_traced();
+                const auto start = Clock::now();
+                const image::Frame frame = tracer.render(bench_scene.scene.cameras[0], options.size, options.size, spp, settings);
+                Row row;
+                row.scene = bench_scene.name;
+                row.method = "reference";
+                row.preset = std::to_string(spp);
+                row.bounces = options.reference_bounces;
+                row.wall_ms = ms_since(start);
+                row.rays_per_second = static_cast<double>(tracer.rays_traced() - rays_before) / (row.wall_ms / 1000.0);
+                const auto error = image::compare(frame, truth);
+                row.rel_mse = row.rel_mse_same_bounces = error.rel_mse;
+                row.rmse = error.rmse;
+                row.mean_ratio = error.mean_reference > 0 ? error.mean_test / error.mean_reference : 0.0;
+                log::info("bench", "{} reference {} spp: {:.0f} ms relMSE {:.4f}", row.scene, spp, row.wall_ms, row.rel_mse);
+                rows.push_back(row);
+            }
+        }
+        fs::create_directories(options.out);
+        write_csv(options.out / "quality.csv", rows);
+        write_markdown(options.markdown, rows, options, renderer.gpu_info().summary(), command);
+        log::info("bench", "wrote {} and {}", (options.out / "quality.csv").string(), options.markdown.string());
+        return 0;
+    } catch (const std::exception& error) {
+        std::fprintf(stderr, "quality: %s\n", error.what());
+        return 1;
+    }
+}
