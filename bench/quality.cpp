@@ -239,6 +239,7 @@ int main(int argc, char** argv) {
             };
             auto resources = renderer.upload(bench_scene.scene);
             for (const auto& method : registry.names()) {
+                if (registry.find(method).device != methods::MethodDevice::gpu) continue;  // measured below
                 for (const auto& preset : methods::preset_names()) {
                     RenderRequest request;
                     request.method = method;

@@ -26,6 +26,26 @@ std::vector<BenchScene> quality_scenes() {
     light.outer_cone = 0.8f;
     light.intensity = 2.0f;
     scenes.push_back({"cornell_indirect", "a spot aimed at the ceiling: the room is lit indirectly", std::move(indirect)});
+
+    // A sealed slab 2 cm thick across the whole box, 7 cm under the light (above both blocks): nothing below it is lit,
+    // so any radiance there is light leaking through a thin wall (exactly zero in the reference).
+    scene::Scene thin = scene::make_cornell_box();
+    thin.name = "thin_wall";
+    scene::add_box(thin, "slab", {-0.01f, 0.36f, -0.01f}, {0.57f, 0.38f, 0.57f}, 0);
+    scenes.push_back({"thin_wall", "a 2 cm slab seals the light above it: radiance below is leakage", std::move(thin)});
+
+    // A wall 4 cm thick across the box with a doorway; the light is behind it, the camera in front:
+    // the front half is lit only through the door, mostly by light that bounced.
+    scene::Scene doorway = scene::make_cornell_box();
+    doorway.name = "doorway";
+    doorway.lights[0].position.z = 0.45f;
+    doorway.lights[0].position.y = 0.30f;
+    doorway.objects.erase(doorway.objects.begin() + 2);  // the tall block would stand in the wall
+    constexpr float z0 = 0.33f, z1 = 0.37f;
+    scene::add_box(doorway, "wall_left", {-0.01f, -0.01f, z0}, {0.22f, 0.56f, z1}, 0);
+    scene::add_box(doorway, "wall_right", {0.34f, -0.01f, z0}, {0.57f, 0.56f, z1}, 0);
+    scene::add_box(doorway, "lintel", {0.22f, 0.36f, z0}, {0.34f, 0.56f, z1}, 0);
+    scenes.push_back({"doorway", "light behind a wall with a doorway: the visible room is lit through it", std::move(doorway)});
     return scenes;
 }
 

@@ -65,6 +65,36 @@ std::unique_ptr<SceneResources> Renderer::upload(const scene::Scene& scene) {
     return std::make_unique<SceneResources>(scene);
 }
 
+void Renderer::ensure_output(int width, int height) {
+    if (output_ && output_.width() == width && output_.height() == height) return;
+    output_ = gpu::Texture({GL_TEXTURE_2D, GL_RGBA32F, width, height});
+    output_.set_filter(GL_NEAREST, GL_NEAREST);
+    output_framebuffer_ = gpu::Framebuffer();
+    output_framebuffer_.attach_color(0, output_);
+    output_framebuffer_.set_draw_buffers(1);
+    output_framebuffer_.check_complete("the HDR output");
+}
+
+void Renderer::make_display_image(image::Frame& frame, const image::DisplayTransform& transform) {
+    BOUNCE_CHECK(frame.width > 0 && frame.height > 0 &&
+                     frame.rgba.size() == static_cast<std::size_t>(frame.width) * frame.height * 4,
+                 "frame {}x{} with {} values", frame.width, frame.height, frame.rgba.size());
+    ensure_output(frame.width, frame.height);
+    // Frames are stored top row first; GL's first row is the bottom one.
+    const std::size_t row = static_cast<std::size_t>(frame.width) * 4;
+    std::vector<float> bottom_up(frame.rgba.size());
+    for (int y = 0; y < frame.height; ++y) {
+        std::copy_n(frame.rgba.begin() + static_cast<std::ptrdiff_t>(row * y), row,
+                    bottom_up.begin() + static_cast<std::ptrdiff_t>(row * (frame.height - 1 - y)));
+    }
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    glTextureSubImage2D(output_.id(), 0, 0, 0, frame.width, frame.height, GL_RGBA, GL_FLOAT, bottom_up.data());
+    timers_.begin_frame();
+    const gpu::Texture& display = tonemap_.run(shaders_, state_, timers_, output_, transform);
+    frame.display_rgba8 = read_texture<std::uint8_t>(display, GL_UNSIGNED_BYTE);
+    timers_.resolve();
+}
+
 RenderResult Renderer::render(SceneResources& resources, const RenderRequest& request) {
     const auto start = Clock::now();
     if (request.width < 1 || request.height < 1 || request.width > kMaxDimension || request.height > kMaxDimension) {
@@ -76,14 +106,7 @@ RenderResult Renderer::render(SceneResources& resources, const RenderRequest& re
     auto& method = resources.methods[request.method];
     if (!method) method = registry.create(request.method);
 
-    if (!output_ || output_.width() != request.width || output_.height() != request.height) {
-        output_ = gpu::Texture({GL_TEXTURE_2D, GL_RGBA32F, request.width, request.height});
-        output_.set_filter(GL_NEAREST, GL_NEAREST);
-        output_framebuffer_ = gpu::Framebuffer();
-        output_framebuffer_.attach_color(0, output_);
-        output_framebuffer_.set_draw_buffers(1);
-        output_framebuffer_.check_complete("the HDR output");
-    }
+    ensure_output(request.width, request.height);
 
     const scene::Scene& scene = resources.gpu_scene.scene();
     const scene::Camera camera = camera_for(scene, request);

@@ -71,6 +71,10 @@ public:
     // Throws InputError for bad requests (unknown method, preset or knob, size out of range).
     RenderResult render(SceneResources& resources, const RenderRequest& request);
 
+    // Tone-maps a linear frame made elsewhere (the CPU reference) into frame.display_rgba8 with the
+    // same GPU pass every GPU frame goes through.
+    void make_display_image(image::Frame& frame, const image::DisplayTransform& transform);
+
     static constexpr int kMaxDimension = 16384;
 
 private:
@@ -79,6 +83,7 @@ private:
     gpu::StateCache state_;
     gpu::GpuTimers timers_;
     passes::TonemapPass tonemap_;
+    void ensure_output(int width, int height);
     gpu::Texture output_;
     gpu::Framebuffer output_framebuffer_;
 };

@@ -124,6 +124,14 @@ nlohmann::json Daemon::hello_body() const {
             {"methods", methods::MethodRegistry::builtin().names()}};
 }
 
+bool Daemon::try_start_cpu_job() {
+    int jobs = cpu_jobs_.load();
+    while (jobs < kMaxCpuJobs) {
+        if (cpu_jobs_.compare_exchange_weak(jobs, jobs + 1)) return true;
+    }
+    return false;
+}
+
 void Daemon::request_started() { ++in_flight_; }
 void Daemon::request_finished() { --in_flight_; }
 
@@ -253,6 +261,7 @@ int Daemon::run() {
     for (int i = 1; i < config_.network_threads; ++i) threads.emplace_back([this] { io_.run(); });
     io_.run();
     for (auto& thread : threads) thread.join();
+    cpu_pool_.join();  // CPU jobs may still hand frames to the render thread
     render_->stop();
     encode_pool_.join();
     log::info("daemon", "stopped");

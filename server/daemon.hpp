@@ -57,6 +57,11 @@ public:
     RenderService& render_service() { return *render_; }
     Metrics& metrics() { return metrics_; }
     boost::asio::thread_pool& encode_pool() { return encode_pool_; }
+    // CPU methods (the path-traced reference) run here, never on the render thread.
+    boost::asio::thread_pool& cpu_pool() { return cpu_pool_; }
+    bool try_start_cpu_job();  // false when kMaxCpuJobs are queued or running
+    void finish_cpu_job() { --cpu_jobs_; }
+    static constexpr int kMaxCpuJobs = 4;
     const SceneRoot& scene_root() const { return scene_root_; }
     bool shutting_down() const { return shutting_down_.load(); }
     nlohmann::json hello_body() const;
@@ -76,6 +81,8 @@ private:
     Metrics metrics_;
     boost::asio::io_context io_;
     boost::asio::thread_pool encode_pool_{2};
+    boost::asio::thread_pool cpu_pool_{1};  // one trace at a time: it uses every core through TBB
+    std::atomic<int> cpu_jobs_{0};
     boost::asio::ip::tcp::acceptor acceptor_;
     std::optional<boost::asio::ip::tcp::acceptor> metrics_acceptor_;
     boost::asio::signal_set signals_;

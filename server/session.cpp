@@ -3,6 +3,8 @@
 #include "renderer/base/log.hpp"
 #include "renderer/image/codec.hpp"
 #include "server/daemon.hpp"
+#include "renderer/reference/path_tracer.hpp"
+#include "renderer/reference/reference_method.hpp"
 #include "server/request_error.hpp"
 
 #include <boost/asio/bind_executor.hpp>
@@ -241,6 +243,10 @@ void Session::execute(const protocol::Message& message, Clock::time_point receiv
                                                    entry.version, *order.min_scene_version),
                                        "min_scene_version");
                 }
+                if (methods::MethodRegistry::builtin().find(order.request.method).device == methods::MethodDevice::cpu) {
+                    render_on_cpu(message, order, entry, received, cancelled);
+                    return;
+                }
                 RenderRequest request = order.request;
                 if (order.camera) {
                     // A camera of the scene for this render only; the scene's own view is untouched.
@@ -254,40 +260,7 @@ void Session::execute(const protocol::Message& message, Clock::time_point receiv
                 }
                 auto result = std::make_shared<RenderResult>(renderer.render(*entry.resources, request));
                 daemon_.metrics().set_resident_bytes(order.scene, result->stats.resident_bytes);
-                const std::uint64_t version = entry.version;
-                const auto rendered = Clock::now();
-                // Encoding runs on the encode pool so the render thread moves on to the next job.
-                asio::post(daemon_.encode_pool(), [self = shared_from_this(), id, order, result, version, received,
-                                                   started, rendered] {
-                    try {
-                        const auto format = image::parse_image_format(order.format);
-                        const auto bytes = image::encode_image(result->frame, format, {order.jpeg_quality, order.exr_half});
-                        const auto encoded = Clock::now();
-                        json passes = json::object();
-                        for (const auto& pass : result->stats.passes) passes[pass.pass] = pass.gpu_ms;
-                        json resident = json::array();
-                        for (const auto& s : result->stats.resident) {
-                            resident.push_back({{"structure", s.name}, {"bytes", s.bytes}, {"reason", s.reason}});
-                        }
-                        const double total_ms = ms_between(received, encoded);
-                        json stats = {{"scene_version", version}, {"width", result->frame.width},
-                                      {"height", result->frame.height}, {"format", image::image_format_name(format)},
-                                      {"method", result->stats.method}, {"preset", result->stats.preset},
-                                      {"knobs", result->stats.knobs},
-                                      {"timings_ms", {{"queue", ms_between(received, started)},
-                                                      {"render", ms_between(started, rendered)},
-                                                      {"gpu", result->stats.gpu_ms},
-                                                      {"readback", result->stats.readback_ms},
-                                                      {"encode", ms_between(rendered, encoded)},
-                                                      {"total", total_ms}, {"passes", passes}}},
-                                      {"resident", resident}, {"resident_bytes", result->stats.resident_bytes}};
-                        self->daemon_.metrics().count_frame(ms_between(started, rendered), total_ms);
-                        self->send({static_cast<std::uint16_t>(MessageType::frame), id, std::move(stats), bytes});
-                    } catch (const std::exception& error) {
-                        self->fail(id, ErrorCode::internal, fmt::format("encoding failed: {}", error.what()));
-                    }
-                    asio::post(self->socket_.get_executor(), [self, id] { self->finish(id); });
-                });
+                deliver_frame(id, order, result, entry.version, received, started, Clock::now());
                 return;
             }
             default:
@@ -303,6 +276,104 @@ void Session::execute(const protocol::Message& message, Clock::time_point receiv
         fail(id, failure.code, failure.message, failure.field);
         asio::post(socket_.get_executor(), [self = shared_from_this(), id] { self->finish(id); });
     }
+}
+
+// Runs on the render thread: snapshots the scene, so the trace on the CPU pool never races with
+// later mutations and never holds the render thread.
+void Session::render_on_cpu(const protocol::Message& message, const RenderOrder& order, const SceneEntry& entry,
+                            Clock::time_point received, const std::shared_ptr<std::atomic<bool>>& cancelled) {
+    const std::uint64_t id = message.request_id;
+    const auto& registry = methods::MethodRegistry::builtin();
+    const methods::KnobValues knobs = registry.resolve(order.request.method, order.request.preset, order.request.knobs);
+    const reference::ReferenceRequest traced = reference::request_from_knobs(knobs);
+    auto snapshot = std::make_shared<const scene::Scene>(*entry.scene);
+    scene::Camera camera = camera_for(*snapshot, order.request);
+    if (order.camera) {
+        const auto index = snapshot->find_camera(*order.camera);
+        if (!index) {
+            throw RequestError(ErrorCode::not_found, fmt::format("scene '{}' has no camera '{}'", order.scene, *order.camera),
+                               "camera");
+        }
+        camera = snapshot->cameras[*index];
+    }
+    if (!daemon_.try_start_cpu_job()) {
+        throw RequestError(ErrorCode::busy, fmt::format("{} CPU renders are already queued", Daemon::kMaxCpuJobs));
+    }
+    const std::uint64_t version = entry.version;
+    asio::post(daemon_.cpu_pool(), [self = shared_from_this(), id, order, snapshot, camera, knobs, traced, version,
+                                    received, cancelled] {
+        Daemon& daemon = self->daemon_;
+        try {
+            if (cancelled->load()) throw RequestError(ErrorCode::cancelled, "cancelled before it ran");
+            const auto started = Clock::now();
+            auto result = std::make_shared<RenderResult>();
+            const reference::PathTracer tracer(*snapshot);
+            result->frame = tracer.render(camera, order.request.width, order.request.height, traced.spp, traced.settings);
+            const auto rendered = Clock::now();
+            daemon.finish_cpu_job();
+            result->stats.method = order.request.method;
+            result->stats.preset = order.request.preset;
+            result->stats.knobs = knobs;
+            result->stats.render_ms = ms_between(started, rendered);
+            if (!order.request.make_display_image) {
+                self->deliver_frame(id, order, result, version, received, started, rendered);
+                return;
+            }
+            // The display transform is the GPU pass every frame goes through, on the render thread.
+            const bool queued = daemon.render_service().submit(
+                [self, id, order, result, version, received, started, rendered](Renderer& renderer, SceneRegistry&) {
+                    try {
+                        renderer.make_display_image(result->frame, order.request.display);
+                        self->deliver_frame(id, order, result, version, received, started, rendered);
+                    } catch (const std::exception& error) {
+                        self->fail(id, ErrorCode::internal, fmt::format("tone mapping failed: {}", error.what()));
+                        asio::post(self->socket_.get_executor(), [self, id] { self->finish(id); });
+                    }
+                });
+            if (!queued) throw RequestError(ErrorCode::busy, "the render queue is full (tone mapping the traced frame)");
+        } catch (...) {
+            const Failure failure = describe_failure(std::current_exception());
+            self->fail(id, failure.code, failure.message, failure.field);
+            asio::post(self->socket_.get_executor(), [self, id] { self->finish(id); });
+        }
+    });
+}
+
+// Encodes a finished frame on the encode pool, sends it, and ends the request.
+void Session::deliver_frame(std::uint64_t id, const RenderOrder& order, std::shared_ptr<RenderResult> result,
+                            std::uint64_t scene_version, Clock::time_point received, Clock::time_point started,
+                            Clock::time_point rendered) {
+    asio::post(daemon_.encode_pool(), [self = shared_from_this(), id, order, result, scene_version, received, started,
+                                       rendered] {
+        try {
+            const auto format = image::parse_image_format(order.format);
+            const auto bytes = image::encode_image(result->frame, format, {order.jpeg_quality, order.exr_half});
+            const auto encoded = Clock::now();
+            json passes = json::object();
+            for (const auto& pass : result->stats.passes) passes[pass.pass] = pass.gpu_ms;
+            json resident = json::array();
+            for (const auto& s : result->stats.resident) {
+                resident.push_back({{"structure", s.name}, {"bytes", s.bytes}, {"reason", s.reason}});
+            }
+            const double total_ms = ms_between(received, encoded);
+            json stats = {{"scene_version", scene_version}, {"width", result->frame.width},
+                          {"height", result->frame.height}, {"format", image::image_format_name(format)},
+                          {"method", result->stats.method}, {"preset", result->stats.preset},
+                          {"knobs", result->stats.knobs},
+                          {"timings_ms", {{"queue", ms_between(received, started)},
+                                          {"render", ms_between(started, rendered)},
+                                          {"gpu", result->stats.gpu_ms},
+                                          {"readback", result->stats.readback_ms},
+                                          {"encode", ms_between(rendered, encoded)},
+                                          {"total", total_ms}, {"passes", passes}}},
+                          {"resident", resident}, {"resident_bytes", result->stats.resident_bytes}};
+            self->daemon_.metrics().count_frame(ms_between(started, rendered), total_ms);
+            self->send({static_cast<std::uint16_t>(MessageType::frame), id, std::move(stats), bytes});
+        } catch (const std::exception& error) {
+            self->fail(id, ErrorCode::internal, fmt::format("encoding failed: {}", error.what()));
+        }
+        asio::post(self->socket_.get_executor(), [self, id] { self->finish(id); });
+    });
 }
 
 void Session::finish(std::uint64_t request_id) {

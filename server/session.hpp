@@ -17,11 +17,14 @@
 
 namespace bounce {
 class Renderer;
+struct RenderResult;
 }
 
 namespace bounce::server {
 
 class Daemon;
+struct RenderOrder;
+struct SceneEntry;
 class SceneRegistry;
 
 class Session : public std::enable_shared_from_this<Session> {
@@ -45,6 +48,11 @@ private:
     void submit(protocol::Message message);
     void execute(const protocol::Message& message, Clock::time_point received, Clock::time_point deadline,
                  const std::shared_ptr<std::atomic<bool>>& cancelled, SceneRegistry& registry, Renderer& renderer);
+    void render_on_cpu(const protocol::Message& message, const RenderOrder& order, const SceneEntry& entry,
+                       Clock::time_point received, const std::shared_ptr<std::atomic<bool>>& cancelled);
+    void deliver_frame(std::uint64_t id, const RenderOrder& order, std::shared_ptr<RenderResult> result,
+                       std::uint64_t scene_version, Clock::time_point received, Clock::time_point started,
+                       Clock::time_point rendered);
     void finish(std::uint64_t request_id);
     void fail(std::uint64_t request_id, protocol::ErrorCode code, const std::string& message,
               std::optional<std::string> field = {});

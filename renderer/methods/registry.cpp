@@ -2,6 +2,7 @@
 
 #include "renderer/base/error.hpp"
 #include "renderer/methods/direct/direct_method.hpp"
+#include "renderer/reference/reference_method.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -24,13 +25,14 @@ const MethodRegistry& MethodRegistry::builtin() {
     static const MethodRegistry registry = [] {
         MethodRegistry r;
         r.add(direct::method_info());
+        r.add(reference::method_info());
         return r;
     }();
     return registry;
 }
 
 void MethodRegistry::add(MethodInfo info) {
-    BOUNCE_CHECK(info.create != nullptr, "method '{}' has no factory", info.name);
+    BOUNCE_CHECK(info.device == MethodDevice::cpu || info.create != nullptr, "method '{}' has no factory", info.name);
     for (const auto& preset : preset_names()) {
         const auto it = info.presets.find(preset);
         BOUNCE_CHECK(it != info.presets.end(), "method '{}' lacks preset '{}'", info.name, preset);
@@ -84,6 +86,12 @@ KnobValues MethodRegistry::resolve(const std::string& method, const std::string&
     return values;
 }
 
-std::unique_ptr<Method> MethodRegistry::create(const std::string& method) const { return find(method).create(); }
+std::unique_ptr<Method> MethodRegistry::create(const std::string& method) const {
+    const MethodInfo& info = find(method);
+    if (info.device != MethodDevice::gpu) {
+        throw InputError(fmt::format("method '{}' runs on the CPU, not through the GL renderer", method));
+    }
+    return info.create();
+}
 
 }  // namespace bounce::methods

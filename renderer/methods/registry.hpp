@@ -23,12 +23,17 @@ struct KnobSpec {
 // Presets every method defines, from fastest to most accurate.
 const std::vector<std::string>& preset_names();
 
+// Where a method runs: GPU methods render through Renderer on the render thread; CPU methods
+// (the path-traced reference) run on their own threads and never hold the GL context.
+enum class MethodDevice { gpu, cpu };
+
 struct MethodInfo {
     std::string name;
     std::string description;
+    MethodDevice device = MethodDevice::gpu;
     std::vector<KnobSpec> knobs;
     std::map<std::string, KnobValues> presets;  // every name of preset_names(), every knob set
-    std::function<std::unique_ptr<Method>()> create;
+    std::function<std::unique_ptr<Method>()> create;  // GPU methods only
 };
 
 class MethodRegistry {

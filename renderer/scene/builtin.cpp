@@ -146,6 +146,33 @@ Scene make_cornell_box() {
     return scene;
 }
 
+int add_box(Scene& scene, const std::string& name, const glm::vec3& lo, const glm::vec3& hi, int material) {
+    const glm::vec3 centre = (lo + hi) * 0.5f;
+    const glm::vec3 a = (lo - centre) / kMillimetre, b = (hi - centre) / kMillimetre;
+    Mesh mesh;
+    mesh.name = name;
+    Primitive primitive;
+    primitive.material = material;
+    const std::array<std::pair<Quad, glm::vec3>, 6> faces{{
+        {{{{a.x, a.y, a.z}, {a.x, b.y, a.z}, {a.x, b.y, b.z}, {a.x, a.y, b.z}}}, {-1, 0, 0}},
+        {{{{b.x, a.y, a.z}, {b.x, b.y, a.z}, {b.x, b.y, b.z}, {b.x, a.y, b.z}}}, {1, 0, 0}},
+        {{{{a.x, a.y, a.z}, {b.x, a.y, a.z}, {b.x, a.y, b.z}, {a.x, a.y, b.z}}}, {0, -1, 0}},
+        {{{{a.x, b.y, a.z}, {b.x, b.y, a.z}, {b.x, b.y, b.z}, {a.x, b.y, b.z}}}, {0, 1, 0}},
+        {{{{a.x, a.y, a.z}, {b.x, a.y, a.z}, {b.x, b.y, a.z}, {a.x, b.y, a.z}}}, {0, 0, -1}},
+        {{{{a.x, a.y, b.z}, {b.x, a.y, b.z}, {b.x, b.y, b.z}, {a.x, b.y, b.z}}}, {0, 0, 1}},
+    }};
+    for (const auto& [quad, facing] : faces) add_quad(primitive, quad, facing, glm::vec3(0.0f));
+    mesh.bounds = primitive.bounds;
+    mesh.primitives.push_back(std::move(primitive));
+    scene.meshes.push_back(std::move(mesh));
+    Object object;
+    object.name = name;
+    object.mesh = static_cast<int>(scene.meshes.size()) - 1;
+    object.initial_transform = object.transform = glm::translate(glm::mat4(1.0f), centre);
+    scene.objects.push_back(object);
+    return static_cast<int>(scene.objects.size()) - 1;
+}
+
 std::vector<std::string> builtin_scene_names() { return {"cornell"}; }
 
 Scene make_builtin_scene(const std::string& name) {

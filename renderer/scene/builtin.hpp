@@ -13,6 +13,10 @@ namespace bounce::scene {
 // below the ceiling.
 Scene make_cornell_box();
 
+// Appends an axis-aligned box [lo, hi] (metres, faces outward) as a movable object whose origin is
+// its centre; returns the object's index.
+int add_box(Scene& scene, const std::string& name, const glm::vec3& lo, const glm::vec3& hi, int material);
+
 // Names of the built-in scenes ("cornell").
 std::vector<std::string> builtin_scene_names();
 // Throws InputError for an unknown name.

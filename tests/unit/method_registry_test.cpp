@@ -24,7 +24,7 @@ TEST(MethodRegistry, PresetsResolveAndOverridesApply) {
 
 TEST(MethodRegistry, FailsLoudlyNamingTheFault) {
     const auto& registry = MethodRegistry::builtin();
-    EXPECT_NE(message_of([&] { registry.find("photon"); }).find("unknown method 'photon' (known: direct"),
+    EXPECT_NE(message_of([&] { registry.find("photon"); }).find("unknown method 'photon' (known: direct, reference)"),
               std::string::npos);
     EXPECT_NE(message_of([&] { registry.resolve("direct", "insane", {}); }).find("unknown preset 'insane'"),
               std::string::npos);
@@ -37,6 +37,15 @@ TEST(MethodRegistry, FailsLoudlyNamingTheFault) {
               std::string::npos);
     EXPECT_NE(message_of([&] { registry.resolve("direct", "low", {{"shadow_map_size", std::nan("")}}); }).find("outside"),
               std::string::npos);
+}
+
+TEST(MethodRegistry, ReferenceIsACpuMethodWithValidatedKnobs) {
+    const auto& registry = MethodRegistry::builtin();
+    EXPECT_EQ(registry.find("reference").device, MethodDevice::cpu);
+    EXPECT_EQ(registry.resolve("reference", "ultra", {}).at("spp"), 1024.0);
+    EXPECT_EQ(registry.resolve("reference", "draft", {{"bounces", 0}}).at("bounces"), 0.0);
+    EXPECT_THROW(registry.resolve("reference", "draft", {{"spp", 0}}), InputError);
+    EXPECT_THROW(registry.create("reference"), InputError);  // not a GL method
 }
 
 TEST(MethodRegistry, IncompleteMethodsAreRejected) {

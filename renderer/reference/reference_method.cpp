@@ -1,0 +1,33 @@
+#include "renderer/reference/reference_method.hpp"
+
+namespace bounce::reference {
+
+methods::MethodInfo method_info() {
+    methods::MethodInfo info;
+    info.name = "reference";
+    info.description = "CPU path tracer (Embree): the ground truth every method is measured against";
+    info.device = methods::MethodDevice::cpu;
+    info.knobs = {{"spp", 1, 65536, true, "samples per pixel"},
+                  {"bounces", 0, 64, true, "indirect bounces (0: direct light only)"},
+                  {"seed", 0, 4294967295.0, true, "random seed; the same seed gives the same image"},
+                  {"ao", 0, 1, true, "1: ambient occlusion instead of radiance"},
+                  {"ao_lambda", 0, 1e6, false, "ambient occlusion falloff 1 / (1 + lambda r), per metre"}};
+    auto preset = [](double spp) {
+        return methods::KnobValues{{"spp", spp}, {"bounces", 4}, {"seed", 1}, {"ao", 0}, {"ao_lambda", 1}};
+    };
+    info.presets = {{"draft", preset(4)}, {"low", preset(16)}, {"medium", preset(64)}, {"high", preset(256)},
+                    {"ultra", preset(1024)}};
+    return info;
+}
+
+ReferenceRequest request_from_knobs(const methods::KnobValues& knobs) {
+    ReferenceRequest request;
+    request.spp = static_cast<int>(knobs.at("spp"));
+    request.settings.max_bounces = static_cast<int>(knobs.at("bounces"));
+    request.settings.seed = static_cast<std::uint64_t>(knobs.at("seed"));
+    request.settings.ambient_occlusion = knobs.at("ao") != 0.0;
+    request.settings.ao_lambda = static_cast<float>(knobs.at("ao_lambda"));
+    return request;
+}
+
+}  // namespace bounce::reference

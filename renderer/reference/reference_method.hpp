@@ -1,0 +1,18 @@
+// Method `reference` in the registry: its knobs and presets, and the settings they make.
+#pragma once
+
+#include "renderer/methods/registry.hpp"
+#include "renderer/reference/path_tracer.hpp"
+
+namespace bounce::reference {
+
+methods::MethodInfo method_info();
+
+struct ReferenceRequest {
+    PathTracerSettings settings;
+    int spp = 64;
+};
+// From knobs resolved by the registry (spp, bounces, seed, ao, ao_lambda).
+ReferenceRequest request_from_knobs(const methods::KnobValues& knobs);
+
+}  // namespace bounce::reference
