@@ -89,7 +89,7 @@ ShaderObject compile(GLenum stage, const std::string& path, const std::vector<st
 }  // namespace
 
 std::string ProgramSource::key() const {
-    std::string key = vertex + "|" + fragment;
+    std::string key = vertex + "|" + fragment + "|" + geometry + "|" + compute;
     for (const auto& define : defines) key += "|" + define;
     return key;
 }
@@ -126,8 +126,15 @@ std::string annotate_info_log(const std::string& log, const std::vector<std::str
 
 ShaderProgram::ShaderProgram(const ProgramSource& source) : program_(glCreateProgram()) {
     std::vector<ShaderObject> shaders;
-    shaders.push_back(compile(GL_VERTEX_SHADER, source.vertex, source.defines));
-    if (!source.fragment.empty()) shaders.push_back(compile(GL_FRAGMENT_SHADER, source.fragment, source.defines));
+    if (!source.compute.empty()) {
+        BOUNCE_CHECK(source.vertex.empty() && source.fragment.empty() && source.geometry.empty(),
+                     "compute program '{}' mixed with raster stages", source.compute);
+        shaders.push_back(compile(GL_COMPUTE_SHADER, source.compute, source.defines));
+    } else {
+        shaders.push_back(compile(GL_VERTEX_SHADER, source.vertex, source.defines));
+        if (!source.geometry.empty()) shaders.push_back(compile(GL_GEOMETRY_SHADER, source.geometry, source.defines));
+        if (!source.fragment.empty()) shaders.push_back(compile(GL_FRAGMENT_SHADER, source.fragment, source.defines));
+    }
     for (const auto& shader : shaders) glAttachShader(program_.id(), shader.id());
     glLinkProgram(program_.id());
     for (const auto& shader : shaders) glDetachShader(program_.id(), shader.id());
@@ -138,7 +145,7 @@ ShaderProgram::ShaderProgram(const ProgramSource& source) : program_(glCreatePro
         glGetProgramiv(program_.id(), GL_INFO_LOG_LENGTH, &length);
         std::string log(static_cast<std::size_t>(std::max(length, 1)), '\0');
         glGetProgramInfoLog(program_.id(), length, nullptr, log.data());
-        BOUNCE_FAIL("program '{}' + '{}' failed to link:\n{}", source.vertex, source.fragment, log);
+        BOUNCE_FAIL("program '{}' failed to link:\n{}", source.key(), log);
     }
 }
 
@@ -167,6 +174,22 @@ void ShaderProgram::set(std::string_view name, const glm::mat3& value) const {
 }
 void ShaderProgram::set(std::string_view name, const glm::mat4& value) const {
     glProgramUniformMatrix4fv(id(), location(name), 1, GL_FALSE, glm::value_ptr(value));
+}
+
+void ShaderProgram::set(std::string_view name, const glm::ivec3& value) const {
+    glProgramUniform3iv(id(), location(name), 1, glm::value_ptr(value));
+}
+void ShaderProgram::set(std::string_view name, unsigned value) const { glProgramUniform1ui(id(), location(name), value); }
+
+void ShaderProgram::dispatch_threads(std::size_t invocations, unsigned local_size) const {
+    if (invocations == 0) return;
+    use();
+    const std::size_t groups = (invocations + local_size - 1) / local_size;
+    BOUNCE_CHECK(groups <= 65535u * 65535u, "dispatch of {} threads is too large", invocations);
+    // Large dispatches spread over y: a single dimension is limited to 65535 groups.
+    const auto x = static_cast<GLuint>(std::min<std::size_t>(groups, 65535));
+    const auto y = static_cast<GLuint>((groups + x - 1) / x);
+    glDispatchCompute(x, y, 1);
 }
 
 const ShaderProgram& ShaderCache::get(const ProgramSource& source) {

@@ -19,6 +19,12 @@ struct ProgramSource {
     std::string vertex;    // path relative to shaders/, e.g. "passes/gbuffer.vert"
     std::string fragment;  // may be empty for depth-only programs
     std::vector<std::string> defines;  // "NAME" or "NAME VALUE"
+    std::string geometry;  // optional
+    std::string compute;   // a compute program: set this alone (vertex and fragment empty)
+
+    static ProgramSource compute_shader(std::string path, std::vector<std::string> defines = {}) {
+        return {"", "", std::move(defines), "", std::move(path)};
+    }
 
     std::string key() const;
 };
@@ -51,6 +57,12 @@ public:
     void set(std::string_view name, const glm::vec4& value) const;
     void set(std::string_view name, const glm::mat3& value) const;
     void set(std::string_view name, const glm::mat4& value) const;
+    void set(std::string_view name, const glm::ivec3& value) const;
+    void set(std::string_view name, unsigned value) const;
+
+    // Compute programs: enough work groups of the declared local size for `invocations` threads
+    // along x (the shader checks its bound), followed by nothing: callers place the barriers.
+    void dispatch_threads(std::size_t invocations, unsigned local_size = 64) const;
 
 private:
     GLint location(std::string_view name) const;

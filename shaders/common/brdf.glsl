@@ -40,6 +40,21 @@ float dielectric_fresnel(float specular, float cos_angle) {
     return specular * (DIELECTRIC_F0 + (1.0 - DIELECTRIC_F0) * schlick_weight(cos_angle));
 }
 
+// The Lambertian part of evaluate_brdf: what the specular interface transmits on the way in and on
+// the way out (weighting by 1 - F(v.h) instead, glTF's mix, creates energy at grazing view).
+vec3 diffuse_brdf(SurfaceMaterial m, float n_dot_l, float n_dot_v) {
+    float transmitted = (1.0 - dielectric_fresnel(m.specular, n_dot_l)) * (1.0 - dielectric_fresnel(m.specular, n_dot_v));
+    return transmitted * (1.0 - m.metallic) * m.base_color * INV_PI;
+}
+
+// The diffuse reflectance seen from nowhere in particular (voxels keep no view direction): the
+// Lambertian part with both Fresnel factors at their cosine-weighted hemispherical mean,
+// F0 + (1 - F0) / 21 for Schlick's approximation.
+vec3 diffuse_albedo(SurfaceMaterial m) {
+    float mean_fresnel = m.specular * (DIELECTRIC_F0 + (1.0 - DIELECTRIC_F0) / 21.0);
+    return (1.0 - mean_fresnel) * (1.0 - mean_fresnel) * (1.0 - m.metallic) * m.base_color;
+}
+
 // f(l, v) for unit vectors; zero when either is below the surface.
 vec3 evaluate_brdf(SurfaceMaterial m, vec3 n, vec3 v, vec3 l) {
     float n_dot_l = dot(n, l);
@@ -53,13 +68,7 @@ vec3 evaluate_brdf(SurfaceMaterial m, vec3 n, vec3 v, vec3 l) {
     float alpha = ggx_alpha(m.roughness);
     float specular_lobe = ggx_distribution(n_dot_h, alpha) * smith_visibility(n_dot_l, n_dot_v, alpha);
     float fw = schlick_weight(v_dot_h);
-
-    // The diffuse part keeps what specular reflection leaves on the way in and on the way out;
-    // weighting it by 1 - F(v.h) instead (glTF's mix) creates energy at grazing view.
-    float diffuse_weight = (1.0 - dielectric_fresnel(m.specular, n_dot_l)) *
-                           (1.0 - dielectric_fresnel(m.specular, n_dot_v));
-    vec3 dielectric = diffuse_weight * m.base_color * INV_PI + dielectric_fresnel(m.specular, v_dot_h) * specular_lobe;
-    vec3 metal_fresnel = m.base_color + (1.0 - m.base_color) * fw;
-    vec3 metal = metal_fresnel * specular_lobe;
-    return mix(dielectric, metal, m.metallic);
+    vec3 dielectric_specular = vec3(dielectric_fresnel(m.specular, v_dot_h) * specular_lobe);
+    vec3 metal_specular = (m.base_color + (1.0 - m.base_color) * fw) * specular_lobe;
+    return diffuse_brdf(m, n_dot_l, n_dot_v) + mix(dielectric_specular, metal_specular, m.metallic);
 }

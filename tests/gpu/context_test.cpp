@@ -43,13 +43,13 @@ TEST(Context, OutOfRangeDeviceIndexNamesWhatWasFound) {
 }
 
 TEST(Shaders, IncludesExpandOnceWithLineDirectives) {
-    const auto source = gpu::expand_shader_source("direct/direct_light.frag", {"EXAMPLE 1"});
+    const auto source = gpu::expand_shader_source("passes/direct_light.frag", {"EXAMPLE 1"});
     EXPECT_EQ(source.text.rfind("#version 450 core\n#define EXAMPLE 1\n", 0), 0u);
     // math.glsl is included by brdf.glsl and lights.glsl and the pass itself, but expanded once.
     std::size_t count = 0;
     for (const auto& file : source.files) count += file == "common/math.glsl";
     EXPECT_EQ(count, 1u);
-    EXPECT_EQ(source.files.front(), "direct/direct_light.frag");
+    EXPECT_EQ(source.files.front(), "passes/direct_light.frag");
 }
 
 TEST(Shaders, CompileErrorsNameFileAndLine) {

@@ -1,12 +1,8 @@
 #include "renderer/methods/direct/direct_method.hpp"
 
-#include "common/shared_layout.h"
-#include "renderer/passes/gbuffer_pass.hpp"
-#include "renderer/passes/shadow_maps.hpp"
+#include "renderer/passes/direct_light_pass.hpp"
 
 #include <fmt/format.h>
-
-#include <cmath>
 
 namespace bounce::methods::direct {
 namespace {
@@ -18,34 +14,7 @@ public:
     void render(const FrameContext& frame) override {
         gbuffer_.render(frame);
         shadows_.render(frame, frame.knob_int("shadow_map_size"));
-
-        glBindFramebuffer(GL_FRAMEBUFFER, frame.output.id());
-        glViewport(0, 0, frame.width, frame.height);
-        const float zero[4] = {0.0f, 0.0f, 0.0f, 0.0f};
-        glClearNamedFramebufferfv(frame.output.id(), GL_COLOR, 0, zero);
-        gbuffer_.bind_textures();
-        frame.state.apply({.blend = gpu::Blend::additive});
-        {
-            gpu::GpuTimers::Scope timing(frame.timers, "emission");
-            frame.shaders.get({"common/fullscreen.vert", "direct/emission.frag", {}}).use();
-            triangle_.draw();
-        }
-        gpu::GpuTimers::Scope timing(frame.timers, "direct_light");
-        const gpu::ShaderProgram& program = frame.shaders.get({"common/fullscreen.vert", "direct/direct_light.frag", {}});
-        program.use();
-        program.set("u_camera_position", frame.camera.position);
-        for (std::size_t i = 0; i < frame.scene.lights.size(); ++i) {
-            if (!shadows_.has_map(i)) continue;  // no power: contributes nothing
-            const scene::Light& light = frame.scene.lights[i];
-            program.set("u_light_type", static_cast<int>(light.type));
-            program.set("u_light_position", light.position);
-            program.set("u_light_direction", glm::normalize(light.direction));
-            program.set("u_light_radiant", light.radiant());
-            program.set("u_light_cos_inner", std::cos(light.inner_cone));
-            program.set("u_light_cos_outer", std::cos(light.outer_cone));
-            shadows_.bind(program, i);
-            triangle_.draw();
-        }
+        direct_light_.render(frame, gbuffer_, shadows_);
     }
 
     std::vector<ResidentStructure> resident() const override {
@@ -59,7 +28,7 @@ public:
 private:
     passes::GBufferPass gbuffer_;
     passes::ShadowMaps shadows_;
-    passes::FullscreenTriangle triangle_;
+    passes::DirectLightPass direct_light_;
 };
 
 }  // namespace

@@ -1,0 +1,55 @@
+// Light-view maps (reflective shadow maps): the scene rasterized from every light with power, one
+// view per spot or directional light and six per point light, each texel holding the world
+// position, normal and base colour of the surface the light reaches first. Every texel is a photon:
+// `photon_flux` in shaders/common/light_view.glsl gives the flux it carries. Maps are kept while the
+// lights, the object transforms and the size stay the same.
+#pragma once
+
+#include "renderer/passes/pass_context.hpp"
+
+#include <cstdint>
+#include <vector>
+
+namespace bounce::passes {
+
+class LightViewMaps {
+public:
+    struct View {
+        std::size_t light = 0;
+        glm::mat4 view_projection{1.0f};
+        glm::vec3 forward{0.0f, 0.0f, -1.0f};
+        // Perspective views: the solid angle of a texel on the view axis (it falls off as cos^3
+        // off-axis). Orthographic views: the area of a texel.
+        float texel_measure = 0.0f;
+    };
+
+    // Draws the maps when anything they depend on changed; returns true when it drew.
+    bool render(const PassContext& context, int size);
+    const std::vector<View>& views() const { return views_; }
+    int size() const { return size_; }
+    // Texture arrays, one layer per view.
+    const gpu::Texture& position() const { return position_; }  // RGBA32F: world position, w = 1 where hit
+    const gpu::Texture& normal() const { return normal_; }      // RGBA16F: shading normal
+    const gpu::Texture& albedo() const { return albedo_; }      // RGBA8: base colour
+    std::size_t bytes() const;
+    std::size_t frames_drawn() const { return frames_drawn_; }
+
+private:
+    std::vector<View> views_;
+    int size_ = 0;
+    gpu::Texture position_, normal_, albedo_, depth_;
+    gpu::Framebuffer framebuffer_;
+    std::uint64_t fingerprint_ = 0;
+    std::size_t frames_drawn_ = 0;
+};
+
+// FNV-1a over what light-view and shadow maps depend on: the lights, every object's mesh and
+// transform, and the map size.
+std::uint64_t light_view_fingerprint(const scene::Scene& scene, int size);
+
+// The views a light's maps are drawn from (its cube faces, its cone, or an orthographic box around
+// the scene bounds); `texel_measure` as in LightViewMaps::View.
+std::vector<LightViewMaps::View> light_views(const scene::Light& light, std::size_t index, const scene::Aabb& bounds,
+                                             int size);
+
+}  // namespace bounce::passes

@@ -1,0 +1,64 @@
+// A material evaluated at a rasterized surface point: factors times textures, the normal map
+// applied. Shared by every pass that rasterizes materials (G-buffer, light-view maps, voxelization).
+#include "common/shared_layout.h"
+#include "common/math.glsl"
+
+layout(binding = BOUNCE_UNIT_BASE_COLOR) uniform sampler2D u_base_color_map;
+layout(binding = BOUNCE_UNIT_METALLIC_ROUGHNESS) uniform sampler2D u_metallic_roughness_map;
+layout(binding = BOUNCE_UNIT_NORMAL) uniform sampler2D u_normal_map;
+layout(binding = BOUNCE_UNIT_EMISSIVE) uniform sampler2D u_emissive_map;
+
+uniform vec4 u_base_color;
+uniform float u_metallic;
+uniform float u_roughness;
+uniform float u_specular;
+uniform vec3 u_emissive;
+uniform float u_normal_scale;
+uniform bool u_double_sided;
+// UV set per texture, or -1 when the material has none.
+uniform int u_base_color_uv;
+uniform int u_metallic_roughness_uv;
+uniform int u_normal_uv;
+uniform int u_emissive_uv;
+
+struct SurfacePoint {
+    vec3 normal;  // shading normal, towards the viewer for double-sided surfaces seen from behind
+    vec3 base_color;
+    float metallic;
+    float roughness;
+    float specular;
+    vec3 emissive;
+};
+
+SurfacePoint evaluate_surface(vec3 interpolated_normal, vec4 tangent, vec2 uv[2], bool front_facing) {
+    SurfacePoint s;
+    vec3 n = safe_normalize(interpolated_normal, vec3(0.0, 1.0, 0.0));
+    if (u_double_sided && !front_facing) n = -n;
+
+    vec4 base = u_base_color;
+    if (u_base_color_uv >= 0) base *= texture(u_base_color_map, uv[clamp(u_base_color_uv, 0, 1)]);
+    s.metallic = u_metallic;
+    s.roughness = u_roughness;
+    if (u_metallic_roughness_uv >= 0) {
+        vec4 mr = texture(u_metallic_roughness_map, uv[clamp(u_metallic_roughness_uv, 0, 1)]);
+        s.roughness *= mr.g;
+        s.metallic *= mr.b;
+    }
+    vec3 emissive = u_emissive;
+    if (u_emissive_uv >= 0) emissive *= texture(u_emissive_map, uv[clamp(u_emissive_uv, 0, 1)]).rgb;
+    if (u_normal_uv >= 0) {
+        vec3 t = tangent.xyz - n * dot(n, tangent.xyz);
+        t = safe_normalize(t, abs(n.x) < 0.9 ? normalize(cross(n, vec3(1, 0, 0))) : normalize(cross(n, vec3(0, 1, 0))));
+        vec3 b = cross(n, t) * (tangent.w < 0.0 ? -1.0 : 1.0);
+        vec3 tangent_normal = texture(u_normal_map, uv[clamp(u_normal_uv, 0, 1)]).xyz * 2.0 - 1.0;
+        tangent_normal.xy *= u_normal_scale;
+        n = safe_normalize(mat3(t, b, n) * tangent_normal, n);
+    }
+    s.normal = n;
+    s.base_color = clamp(base.rgb, 0.0, 1.0);
+    s.metallic = saturate(s.metallic);
+    s.roughness = saturate(s.roughness);
+    s.specular = saturate(u_specular);
+    s.emissive = finite_or_zero(max(emissive, vec3(0.0)));
+    return s;
+}

@@ -1,0 +1,20 @@
+#version 450 core
+// A light-view map texel: the surface a light reaches first (passes/light_view_maps.hpp).
+#include "common/shared_layout.h"
+#include "common/material.glsl"
+
+in vec3 v_position;
+in vec3 v_normal;
+in vec4 v_tangent;
+in vec2 v_uv[2];
+
+layout(location = 0) out vec4 out_position;
+layout(location = 1) out vec4 out_normal;
+layout(location = 2) out vec4 out_albedo;
+
+void main() {
+    SurfacePoint s = evaluate_surface(v_normal, v_tangent, v_uv, gl_FrontFacing);
+    out_position = vec4(v_position, 1.0);
+    out_normal = vec4(s.normal, 0.0);
+    out_albedo = vec4(s.base_color, 1.0);
+}
