@@ -138,6 +138,7 @@ RenderResult Renderer::render(SceneResources& resources, const RenderRequest& re
     stats.passes = timers_.resolve();
     for (const auto& pass : stats.passes) stats.gpu_ms += pass.gpu_ms;
     stats.resident = resources.resident();
+    stats.method_statistics = method->statistics();
     for (const auto& structure : stats.resident) stats.resident_bytes += structure.bytes;
     stats.render_ms = ms_since(start);
     return result;

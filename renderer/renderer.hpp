@@ -37,6 +37,7 @@ struct FrameStats {
     double readback_ms = 0.0;  // part of render_ms spent reading pixels back
     std::vector<methods::ResidentStructure> resident;
     std::size_t resident_bytes = 0;
+    std::map<std::string, double> method_statistics;  // Method::statistics() after this frame
 };
 
 struct RenderResult {

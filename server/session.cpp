@@ -366,7 +366,8 @@ void Session::deliver_frame(std::uint64_t id, const RenderOrder& order, std::sha
                                           {"readback", result->stats.readback_ms},
                                           {"encode", ms_between(rendered, encoded)},
                                           {"total", total_ms}, {"passes", passes}}},
-                          {"resident", resident}, {"resident_bytes", result->stats.resident_bytes}};
+                          {"resident", resident}, {"resident_bytes", result->stats.resident_bytes},
+                          {"method_stats", result->stats.method_statistics}};
             self->daemon_.metrics().count_frame(ms_between(started, rendered), total_ms);
             self->send({static_cast<std::uint16_t>(MessageType::frame), id, std::move(stats), bytes});
         } catch (const std::exception& error) {

@@ -43,6 +43,9 @@ public:
     virtual void render(const FrameContext& frame) = 0;
     // The structures held right now, with their bytes and the reason each exists.
     virtual std::vector<ResidentStructure> resident() const = 0;
+    // Counts that describe the method's state after the last frame (structure sizes, how often each
+    // structure was rebuilt), reported with every frame; empty by default.
+    virtual std::map<std::string, double> statistics() const { return {}; }
 };
 
 }  // namespace bounce::methods

@@ -2,6 +2,7 @@
 
 #include "renderer/base/error.hpp"
 #include "renderer/methods/direct/direct_method.hpp"
+#include "renderer/methods/vct/vct_method.hpp"
 #include "renderer/reference/reference_method.hpp"
 
 #include <algorithm>
@@ -25,6 +26,7 @@ const MethodRegistry& MethodRegistry::builtin() {
     static const MethodRegistry registry = [] {
         MethodRegistry r;
         r.add(direct::method_info());
+        r.add(vct::method_info());
         r.add(reference::method_info());
         return r;
     }();

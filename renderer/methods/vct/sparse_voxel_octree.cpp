@@ -1,0 +1,314 @@
+#include "renderer/methods/vct/sparse_voxel_octree.hpp"
+
+#include "renderer/base/error.hpp"
+#include "vct/vct_layout.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+namespace bounce::methods::vct {
+namespace {
+
+constexpr int kMaxLeafLevel = 8;  // lattice coordinates up to 2^9 fit the 10-bit packing
+
+std::size_t grown(std::size_t needed) { return std::max<std::size_t>(needed + needed / 2, 1024); }
+
+void storage_barrier() { glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT); }
+
+void clear_buffer(const gpu::Buffer& buffer) {
+    glClearNamedBufferData(buffer.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, nullptr);
+}
+
+void bind_storage(int binding, const gpu::Buffer& buffer) {
+    if (buffer) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, static_cast<GLuint>(binding), buffer.id());
+}
+
+int cube_side_for(std::size_t bricks) {
+    int side = std::max(1, static_cast<int>(std::ceil(std::cbrt(static_cast<double>(bricks)) - 1e-9)));
+    while (static_cast<std::size_t>(side) * side * side < bricks) ++side;
+    return side;
+}
+
+gpu::Buffer copy_grown(const gpu::Buffer& old, std::size_t bytes) {
+    gpu::Buffer bigger(bytes, nullptr);
+    if (old) glCopyNamedBufferSubData(old.id(), bigger.id(), 0, 0, static_cast<GLsizeiptr>(old.bytes()));
+    return bigger;
+}
+
+}  // namespace
+
+OctreeGrid grid_for(const scene::Aabb& bounds, int resolution) {
+    if (bounds.empty()) BOUNCE_FAIL("the scene has no geometry to voxelize");
+    const glm::vec3 extent = bounds.extent();
+    const float largest = std::max({extent.x, extent.y, extent.z});
+    OctreeGrid grid;
+    grid.spacing = largest > 0.0f ? largest / static_cast<float>(resolution) : 1.0f;
+    // A two-voxel margin on each side keeps every surface voxel's neighbours inside the root.
+    const int intervals = resolution + 4;
+    grid.leaf_level = std::max(1, static_cast<int>(std::ceil(std::log2(static_cast<double>(intervals)))) - 1);
+    if (grid.leaf_level > kMaxLeafLevel) {
+        throw InputError(fmt::format("vct resolution {} needs octree depth {}; at most {} levels are supported",
+                                     resolution, grid.leaf_level, kMaxLeafLevel));
+    }
+    grid.origin = bounds.min - 2.0f * grid.spacing;
+    return grid;
+}
+
+void SparseVoxelOctree::build(const passes::PassContext& context, int resolution) {
+    grid_ = grid_for(context.scene.world_bounds(), resolution);
+    if (!counters_) counters_ = gpu::Buffer(VCT_COUNTERS * sizeof(std::uint32_t), nullptr, GL_DYNAMIC_STORAGE_BIT);
+    voxelize(context);
+    subdivide(context);
+    accumulate_leaves(context);
+    fragments_ = gpu::Buffer();  // only the build reads them
+
+    bricks_per_axis_ = cube_side_for(node_count_);
+    directional_pool_ = gpu::Texture();
+    GLint max_3d = 0;
+    glGetIntegerv(GL_MAX_3D_TEXTURE_SIZE, &max_3d);
+    const int pool_side = VCT_BRICK * bricks_per_axis_;
+    if (pool_side > max_3d) {
+        throw InputError(fmt::format("vct: {} octree nodes need a {}^3 brick pool; the GPU allows {}^3 (lower "
+                                     "the resolution)",
+                                     node_count_, pool_side, max_3d));
+    }
+    pool_ = gpu::Texture({GL_TEXTURE_3D, GL_RGBA16F, pool_side, pool_side, pool_side});
+    pool_.set_filter(GL_LINEAR, GL_LINEAR);
+    pool_.set_wrap(GL_CLAMP_TO_EDGE);
+    leaf_light_ = gpu::Buffer(counts_.leaves * 8 * 3 * sizeof(float), nullptr);
+}
+
+void SparseVoxelOctree::voxelize(const passes::PassContext& context) {
+    gpu::GpuTimers::Scope timing(context.timers, "vct_voxelize");
+    const int lattice_points = grid_.lattice_max() + 1;
+    glNamedFramebufferParameteri(voxelize_target_.id(), GL_FRAMEBUFFER_DEFAULT_WIDTH, lattice_points);
+    glNamedFramebufferParameteri(voxelize_target_.id(), GL_FRAMEBUFFER_DEFAULT_HEIGHT, lattice_points);
+    const gpu::ShaderProgram& program =
+        context.shaders.get({"passes/gbuffer.vert", "vct/voxelize.frag", {}, "vct/voxelize.geom", ""});
+    program.use();
+    program.set("u_view_proj", glm::mat4(1.0f));
+    program.set("u_grid_origin", grid_.origin);
+    program.set("u_lattice_spacing", grid_.spacing);
+    program.set("u_viewport_texels", static_cast<float>(lattice_points));
+    program.set("u_lattice_max", static_cast<unsigned>(grid_.lattice_max()));
+    context.state.apply({.depth_test = false, .depth_write = false, .cull = gpu::Cull::none});
+    glBindFramebuffer(GL_FRAMEBUFFER, voxelize_target_.id());
+    glViewport(0, 0, lattice_points, lattice_points);
+    for (int attempt = 0; attempt < 2; ++attempt) {
+        if (!fragments_ || fragments_.bytes() < fragment_capacity_ * VCT_FRAGMENT_WORDS * 4) {
+            fragments_ = gpu::Buffer(fragment_capacity_ * VCT_FRAGMENT_WORDS * 4, nullptr);
+        }
+        write_counters({});
+        bind_storage(VCT_BINDING_COUNTERS, counters_);
+        bind_storage(VCT_BINDING_FRAGMENTS, fragments_);
+        program.set("u_fragment_capacity", static_cast<unsigned>(fragment_capacity_));
+        context.gpu_scene.for_each_primitive([&](const scene::Object& object, const gpu::GpuPrimitive& primitive) {
+            gpu::set_object_transform(program, object.transform);
+            context.gpu_scene.bind_material(program, primitive.material);
+            gpu::GpuScene::draw(primitive);
+        });
+        storage_barrier();
+        counts_.fragments = read_counters()[VCT_COUNTER_FRAGMENTS];
+        if (counts_.fragments <= fragment_capacity_) return;
+        fragment_capacity_ = grown(counts_.fragments);  // the list overflowed: voxelize again, once
+    }
+    BOUNCE_FAIL("vct voxelization kept overflowing its fragment list ({} fragments)", counts_.fragments);
+}
+
+void SparseVoxelOctree::subdivide(const passes::PassContext& context) {
+    gpu::GpuTimers::Scope timing(context.timers, "vct_octree_build");
+    node_count_ = 1;
+    ensure_node_capacity(std::max<std::size_t>(node_capacity_, 4096));
+    clear_buffer(node_children_);
+    clear_buffer(node_coords_);  // the root: cell 0, level 0
+    levels_.assign(1, {0, 1});
+    const gpu::ShaderProgram& flag = context.shaders.get(gpu::ProgramSource::compute_shader("vct/flag_nodes.comp"));
+    const gpu::ShaderProgram& allocate =
+        context.shaders.get(gpu::ProgramSource::compute_shader("vct/allocate_nodes.comp"));
+    set_octree_uniforms(flag);
+    set_octree_uniforms(allocate);
+    flag.set("u_fragment_count", static_cast<unsigned>(counts_.fragments));
+    for (int level = 0; level < grid_.leaf_level; ++level) {
+        std::array<std::uint32_t, 8> counters{};
+        counters[VCT_COUNTER_NODES] = static_cast<std::uint32_t>(node_count_);
+        write_counters(counters);
+        bind_buffers();
+        flag.set("u_level", static_cast<unsigned>(level));
+        flag.dispatch_threads(counts_.fragments);
+        storage_barrier();
+        const std::size_t flagged = read_counters()[VCT_COUNTER_FLAGGED];
+        ensure_node_capacity(node_count_ + 8 * flagged);
+        bind_buffers();
+        allocate.set("u_first_node", static_cast<unsigned>(levels_.back().first));
+        allocate.set("u_node_count", static_cast<unsigned>(levels_.back().count));
+        allocate.dispatch_threads(levels_.back().count);
+        storage_barrier();
+        levels_.push_back({node_count_, 8 * flagged});
+        node_count_ += 8 * flagged;
+        const std::size_t allocated = read_counters()[VCT_COUNTER_NODES];
+        BOUNCE_CHECK(allocated == node_count_, "vct octree level {}: {} nodes allocated, {} expected", level + 1,
+                     allocated, node_count_);
+    }
+    counts_.nodes = node_count_;
+    counts_.leaves = levels_.back().count;
+}
+
+void SparseVoxelOctree::accumulate_leaves(const passes::PassContext& context) {
+    gpu::GpuTimers::Scope timing(context.timers, "vct_leaf_sums");
+    leaf_sums_ = gpu::Buffer(std::max<std::size_t>(counts_.leaves, 1) * 8 * VCT_LEAF_SUM_WORDS * 4, nullptr);
+    clear_buffer(leaf_sums_);
+    const gpu::ShaderProgram& program =
+        context.shaders.get(gpu::ProgramSource::compute_shader("vct/accumulate_leaves.comp"));
+    set_octree_uniforms(program);
+    program.set("u_fragment_count", static_cast<unsigned>(counts_.fragments));
+    bind_buffers();
+    bind_storage(VCT_BINDING_FRAGMENTS, fragments_);
+    program.dispatch_threads(counts_.fragments);
+    storage_barrier();
+}
+
+void SparseVoxelOctree::inject(const passes::PassContext& context, const passes::LightViewMaps& maps,
+                               bool anisotropic) {
+    BOUNCE_CHECK(built(), "vct: light injected before the octree was built");
+    anisotropic_ = anisotropic;
+    if (!anisotropic) {
+        directional_pool_ = gpu::Texture();
+    } else if (!directional_pool_) {
+        // Inner nodes come before the leaves: their bricks, six each, indexed by node.
+        const std::size_t inner = levels_.back().first;
+        inner_bricks_per_axis_ = cube_side_for(inner);
+        const int side = VCT_BRICK * inner_bricks_per_axis_;
+        GLint max_3d = 0;
+        glGetIntegerv(GL_MAX_3D_TEXTURE_SIZE, &max_3d);
+        if (6 * side > max_3d) {
+            throw InputError(fmt::format("vct: {} inner nodes need a {}x{}x{} directional pool; the GPU allows {} "
+                                         "per side (lower the resolution or turn anisotropic off)",
+                                         inner, side, side, 6 * side, max_3d));
+        }
+        directional_pool_ = gpu::Texture({GL_TEXTURE_3D, GL_RGBA16F, side, side, 6 * side});
+        directional_pool_.set_filter(GL_LINEAR, GL_LINEAR);
+        directional_pool_.set_wrap(GL_CLAMP_TO_EDGE);
+    }
+    const std::size_t slots = counts_.leaves * 8;
+    {
+        gpu::GpuTimers::Scope timing(context.timers, "vct_inject");
+        clear_buffer(leaf_light_);
+        write_counters({});
+        bind_buffers();
+        const gpu::ShaderProgram& program = context.shaders.get(gpu::ProgramSource::compute_shader("vct/inject.comp"));
+        set_octree_uniforms(program);
+        glBindTextureUnit(0, maps.position().id());
+        glBindTextureUnit(1, maps.normal().id());
+        program.set("u_size", maps.size());
+        for (std::size_t v = 0; v < maps.views().size(); ++v) {
+            const passes::LightViewMaps::View& view = maps.views()[v];
+            const scene::Light& light = context.scene.lights[view.light];
+            program.set("u_layer", static_cast<int>(v));
+            program.set("u_view_forward", view.forward);
+            program.set("u_texel_measure", view.texel_measure);
+            program.set("u_light_type", static_cast<int>(light.type));
+            program.set("u_light_position", light.position);
+            program.set("u_light_direction", glm::normalize(light.direction));
+            program.set("u_light_radiant", light.radiant());
+            program.set("u_light_cos_inner", std::cos(light.inner_cone));
+            program.set("u_light_cos_outer", std::cos(light.outer_cone));
+            program.dispatch_threads(static_cast<std::size_t>(maps.size()) * static_cast<std::size_t>(maps.size()));
+        }
+        storage_barrier();
+        const gpu::ShaderProgram& radiance =
+            context.shaders.get(gpu::ProgramSource::compute_shader("vct/leaf_radiance.comp"));
+        set_octree_uniforms(radiance);
+        radiance.set("u_slot_count", static_cast<unsigned>(slots));
+        radiance.dispatch_threads(slots);
+        storage_barrier();
+    }
+    const auto counters = read_counters();
+    counts_.injected_photons = counters[VCT_COUNTER_INJECTED_PHOTONS];
+    counts_.dropped_photons = counters[VCT_COUNTER_DROPPED_PHOTONS];
+    counts_.stray_slots = counters[VCT_COUNTER_STRAY_SLOTS];
+    std::memcpy(&counts_.max_radiance, &counters[VCT_COUNTER_MAX_RADIANCE], sizeof(float));
+    // Half floats hold up to 65504: the pool stores radiance relative to the brightest voxel.
+    radiance_scale_ = counts_.max_radiance > 0.0f && std::isfinite(counts_.max_radiance) ? 1.0f / counts_.max_radiance
+                                                                                          : 1.0f;
+    glBindImageTexture(VCT_IMAGE_POOL, pool_.id(), 0, GL_TRUE, 0, GL_READ_WRITE, GL_RGBA16F);
+    if (anisotropic) {
+        glBindImageTexture(VCT_IMAGE_DIRECTIONAL_POOL, directional_pool_.id(), 0, GL_TRUE, 0, GL_READ_WRITE,
+                           GL_RGBA16F);
+    }
+    {
+        gpu::GpuTimers::Scope timing(context.timers, "vct_bricks");
+        const gpu::ShaderProgram& resolve =
+            context.shaders.get(gpu::ProgramSource::compute_shader("vct/resolve_bricks.comp"));
+        set_octree_uniforms(resolve);
+        resolve.set("u_leaf_count", static_cast<unsigned>(counts_.leaves));
+        resolve.set("u_radiance_scale", radiance_scale_);
+        resolve.dispatch_threads(counts_.leaves * 27);
+        glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+    }
+    gpu::GpuTimers::Scope timing(context.timers, "vct_mipmap");
+    const gpu::ShaderProgram& mipmap = context.shaders.get(gpu::ProgramSource::compute_shader(
+        "vct/mipmap.comp", anisotropic ? std::vector<std::string>{"ANISOTROPIC"} : std::vector<std::string>{}));
+    set_octree_uniforms(mipmap);
+    for (int level = grid_.leaf_level - 1; level >= 0; --level) {
+        const LevelRange& range = levels_[static_cast<std::size_t>(level)];
+        mipmap.set("u_level", static_cast<unsigned>(level));
+        mipmap.set("u_first_node", static_cast<unsigned>(range.first));
+        mipmap.set("u_node_count", static_cast<unsigned>(range.count));
+        mipmap.dispatch_threads(range.count * 27 * (anisotropic ? 6 : 1));
+        glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+    }
+    glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT);
+}
+
+void SparseVoxelOctree::bind_for_tracing(const gpu::ShaderProgram& program) const {
+    set_octree_uniforms(program);
+    bind_buffers();
+    glBindTextureUnit(VCT_UNIT_POOL, pool_.id());
+    program.set("u_pool_texel", glm::vec3(1.0f / static_cast<float>(pool_.width())));
+    if (directional_pool_) {
+        glBindTextureUnit(VCT_UNIT_DIRECTIONAL_POOL, directional_pool_.id());
+        const float side = static_cast<float>(directional_pool_.width());
+        program.set("u_directional_pool_texel", glm::vec3(1.0f / side, 1.0f / side, 1.0f / (6.0f * side)));
+    }
+    program.set("u_radiance_unscale", 1.0f / radiance_scale_);
+}
+
+void SparseVoxelOctree::ensure_node_capacity(std::size_t nodes) {
+    if (nodes <= node_capacity_ && node_children_) return;
+    const std::size_t capacity = std::max(nodes, grown(node_capacity_));
+    node_children_ = copy_grown(node_children_, capacity * sizeof(std::uint32_t));
+    node_coords_ = copy_grown(node_coords_, capacity * 4 * sizeof(std::uint32_t));
+    node_capacity_ = capacity;
+}
+
+void SparseVoxelOctree::set_octree_uniforms(const gpu::ShaderProgram& program) const {
+    program.set("u_leaf_level", static_cast<unsigned>(grid_.leaf_level));
+    program.set("u_grid_origin", grid_.origin);
+    program.set("u_lattice_spacing", grid_.spacing);
+    program.set("u_bricks_per_axis", static_cast<unsigned>(std::max(bricks_per_axis_, 1)));
+    program.set("u_inner_bricks_per_axis", static_cast<unsigned>(std::max(inner_bricks_per_axis_, 1)));
+    program.set("u_first_leaf", static_cast<unsigned>(levels_.empty() ? 0 : levels_.back().first));
+}
+
+void SparseVoxelOctree::bind_buffers() const {
+    bind_storage(VCT_BINDING_COUNTERS, counters_);
+    bind_storage(VCT_BINDING_NODES, node_children_);
+    bind_storage(VCT_BINDING_NODE_COORDS, node_coords_);
+    bind_storage(VCT_BINDING_LEAF_SUMS, leaf_sums_);
+    bind_storage(VCT_BINDING_LEAF_LIGHT, leaf_light_);
+}
+
+std::array<std::uint32_t, 8> SparseVoxelOctree::read_counters() const {
+    std::array<std::uint32_t, 8> values{};
+    glGetNamedBufferSubData(counters_.id(), 0, VCT_COUNTERS * sizeof(std::uint32_t), values.data());
+    return values;
+}
+
+void SparseVoxelOctree::write_counters(const std::array<std::uint32_t, 8>& values) {
+    counters_.upload(0, VCT_COUNTERS * sizeof(std::uint32_t), values.data());
+}
+
+}  // namespace bounce::methods::vct

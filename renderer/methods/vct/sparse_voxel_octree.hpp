@@ -1,0 +1,94 @@
+// The sparse voxel octree of voxel cone tracing (paper §4), built and filled on the GPU.
+//
+// - Grid: leaf voxels (lattice points) `spacing` apart over the scene bounds plus a two-voxel
+//   margin; the root spans 2^(D+1) lattice intervals, so D follows from the scene extent and the
+//   requested resolution. Nodes exist only where geometry is.
+// - build(): voxelizes every triangle along its dominant axis into a fragment list (no full-size
+//   grid), subdivides level by level (nodes in 2x2x2 tiles from a preallocated pool, an atomic
+//   counter, the pool grown between levels to what the level flagged), and sums each fragment's
+//   area, albedo, normal and emission into the leaf slot of its lattice point.
+// - inject(): one photon per light-view texel into the leaves (flux by solid angle), radiance per
+//   leaf slot, the leaf bricks, and the Gaussian mipmap of every inner level.
+// - Bricks: 3x3x3 voxels on node corners in one RGBA16F 3D pool (premultiplied radiance, opacity),
+//   brick i of node i, so hardware trilinear filtering works inside a brick.
+#pragma once
+
+#include "renderer/passes/light_view_maps.hpp"
+#include "renderer/passes/pass_context.hpp"
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace bounce::methods::vct {
+
+struct OctreeGrid {
+    glm::vec3 origin{0.0f};  // lattice point 0: the root's min corner
+    float spacing = 1.0f;    // leaf voxel size
+    int leaf_level = 0;      // D
+    int lattice_max() const { return 2 << leaf_level; }  // last lattice coordinate per axis
+};
+
+// The grid with `resolution` leaf voxels across the largest extent of `bounds`. Throws InputError
+// when the resolution needs more levels than the lattice packing holds.
+OctreeGrid grid_for(const scene::Aabb& bounds, int resolution);
+
+class SparseVoxelOctree {
+public:
+    struct Counts {
+        std::size_t fragments = 0;
+        std::size_t nodes = 0;
+        std::size_t leaves = 0;
+        std::size_t injected_photons = 0;
+        std::size_t dropped_photons = 0;  // landed where no leaf is
+        std::size_t stray_slots = 0;      // lattice points with flux but no surface
+        float max_radiance = 0.0f;
+    };
+
+    void build(const passes::PassContext& context, int resolution);
+    // `anisotropic`: inner levels get six directional voxels (paper §9) instead of one.
+    void inject(const passes::PassContext& context, const passes::LightViewMaps& maps, bool anisotropic);
+    bool anisotropic() const { return anisotropic_; }
+    bool built() const { return node_count_ > 0; }
+
+    // Binds the node buffers and the brick pool, and sets the octree uniforms of vct/octree.glsl
+    // and the pool's of vct/cone_trace.frag.
+    void bind_for_tracing(const gpu::ShaderProgram& program) const;
+
+    const OctreeGrid& grid() const { return grid_; }
+    const Counts& counts() const { return counts_; }
+    std::size_t node_bytes() const { return node_children_.bytes() + node_coords_.bytes(); }
+    std::size_t leaf_bytes() const { return leaf_sums_.bytes() + leaf_light_.bytes(); }
+    std::size_t pool_bytes() const { return pool_.bytes() + directional_pool_.bytes(); }
+
+private:
+    void voxelize(const passes::PassContext& context);
+    void subdivide(const passes::PassContext& context);
+    void accumulate_leaves(const passes::PassContext& context);
+    void ensure_node_capacity(std::size_t nodes);
+    void set_octree_uniforms(const gpu::ShaderProgram& program) const;
+    void bind_buffers() const;
+    std::array<std::uint32_t, 8> read_counters() const;
+    void write_counters(const std::array<std::uint32_t, 8>& values);
+
+    struct LevelRange {
+        std::size_t first = 0;
+        std::size_t count = 0;
+    };
+
+    OctreeGrid grid_;
+    std::vector<LevelRange> levels_;
+    std::size_t node_count_ = 0;
+    std::size_t node_capacity_ = 0;
+    std::size_t fragment_capacity_ = 1 << 16;
+    int bricks_per_axis_ = 0;
+    int inner_bricks_per_axis_ = 0;
+    bool anisotropic_ = false;
+    float radiance_scale_ = 1.0f;
+    Counts counts_;
+    gpu::Buffer counters_, fragments_, node_children_, node_coords_, leaf_sums_, leaf_light_;
+    gpu::Texture pool_, directional_pool_;
+    gpu::Framebuffer voxelize_target_;
+};
+
+}  // namespace bounce::methods::vct

@@ -1,0 +1,221 @@
+#include "renderer/methods/vct/vct_method.hpp"
+
+#include "renderer/methods/vct/sparse_voxel_octree.hpp"
+#include "renderer/passes/direct_light_pass.hpp"
+#include "renderer/passes/light_view_maps.hpp"
+#include "vct/vct_layout.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace bounce::methods::vct {
+
+std::vector<DiffuseCone> diffuse_cones(int count) {
+    count = std::clamp(count, 1, VCT_MAX_CONES);
+    std::vector<DiffuseCone> cones(static_cast<std::size_t>(count));
+    if (count == 1) {
+        cones[0].weight = std::numbers::pi_v<float>;
+        return cones;
+    }
+    // Uniform in z is uniform in solid angle; the golden angle spreads the azimuths.
+    const double golden_angle = std::numbers::pi * (3.0 - std::sqrt(5.0));
+    for (int i = 0; i < count; ++i) {
+        const double z = 1.0 - (i + 0.5) / count;
+        const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
+        const double phi = golden_angle * i;
+        cones[static_cast<std::size_t>(i)].axis = glm::vec3(r * std::cos(phi), r * std::sin(phi), z);
+    }
+    // Voronoi-cell integrals of cos by midpoint quadrature, uniform in solid angle; normalized so
+    // the sum is pi exactly.
+    constexpr int kRings = 256, kSectors = 512;
+    std::vector<double> weights(cones.size(), 0.0);
+    for (int ring = 0; ring < kRings; ++ring) {
+        const double z = (ring + 0.5) / kRings;
+        const double r = std::sqrt(1.0 - z * z);
+        for (int sector = 0; sector < kSectors; ++sector) {
+            const double phi = 2.0 * std::numbers::pi * (sector + 0.5) / kSectors;
+            const glm::vec3 direction(r * std::cos(phi), r * std::sin(phi), z);
+            std::size_t nearest = 0;
+            for (std::size_t c = 1; c < cones.size(); ++c) {
+                if (glm::dot(direction, cones[c].axis) > glm::dot(direction, cones[nearest].axis)) nearest = c;
+            }
+            weights[nearest] += z;
+        }
+    }
+    double total = 0.0;
+    for (double w : weights) total += w;
+    for (std::size_t c = 0; c < cones.size(); ++c) {
+        cones[c].weight = static_cast<float>(weights[c] / total * std::numbers::pi);
+    }
+    return cones;
+}
+
+float default_cone_aperture(int count) {
+    return static_cast<float>(std::acos(1.0 - 1.0 / std::max(count, 1)));
+}
+
+namespace {
+
+std::uint64_t geometry_fingerprint(const scene::Scene& scene, int resolution) {
+    std::uint64_t hash = 1469598103934665603ull;
+    auto mix = [&hash](const void* data, std::size_t bytes) {
+        const auto* p = static_cast<const unsigned char*>(data);
+        for (std::size_t i = 0; i < bytes; ++i) hash = (hash ^ p[i]) * 1099511628211ull;
+    };
+    mix(&resolution, sizeof(resolution));
+    for (const scene::Object& object : scene.objects) {
+        mix(&object.mesh, sizeof(object.mesh));
+        mix(&object.transform, sizeof(object.transform));
+    }
+    const std::size_t count = scene.objects.size();
+    mix(&count, sizeof(count));
+    return hash;
+}
+
+class VctMethod final : public Method {
+public:
+    std::string_view name() const override { return "vct"; }
+
+    void render(const FrameContext& frame) override {
+        const bool ambient_occlusion = frame.knob_int("ao") != 0;
+        gbuffer_.render(frame);
+        if (!ambient_occlusion) {
+            shadows_.render(frame, frame.knob_int("shadow_map_size"));
+            direct_light_.render(frame, gbuffer_, shadows_);
+        }
+        const bool has_geometry = !frame.scene.world_bounds().empty();
+        if (!has_geometry) return;
+
+        const int resolution = frame.knob_int("resolution");
+        const std::uint64_t geometry = geometry_fingerprint(frame.scene, resolution);
+        bool rebuilt = false;
+        if (!octree_.built() || geometry != geometry_fingerprint_) {
+            octree_.build(frame, resolution);
+            geometry_fingerprint_ = geometry;
+            ++builds_;
+            rebuilt = true;
+        }
+        const bool maps_drawn = light_views_.render(frame, frame.knob_int("light_view_size"));
+        const bool anisotropic = frame.knob_int("anisotropic") != 0;
+        if (rebuilt || maps_drawn || anisotropic != octree_.anisotropic()) {
+            octree_.inject(frame, light_views_, anisotropic);
+            ++injections_;
+        }
+        trace(frame, ambient_occlusion);
+    }
+
+    std::vector<ResidentStructure> resident() const override {
+        const auto& counts = octree_.counts();
+        return {
+            {"gbuffer", gbuffer_.bytes(), "surface attributes at the frame size"},
+            {"shadow_maps", shadows_.bytes(), fmt::format("direct light: {} lights with power", shadows_.map_count())},
+            {"light_view_maps", light_views_.bytes(),
+             fmt::format("photons for injection: {} views", light_views_.views().size())},
+            {"octree_nodes", octree_.node_bytes(),
+             fmt::format("{} nodes ({} leaves) over {} levels where the scene has surfaces; voxel {:.4g} m",
+                         counts.nodes, counts.leaves, octree_.grid().leaf_level + 1, octree_.grid().spacing)},
+            {"octree_leaf_data", octree_.leaf_bytes(),
+             "per leaf voxel: surface area, albedo, normal, emission, radiance (for re-injection)"},
+            {"brick_pool", octree_.pool_bytes(),
+             fmt::format("{} bricks of 3x3x3 RGBA16F voxels, one per node{}", counts.nodes,
+                         octree_.anisotropic() ? ", and six directional bricks per inner node" : "")}};
+    }
+
+    std::map<std::string, double> statistics() const override {
+        const auto& counts = octree_.counts();
+        return {{"octree_builds", static_cast<double>(builds_)},
+                {"light_injections", static_cast<double>(injections_)},
+                {"octree_levels", static_cast<double>(octree_.grid().leaf_level + 1)},
+                {"octree_nodes", static_cast<double>(counts.nodes)},
+                {"octree_leaves", static_cast<double>(counts.leaves)},
+                {"octree_bricks", static_cast<double>(counts.nodes)},
+                {"octree_bytes", static_cast<double>(octree_.node_bytes() + octree_.leaf_bytes() + octree_.pool_bytes())},
+                {"voxel_size_m", static_cast<double>(octree_.grid().spacing)},
+                {"voxel_fragments", static_cast<double>(counts.fragments)},
+                {"photons_injected", static_cast<double>(counts.injected_photons)},
+                {"photons_dropped", static_cast<double>(counts.dropped_photons)},
+                {"stray_flux_voxels", static_cast<double>(counts.stray_slots)}};
+    }
+
+private:
+    void trace(const FrameContext& frame, bool ambient_occlusion) {
+        gpu::GpuTimers::Scope timing(frame.timers, "vct_cone_trace");
+        const int count = frame.knob_int("diffuse_cones");
+        const std::vector<DiffuseCone> cones = diffuse_cones(count);
+        const double aperture_degrees = frame.knob("aperture");
+        const float aperture =
+            aperture_degrees > 0.0 ? static_cast<float>(aperture_degrees * std::numbers::pi / 180.0) : default_cone_aperture(count);
+        const gpu::ShaderProgram& program = frame.shaders.get(
+            {"common/fullscreen.vert", "vct/cone_trace.frag",
+             octree_.anisotropic() ? std::vector<std::string>{"ANISOTROPIC"} : std::vector<std::string>{}});
+        program.use();
+        octree_.bind_for_tracing(program);
+        std::vector<glm::vec4> packed;
+        for (const DiffuseCone& cone : cones) packed.emplace_back(cone.axis, cone.weight);
+        glProgramUniform4fv(program.id(), glGetUniformLocation(program.id(), "u_cones"),
+                            static_cast<GLsizei>(packed.size()), &packed[0].x);
+        program.set("u_cone_count", static_cast<int>(cones.size()));
+        program.set("u_cone_tan", std::tan(aperture));
+        program.set("u_step", static_cast<float>(frame.knob("step")));
+        program.set("u_max_distance", glm::length(frame.scene.world_bounds().extent()));
+        program.set("u_ambient_occlusion", ambient_occlusion ? 1 : 0);
+        program.set("u_ao_lambda", static_cast<float>(frame.knob("ao_lambda")));
+        program.set("u_camera_position", frame.camera.position);
+
+        glBindFramebuffer(GL_FRAMEBUFFER, frame.output.id());
+        glViewport(0, 0, frame.width, frame.height);
+        if (ambient_occlusion) {
+            const float zero[4] = {0.0f, 0.0f, 0.0f, 0.0f};
+            glClearNamedFramebufferfv(frame.output.id(), GL_COLOR, 0, zero);
+        }
+        gbuffer_.bind_textures();
+        frame.state.apply({.blend = ambient_occlusion ? gpu::Blend::none : gpu::Blend::additive});
+        triangle_.draw();
+    }
+
+    passes::GBufferPass gbuffer_;
+    passes::ShadowMaps shadows_;
+    passes::DirectLightPass direct_light_;
+    passes::LightViewMaps light_views_;
+    SparseVoxelOctree octree_;
+    passes::FullscreenTriangle triangle_;
+    std::uint64_t geometry_fingerprint_ = 0;
+    std::size_t builds_ = 0;
+    std::size_t injections_ = 0;
+};
+
+}  // namespace
+
+MethodInfo method_info() {
+    MethodInfo info;
+    info.name = "vct";
+    info.description = "voxel cone tracing on a GPU-built sparse voxel octree: direct light plus one diffuse bounce, "
+                       "or ambient occlusion";
+    info.knobs = {
+        {"resolution", 4, 500, true, "leaf voxels across the scene's largest extent (voxel size = extent / this)"},
+        {"diffuse_cones", 1, VCT_MAX_CONES, true, "cones gathering diffuse indirect light per pixel"},
+        {"aperture", 0, 89, false, "cone half aperture in degrees; 0: the cones' share of the hemisphere"},
+        {"step", 0.05, 4, false, "cone march step in cone diameters"},
+        {"anisotropic", 0, 1, true, "1: six directional voxels per inner voxel (paper §9); 0: one isotropic"},
+        {"light_view_size", 16, 4096, true, "texels per side of each light-view map (photons per light view)"},
+        {"shadow_map_size", 16, 8192, true, "texels per side of each shadow map (direct light)"},
+        {"ao", 0, 1, true, "1: ambient occlusion (paper §6) instead of radiance"},
+        {"ao_lambda", 0, 1e6, false, "ambient occlusion falloff 1 / (1 + lambda r), per metre"}};
+    auto preset = [](double resolution, double cones, double step, double light_view, double shadow) {
+        return KnobValues{{"resolution", resolution}, {"diffuse_cones", cones}, {"aperture", 0},
+                          {"step", step}, {"anisotropic", 1}, {"light_view_size", light_view}, {"shadow_map_size", shadow},
+                          {"ao", 0}, {"ao_lambda", 1}};
+    };
+    info.presets = {{"draft", preset(24, 6, 1.0, 128, 512)},
+                    {"low", preset(32, 9, 0.75, 256, 1024)},
+                    {"medium", preset(48, 12, 0.5, 256, 2048)},
+                    {"high", preset(64, 16, 0.5, 512, 2048)},
+                    {"ultra", preset(96, 32, 0.35, 512, 2048)}};
+    info.create = [] { return std::make_unique<VctMethod>(); };
+    return info;
+}
+
+}  // namespace bounce::methods::vct

@@ -1,0 +1,111 @@
+#version 450 core
+// Mipmapping (paper §4.2.3), one level at a time from the leaves up: each voxel of a level-L brick
+// gathers the 27 level-(L+1) voxels around the same point with the Gaussian weights 1/4, 1/2, 1/4
+// per axis. Those lie in the node's children or, on its border, in its neighbours' children; every
+// brick holding a voxel agrees on its value, so any one of them answers.
+//
+// Isotropic: the weighted average. ANISOTROPIC (paper §9): for each of the six directions a cone
+// can travel, each row of three voxels along it is composited front to back (lengths 1/2, 1, 1/2
+// of a child voxel, so the row spans the parent voxel), then the nine rows are averaged with their
+// weights: a wall stays opaque across itself at every level instead of fading to 1/2, 1/4, ...
+layout(local_size_x = 64) in;
+#include "common/compute.glsl"
+#include "vct/octree.glsl"
+
+layout(binding = VCT_IMAGE_POOL, rgba16f) coherent uniform image3D u_pool;
+layout(binding = VCT_IMAGE_DIRECTIONAL_POOL, rgba16f) coherent uniform image3D u_directional_pool;
+
+uniform uint u_level;  // the level written; u_level + 1 is read
+uniform uint u_first_node;
+uniform uint u_node_count;
+
+vec4 load_brick(uint node, ivec3 offset, uint level, uint direction) {
+#ifdef ANISOTROPIC
+    if (level < u_leaf_level) return imageLoad(u_directional_pool, directional_brick_origin(node, direction) + offset);
+#endif
+    return imageLoad(u_pool, brick_origin(node) + offset);
+}
+
+// The level-`level` voxel at lattice point `p` (lattice of that level), zero where the tree is empty.
+vec4 fetch_voxel(uint level, ivec3 p, uint parent, ivec3 parent_base, uint direction) {
+    int side = 1 << level;
+    if (any(lessThan(p, ivec3(0))) || any(greaterThan(p, ivec3(2 * side)))) return vec4(0.0);
+    uint first_child = node_child[parent];
+    // Inside the parent's own children: no descent.
+    if (first_child != 0u && all(greaterThanEqual(p, parent_base)) && all(lessThanEqual(p, parent_base + 4))) {
+        ivec3 local = min((p - parent_base) >> 1, ivec3(1));
+        uint child = first_child + uint(local.x + 2 * local.y + 4 * local.z);
+        return load_brick(child, p - (parent_base + 2 * local), level, direction);
+    }
+    // Any node whose brick holds the point: the cell p/2 (slot 0 or 1) or, for an even coordinate,
+    // the cell before it (slot 2).
+    for (int k = 0; k < 8; ++k) {
+        ivec3 cell;
+        bool valid = true;
+        for (int axis = 0; axis < 3; ++axis) {
+            bool before = ((k >> axis) & 1) != 0;
+            cell[axis] = (p[axis] >> 1) - (before ? 1 : 0);
+            valid = valid && cell[axis] >= 0 && cell[axis] < side && (!before || (p[axis] & 1) == 0);
+        }
+        if (!valid) continue;
+        uint node = find_node(uvec3(cell), level);
+        if (node != VCT_NODE_NONE) return load_brick(node, p - 2 * cell, level, direction);
+    }
+    return vec4(0.0);
+}
+
+const float kWeight[3] = float[3](0.25, 0.5, 0.25);
+
+void main() {
+    uint index = thread_index();
+#ifdef ANISOTROPIC
+    const uint directions = 6u;
+#else
+    const uint directions = 1u;
+#endif
+    if (index >= u_node_count * 27u * directions) return;
+    uint direction = index % directions;
+    uint node = u_first_node + index / (27u * directions);
+    uint voxel = (index / directions) % 27u;
+    ivec3 offset = ivec3(voxel % 3u, (voxel / 3u) % 3u, voxel / 9u);
+    ivec3 base = 4 * ivec3(node_coord[node].xyz);  // the children's lattice starts here
+    ivec3 center = base + 2 * offset;
+    vec4 sum = vec4(0.0);
+#ifdef ANISOTROPIC
+    int axis = int(direction / 2u);
+    int toward = (direction % 2u) == 0u ? 1 : -1;  // the way the cone travels along `axis`
+    ivec3 across_u = ivec3(0), across_v = ivec3(0);
+    across_u[(axis + 1) % 3] = 1;
+    across_v[(axis + 2) % 3] = 1;
+    ivec3 along = ivec3(0);
+    along[axis] = toward;
+    const float kLength[3] = float[3](0.5, 1.0, 0.5);  // in child voxels
+    for (int v = -1; v <= 1; ++v) {
+        for (int u = -1; u <= 1; ++u) {
+            vec3 radiance = vec3(0.0);
+            float transmittance = 1.0;
+            for (int s = -1; s <= 1; ++s) {  // front to back
+                vec4 child = fetch_voxel(u_level + 1u, center + u * across_u + v * across_v + s * along, node, base,
+                                         direction);
+                float alpha = clamp(child.a, 0.0, 1.0);
+                if (alpha <= 0.0) continue;
+                float corrected = 1.0 - pow(max(1.0 - alpha, 0.0), kLength[s + 1]);
+                radiance += transmittance * child.rgb * (corrected / alpha);
+                transmittance *= 1.0 - corrected;
+            }
+            sum += kWeight[u + 1] * kWeight[v + 1] * vec4(radiance, 1.0 - transmittance);
+        }
+    }
+    imageStore(u_directional_pool, directional_brick_origin(node, direction) + offset, sum);
+#else
+    for (int z = -1; z <= 1; ++z) {
+        for (int y = -1; y <= 1; ++y) {
+            for (int x = -1; x <= 1; ++x) {
+                float w = kWeight[x + 1] * kWeight[y + 1] * kWeight[z + 1];
+                sum += w * fetch_voxel(u_level + 1u, center + ivec3(x, y, z), node, base, 0u);
+            }
+        }
+    }
+    imageStore(u_pool, brick_origin(node) + offset, sum);
+#endif
+}
