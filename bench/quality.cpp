@@ -142,8 +142,87 @@ void write_csv(const fs::path& path, const std::vector<Row>& rows) {
     }
 }
 
+// vct in detail: per-pass GPU ms of a cold frame (octree built, light injected, mipmapped, cones
+// traced) and of a warm one (cones only), with the octree's size, at each preset and frame size.
+std::string vct_passes_markdown(Renderer& renderer, const scene::Scene& scene, const std::vector<int>& sizes) {
+    const char* passes[] = {"vct_voxelize", "vct_octree_build", "vct_leaf_sums", "light_view_maps", "vct_inject",
+                            "vct_bricks",   "vct_mipmap",       "vct_cone_trace"};
+    std::string md =
+        "| size | preset | voxelize | octree build | leaf sums | light views | inject | bricks | mipmap | cone trace | "
+        "cold GPU ms | warm GPU ms | warm wall ms | nodes | octree MiB | resident MiB |\n"
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+    for (const int size : sizes) {
+        for (const auto& preset : methods::preset_names()) {
+            auto resources = renderer.upload(scene);
+            RenderRequest request;
+            request.method = "vct";
+            request.preset = preset;
+            request.width = request.height = size;
+            request.make_display_image = false;
+            const RenderResult cold = renderer.render(*resources, request);
+            const RenderResult warm = renderer.render(*resources, request);
+            std::map<std::string, double> ms;
+            for (const auto& pass : cold.stats.passes) ms[pass.pass] += pass.gpu_ms;
+            md += fmt::format("| {}² | {} ", size, preset);
+            for (const char* pass : passes) md += fmt::format("| {:.1f} ", ms[pass]);
+            md += fmt::format("| {:.1f} | {:.1f} | {:.1f} | {:.0f} | {:.2f} | {:.1f} |\n", cold.stats.gpu_ms,
+                              warm.stats.gpu_ms, warm.stats.render_ms,
+                              cold.stats.method_statistics.at("octree_nodes"),
+                              cold.stats.method_statistics.at("octree_bytes") / 1048576.0,
+                              cold.stats.resident_bytes / 1048576.0);
+            log::info("bench", "vct passes {}x{} {}: cold {:.0f} ms, warm {:.0f} ms", size, size, preset,
+                      cold.stats.gpu_ms, warm.stats.gpu_ms);
+        }
+    }
+    return md;
+}
+
+// Light leaking through the thin wall: the reference is exactly zero below the slab, so the leak is
+// the method's mean radiance over those pixels, relative to the reference's mean over the lit ones.
+std::string leak_markdown(Renderer& renderer, const scene::Scene& scene, const image::Frame& truth, int size) {
+    std::string md = "| method | preset | anisotropic | leak (dark-pixel mean / lit-pixel mean) |\n|---|---|---|---|\n";
+    auto leak_of = [&](const image::Frame& frame) {
+        double dark = 0.0, lit = 0.0;
+        std::size_t dark_count = 0, lit_count = 0;
+        for (int y = 0; y < size; ++y) {
+            for (int x = 0; x < size; ++x) {
+                const glm::vec4 r = truth.at(x, y);
+                const glm::vec4 t = frame.at(x, y);
+                if (r.a <= 0.0f) continue;  // no geometry
+                if (r.r + r.g + r.b == 0.0f) {
+                    dark += (t.r + t.g + t.b) / 3.0;
+                    ++dark_count;
+                } else {
+                    lit += (r.r + r.g + r.b) / 3.0;
+                    ++lit_count;
+                }
+            }
+        }
+        return dark_count && lit > 0.0 ? (dark / dark_count) / (lit / lit_count) : 0.0;
+    };
+    auto resources = renderer.upload(scene);
+    for (const auto& preset : methods::preset_names()) {
+        for (const int anisotropic : {1, 0}) {
+            RenderRequest request;
+            request.method = "vct";
+            request.preset = preset;
+            request.knobs = {{"anisotropic", anisotropic}};
+            request.width = request.height = size;
+            request.make_display_image = false;
+            const double leak = leak_of(renderer.render(*resources, request).frame);
+            md += fmt::format("| vct | {} | {} | {:.4f} |\n", preset, anisotropic ? "on" : "off", leak);
+            log::info("bench", "thin_wall leak vct {} anisotropic={}: {:.4f}", preset, anisotropic, leak);
+        }
+    }
+    RenderRequest direct;
+    direct.width = direct.height = size;
+    direct.make_display_image = false;
+    md += fmt::format("| direct | medium | — | {:.4f} |\n", leak_of(renderer.render(*resources, direct).frame));
+    return md;
+}
+
 void write_markdown(const fs::path& path, const std::vector<Row>& rows, const Options& options, const std::string& gpu,
-                    const std::string& command) {
+                    const std::string& command, const std::string& details) {
     std::ostringstream md;
     const std::time_t now = std::time(nullptr);
     char date[32];
@@ -174,6 +253,7 @@ void write_markdown(const fs::path& path, const std::vector<Row>& rows, const Op
     for (const Row& r : rows) {
         if (r.method == "reference") md << fmt::format("| {} | {} | {:.3g} |\n", r.scene, r.preset, r.rays_per_second);
     }
+    md << details;
     std::ofstream(path) << md.str();
 }
 
@@ -220,6 +300,7 @@ int main(int argc, char** argv) {
     try {
         Renderer renderer(gpu::DeviceChoice::resolve(std::nullopt));
         std::vector<Row> rows;
+        std::string details;
         const auto& registry = methods::MethodRegistry::builtin();
         for (const auto& bench_scene : bench::quality_scenes()) {
             if (!options.scenes.empty() &&
@@ -257,7 +338,8 @@ int main(int argc, char** argv) {
                     row.method = method;
                     row.preset = preset;
                     const auto bounces_knob = median.stats.knobs.find("bounces");
-                    row.bounces = bounces_knob == median.stats.knobs.end() ? 0 : static_cast<int>(bounces_knob->second);
+                    row.bounces = bounces_knob == median.stats.knobs.end() ? registry.find(method).indirect_bounces
+                                                                           : static_cast<int>(bounces_knob->second);
                     row.wall_ms = median.stats.render_ms;
                     row.gpu_ms = median.stats.gpu_ms;
                     for (const auto& pass : median.stats.passes) {
@@ -275,6 +357,19 @@ int main(int argc, char** argv) {
                 }
             }
             resources.reset();
+            if (bench_scene.name == "cornell") {
+                details += "\n## vct per pass (bench/quality)\n\nThe built-in Cornell box. Cold: a fresh scene, so the "
+                           "octree is built, the light injected and mipmapped, then cones traced; warm: the same view "
+                           "again (cones only). Octree MiB: nodes, leaf data and brick pools.\n\n" +
+                           vct_passes_markdown(renderer, bench_scene.scene, {256, 512});
+            }
+            if (bench_scene.name == "thin_wall") {
+                details += fmt::format("\n## Light leaking through a thin wall (bench/quality, {0}x{0})\n\n"
+                                       "thin_wall: a 2 cm slab seals the light above it, so the reference is exactly "
+                                       "zero below it.\n\n",
+                                       options.size) +
+                           leak_markdown(renderer, bench_scene.scene, truth, options.size);
+            }
             // The reference itself: error reached per CPU second.
             for (const int spp : {1, 4, 16, 64}) {
                 reference::PathTracerSettings settings;
@@ -300,7 +395,7 @@ int main(int argc, char** argv) {
         }
         fs::create_directories(options.out);
         write_csv(options.out / "quality.csv", rows);
-        write_markdown(options.markdown, rows, options, renderer.gpu_info().summary(), command);
+        write_markdown(options.markdown, rows, options, renderer.gpu_info().summary(), command, details);
         log::info("bench", "wrote {} and {}", (options.out / "quality.csv").string(), options.markdown.string());
         return 0;
     } catch (const std::exception& error) {

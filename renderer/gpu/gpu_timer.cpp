@@ -19,6 +19,10 @@ void GpuTimers::begin_frame() {
 std::size_t GpuTimers::timestamp() {
     if (used_ == pool_.size()) pool_.push_back(make_query(GL_TIMESTAMP));
     glQueryCounter(pool_[used_].id(), GL_TIMESTAMP);
+    // Submit now: a driver that batches draws until a flush (llvmpipe among them) would otherwise
+    // stamp the query when the batch runs, after compute work dispatched since, and charge that
+    // work to the wrong pass.
+    glFlush();
     return used_++;
 }
 

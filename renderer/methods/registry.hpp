@@ -31,6 +31,9 @@ struct MethodInfo {
     std::string name;
     std::string description;
     MethodDevice device = MethodDevice::gpu;
+    // Indirect bounces the method models when it has no `bounces` knob (what `reference` must be
+    // given for a like-for-like comparison).
+    int indirect_bounces = 0;
     std::vector<KnobSpec> knobs;
     std::map<std::string, KnobValues> presets;  // every name of preset_names(), every knob set
     std::function<std::unique_ptr<Method>()> create;  // GPU methods only

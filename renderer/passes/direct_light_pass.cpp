@@ -1,5 +1,7 @@
 #include "renderer/passes/direct_light_pass.hpp"
 
+#include "renderer/passes/light_geometry.hpp"
+
 #include <cmath>
 
 namespace bounce::passes {
@@ -23,12 +25,7 @@ void DirectLightPass::render(const PassContext& context, const GBufferPass& gbuf
     for (std::size_t i = 0; i < context.scene.lights.size(); ++i) {
         if (!shadows.has_map(i)) continue;  // no power: contributes nothing
         const scene::Light& light = context.scene.lights[i];
-        program.set("u_light_type", static_cast<int>(light.type));
-        program.set("u_light_position", light.position);
-        program.set("u_light_direction", glm::normalize(light.direction));
-        program.set("u_light_radiant", light.radiant());
-        program.set("u_light_cos_inner", std::cos(light.inner_cone));
-        program.set("u_light_cos_outer", std::cos(light.outer_cone));
+        set_light_uniforms(program, light);
         shadows.bind(program, i);
         triangle_.draw();
     }

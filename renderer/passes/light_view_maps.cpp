@@ -1,6 +1,7 @@
 #include "renderer/passes/light_view_maps.hpp"
 
 #include "common/shared_layout.h"
+#include "renderer/passes/light_geometry.hpp"
 
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -8,53 +9,6 @@
 #include <cmath>
 
 namespace bounce::passes {
-namespace {
-
-float farthest_distance(const scene::Aabb& bounds, const glm::vec3& from) {
-    float farthest = 0.0f;
-    for (int corner = 0; corner < 8; ++corner) {
-        const glm::vec3 p{(corner & 1) ? bounds.max.x : bounds.min.x, (corner & 2) ? bounds.max.y : bounds.min.y,
-                          (corner & 4) ? bounds.max.z : bounds.min.z};
-        farthest = std::max(farthest, glm::length(p - from));
-    }
-    return std::max(farthest * 1.01f, 1e-6f);
-}
-
-glm::vec3 up_for(const glm::vec3& direction) {
-    return std::abs(direction.y) > 0.99f ? glm::vec3(0.0f, 0.0f, 1.0f) : glm::vec3(0.0f, 1.0f, 0.0f);
-}
-
-bool has_power(const scene::Light& light) {
-    const glm::vec3 radiant = light.radiant();
-    return radiant.x > 0.0f || radiant.y > 0.0f || radiant.z > 0.0f;
-}
-
-}  // namespace
-
-std::uint64_t light_view_fingerprint(const scene::Scene& scene, int size) {
-    std::uint64_t hash = 1469598103934665603ull;
-    auto mix = [&hash](const void* data, std::size_t bytes) {
-        const auto* p = static_cast<const unsigned char*>(data);
-        for (std::size_t i = 0; i < bytes; ++i) hash = (hash ^ p[i]) * 1099511628211ull;
-    };
-    mix(&size, sizeof(size));
-    for (const scene::Light& light : scene.lights) {
-        mix(&light.type, sizeof(light.type));
-        mix(&light.position, sizeof(light.position));
-        mix(&light.direction, sizeof(light.direction));
-        const glm::vec3 radiant = light.radiant();
-        mix(&radiant, sizeof(radiant));
-        mix(&light.inner_cone, sizeof(light.inner_cone));
-        mix(&light.outer_cone, sizeof(light.outer_cone));
-    }
-    for (const scene::Object& object : scene.objects) {
-        mix(&object.mesh, sizeof(object.mesh));
-        mix(&object.transform, sizeof(object.transform));
-    }
-    const std::size_t counts[2] = {scene.lights.size(), scene.objects.size()};
-    mix(counts, sizeof(counts));
-    return hash;
-}
 
 std::vector<LightViewMaps::View> light_views(const scene::Light& light, std::size_t index, const scene::Aabb& bounds,
                                              int size) {

@@ -43,10 +43,6 @@ private:
     std::size_t frames_drawn_ = 0;
 };
 
-// FNV-1a over what light-view and shadow maps depend on: the lights, every object's mesh and
-// transform, and the map size.
-std::uint64_t light_view_fingerprint(const scene::Scene& scene, int size);
-
 // The views a light's maps are drawn from (its cube faces, its cone, or an orthographic box around
 // the scene bounds); `texel_measure` as in LightViewMaps::View.
 std::vector<LightViewMaps::View> light_views(const scene::Light& light, std::size_t index, const scene::Aabb& bounds,

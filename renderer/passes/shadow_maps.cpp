@@ -2,6 +2,7 @@
 
 #include "common/shared_layout.h"
 #include "renderer/base/error.hpp"
+#include "renderer/passes/light_geometry.hpp"
 
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -11,58 +12,12 @@
 namespace bounce::passes {
 namespace {
 
-bool has_power(const scene::Light& light) {
-    const glm::vec3 radiant = light.radiant();
-    return radiant.x > 0.0f || radiant.y > 0.0f || radiant.z > 0.0f;
-}
-
-float farthest_distance(const scene::Aabb& bounds, const glm::vec3& from) {
-    float farthest = 0.0f;
-    for (int corner = 0; corner < 8; ++corner) {
-        const glm::vec3 p{(corner & 1) ? bounds.max.x : bounds.min.x, (corner & 2) ? bounds.max.y : bounds.min.y,
-                          (corner & 4) ? bounds.max.z : bounds.min.z};
-        farthest = std::max(farthest, glm::length(p - from));
-    }
-    return std::max(farthest * 1.01f, 1e-6f);
-}
-
-// An up vector that is not parallel to `direction`.
-glm::vec3 up_for(const glm::vec3& direction) {
-    return std::abs(direction.y) > 0.99f ? glm::vec3(0.0f, 0.0f, 1.0f) : glm::vec3(0.0f, 1.0f, 0.0f);
-}
-
 gpu::Texture make_depth_map(GLenum target, int size) {
     gpu::Texture texture({target, GL_DEPTH_COMPONENT32F, size, size});
     glTextureParameteri(texture.id(), GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
     glTextureParameteri(texture.id(), GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
     texture.set_filter(GL_LINEAR, GL_LINEAR);  // bilinear percentage-closer filtering
     return texture;
-}
-
-// FNV-1a over everything a shadow map depends on: the lights, every object's transform and mesh,
-// the map size. Geometry itself is immutable once uploaded.
-std::uint64_t shadow_fingerprint(const scene::Scene& scene, int size) {
-    std::uint64_t hash = 1469598103934665603ull;
-    auto mix = [&hash](const void* data, std::size_t bytes) {
-        const auto* p = static_cast<const unsigned char*>(data);
-        for (std::size_t i = 0; i < bytes; ++i) hash = (hash ^ p[i]) * 1099511628211ull;
-    };
-    mix(&size, sizeof(size));
-    for (const scene::Light& light : scene.lights) {
-        mix(&light.type, sizeof(light.type));
-        mix(&light.position, sizeof(light.position));
-        mix(&light.direction, sizeof(light.direction));
-        const glm::vec3 radiant = light.radiant();
-        mix(&radiant, sizeof(radiant));  // power 0 <-> > 0 decides whether a map exists
-        mix(&light.outer_cone, sizeof(light.outer_cone));
-    }
-    for (const scene::Object& object : scene.objects) {
-        mix(&object.mesh, sizeof(object.mesh));
-        mix(&object.transform, sizeof(object.transform));
-    }
-    const std::size_t counts[2] = {scene.lights.size(), scene.objects.size()};
-    mix(counts, sizeof(counts));
-    return hash;
 }
 
 }  // namespace
@@ -78,7 +33,7 @@ void ShadowMaps::render_view(const PassContext& context, const gpu::ShaderProgra
 
 void ShadowMaps::render(const PassContext& context, int size) {
     gpu::GpuTimers::Scope timing(context.timers, "shadow_maps");
-    const std::uint64_t fingerprint = shadow_fingerprint(context.scene, size);
+    const std::uint64_t fingerprint = light_view_fingerprint(context.scene, size);
     last_reused_ = fingerprint == fingerprint_ && maps_.size() == context.scene.lights.size();
     if (last_reused_) {
         ++frames_reused_;

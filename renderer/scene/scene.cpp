@@ -37,14 +37,8 @@ glm::mat4 Camera::projection(float aspect, float far) const {
 
 float Camera::far_plane_for(const Aabb& bounds) const {
     if (bounds.empty()) return 1.0f;
-    float farthest = 0.0f;
-    for (int corner = 0; corner < 8; ++corner) {
-        const glm::vec3 p{(corner & 1) ? bounds.max.x : bounds.min.x, (corner & 2) ? bounds.max.y : bounds.min.y,
-                          (corner & 4) ? bounds.max.z : bounds.min.z};
-        farthest = std::max(farthest, glm::length(p - position));
-    }
     // A little margin so the farthest corner is not clipped; never zero.
-    return std::max(farthest * 1.05f, 1e-6f);
+    return std::max(bounds.farthest_distance(position) * 1.05f, 1e-6f);
 }
 
 Camera Camera::look_at(const glm::vec3& eye, const glm::vec3& target, const glm::vec3& up,

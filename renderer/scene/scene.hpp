@@ -8,6 +8,7 @@
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
 
+#include <algorithm>
 #include <cstdint>
 #include <limits>
 #include <optional>
@@ -21,6 +22,15 @@ struct Aabb {
     glm::vec3 max{-std::numeric_limits<float>::max()};
 
     bool empty() const { return min.x > max.x || min.y > max.y || min.z > max.z; }
+    // Corner i: bit 0 picks max.x, bit 1 max.y, bit 2 max.z.
+    glm::vec3 corner(int i) const {
+        return {(i & 1) ? max.x : min.x, (i & 2) ? max.y : min.y, (i & 4) ? max.z : min.z};
+    }
+    float farthest_distance(const glm::vec3& from) const {
+        float farthest = 0.0f;
+        for (int i = 0; i < 8; ++i) farthest = std::max(farthest, glm::length(corner(i) - from));
+        return farthest;
+    }
     void extend(const glm::vec3& p) {
         min = glm::min(min, p);
         max = glm::max(max, p);

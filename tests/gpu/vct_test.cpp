@@ -26,13 +26,17 @@ image::Frame reference_frame(const scene::Scene& scene, int bounces, bool ambien
     return tracer.render(scene.cameras[0], kSize, kSize, spp, settings);
 }
 
-RenderResult render_vct(const scene::Scene& scene, const std::string& preset, methods::KnobValues knobs = {}) {
+RenderRequest vct_request(const std::string& preset, methods::KnobValues knobs = {}) {
     RenderRequest request;
     request.method = "vct";
     request.preset = preset;
     request.knobs = std::move(knobs);
     request.width = request.height = kSize;
-    return render_scene(scene, request);
+    return request;
+}
+
+RenderResult render_vct(const scene::Scene& scene, const std::string& preset, methods::KnobValues knobs = {}) {
+    return render_scene(scene, vct_request(preset, std::move(knobs)));
 }
 
 double mean_of(const image::Frame& frame) {
@@ -113,10 +117,7 @@ TEST(Vct, AmbientOcclusionMatchesTheReference) {
 TEST(Vct, LightChangesReinjectWithoutRebuildingTheOctree) {
     scene::Scene scene = scene::make_cornell_box();
     auto resources = shared_renderer().upload(scene);
-    RenderRequest request;
-    request.method = "vct";
-    request.preset = "low";
-    request.width = request.height = kSize;
+    const RenderRequest request = vct_request("low");
     const auto first = shared_renderer().render(*resources, request);
     const auto again = shared_renderer().render(*resources, request);
     scene.lights[0].intensity *= 2.0f;
@@ -134,10 +135,7 @@ TEST(Vct, LightChangesReinjectWithoutRebuildingTheOctree) {
 TEST(Vct, MovedBlockMatchesTheReferenceWithTheBlockMoved) {
     scene::Scene scene = scene::make_cornell_box();
     auto resources = shared_renderer().upload(scene);
-    RenderRequest request;
-    request.method = "vct";
-    request.preset = "medium";
-    request.width = request.height = kSize;
+    const RenderRequest request = vct_request("medium");
     const double unmoved = image::compare(shared_renderer().render(*resources, request).frame,
                                           reference_frame(scene, 1, false, 256)).rel_mse;
     const auto block = scene.find_object("short_block");

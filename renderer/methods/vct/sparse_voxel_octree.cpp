@@ -1,6 +1,7 @@
 #include "renderer/methods/vct/sparse_voxel_octree.hpp"
 
 #include "renderer/base/error.hpp"
+#include "renderer/passes/light_geometry.hpp"
 #include "vct/vct_layout.h"
 
 #include <fmt/format.h>
@@ -173,25 +174,6 @@ void SparseVoxelOctree::accumulate_leaves(const passes::PassContext& context) {
 void SparseVoxelOctree::inject(const passes::PassContext& context, const passes::LightViewMaps& maps,
                                bool anisotropic) {
     BOUNCE_CHECK(built(), "vct: light injected before the octree was built");
-    anisotropic_ = anisotropic;
-    if (!anisotropic) {
-        directional_pool_ = gpu::Texture();
-    } else if (!directional_pool_) {
-        // Inner nodes come before the leaves: their bricks, six each, indexed by node.
-        const std::size_t inner = levels_.back().first;
-        inner_bricks_per_axis_ = cube_side_for(inner);
-        const int side = VCT_BRICK * inner_bricks_per_axis_;
-        GLint max_3d = 0;
-        glGetIntegerv(GL_MAX_3D_TEXTURE_SIZE, &max_3d);
-        if (6 * side > max_3d) {
-            throw InputError(fmt::format("vct: {} inner nodes need a {}x{}x{} directional pool; the GPU allows {} "
-                                         "per side (lower the resolution or turn anisotropic off)",
-                                         inner, side, side, 6 * side, max_3d));
-        }
-        directional_pool_ = gpu::Texture({GL_TEXTURE_3D, GL_RGBA16F, side, side, 6 * side});
-        directional_pool_.set_filter(GL_LINEAR, GL_LINEAR);
-        directional_pool_.set_wrap(GL_CLAMP_TO_EDGE);
-    }
     const std::size_t slots = counts_.leaves * 8;
     {
         gpu::GpuTimers::Scope timing(context.timers, "vct_inject");
@@ -209,12 +191,7 @@ void SparseVoxelOctree::inject(const passes::PassContext& context, const passes:
             program.set("u_layer", static_cast<int>(v));
             program.set("u_view_forward", view.forward);
             program.set("u_texel_measure", view.texel_measure);
-            program.set("u_light_type", static_cast<int>(light.type));
-            program.set("u_light_position", light.position);
-            program.set("u_light_direction", glm::normalize(light.direction));
-            program.set("u_light_radiant", light.radiant());
-            program.set("u_light_cos_inner", std::cos(light.inner_cone));
-            program.set("u_light_cos_outer", std::cos(light.outer_cone));
+            passes::set_light_uniforms(program, light);
             program.dispatch_threads(static_cast<std::size_t>(maps.size()) * static_cast<std::size_t>(maps.size()));
         }
         storage_barrier();
@@ -234,10 +211,7 @@ void SparseVoxelOctree::inject(const passes::PassContext& context, const passes:
     radiance_scale_ = counts_.max_radiance > 0.0f && std::isfinite(counts_.max_radiance) ? 1.0f / counts_.max_radiance
                                                                                           : 1.0f;
     glBindImageTexture(VCT_IMAGE_POOL, pool_.id(), 0, GL_TRUE, 0, GL_READ_WRITE, GL_RGBA16F);
-    if (anisotropic) {
-        glBindImageTexture(VCT_IMAGE_DIRECTIONAL_POOL, directional_pool_.id(), 0, GL_TRUE, 0, GL_READ_WRITE,
-                           GL_RGBA16F);
-    }
+
     {
         gpu::GpuTimers::Scope timing(context.timers, "vct_bricks");
         const gpu::ShaderProgram& resolve =
@@ -247,6 +221,29 @@ void SparseVoxelOctree::inject(const passes::PassContext& context, const passes:
         resolve.set("u_radiance_scale", radiance_scale_);
         resolve.dispatch_threads(counts_.leaves * 27);
         glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+    }
+    anisotropic_ = anisotropic;
+    if (!anisotropic) {
+        directional_pool_ = gpu::Texture();
+    } else if (!directional_pool_) {
+        // Inner nodes come before the leaves: their bricks, six each, indexed by node.
+        const std::size_t inner = levels_.back().first;
+        inner_bricks_per_axis_ = cube_side_for(inner);
+        const int side = VCT_BRICK * inner_bricks_per_axis_;
+        GLint max_3d = 0;
+        glGetIntegerv(GL_MAX_3D_TEXTURE_SIZE, &max_3d);
+        if (6 * side > max_3d) {
+            throw InputError(fmt::format("vct: {} inner nodes need a {}x{}x{} directional pool; the GPU allows {} "
+                                         "per side (lower the resolution or turn anisotropic off)",
+                                         inner, side, side, 6 * side, max_3d));
+        }
+        directional_pool_ = gpu::Texture({GL_TEXTURE_3D, GL_RGBA16F, side, side, 6 * side});
+        directional_pool_.set_filter(GL_LINEAR, GL_LINEAR);
+        directional_pool_.set_wrap(GL_CLAMP_TO_EDGE);
+    }
+    if (anisotropic) {
+        glBindImageTexture(VCT_IMAGE_DIRECTIONAL_POOL, directional_pool_.id(), 0, GL_TRUE, 0, GL_READ_WRITE,
+                           GL_RGBA16F);
     }
     gpu::GpuTimers::Scope timing(context.timers, "vct_mipmap");
     const gpu::ShaderProgram& mipmap = context.shaders.get(gpu::ProgramSource::compute_shader(

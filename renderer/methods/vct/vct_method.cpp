@@ -2,6 +2,7 @@
 
 #include "renderer/methods/vct/sparse_voxel_octree.hpp"
 #include "renderer/passes/direct_light_pass.hpp"
+#include "renderer/passes/light_geometry.hpp"
 #include "renderer/passes/light_view_maps.hpp"
 #include "vct/vct_layout.h"
 
@@ -59,22 +60,6 @@ float default_cone_aperture(int count) {
 
 namespace {
 
-std::uint64_t geometry_fingerprint(const scene::Scene& scene, int resolution) {
-    std::uint64_t hash = 1469598103934665603ull;
-    auto mix = [&hash](const void* data, std::size_t bytes) {
-        const auto* p = static_cast<const unsigned char*>(data);
-        for (std::size_t i = 0; i < bytes; ++i) hash = (hash ^ p[i]) * 1099511628211ull;
-    };
-    mix(&resolution, sizeof(resolution));
-    for (const scene::Object& object : scene.objects) {
-        mix(&object.mesh, sizeof(object.mesh));
-        mix(&object.transform, sizeof(object.transform));
-    }
-    const std::size_t count = scene.objects.size();
-    mix(&count, sizeof(count));
-    return hash;
-}
-
 class VctMethod final : public Method {
 public:
     std::string_view name() const override { return "vct"; }
@@ -90,7 +75,7 @@ public:
         if (!has_geometry) return;
 
         const int resolution = frame.knob_int("resolution");
-        const std::uint64_t geometry = geometry_fingerprint(frame.scene, resolution);
+        const std::uint64_t geometry = passes::geometry_fingerprint(frame.scene) ^ static_cast<std::uint64_t>(resolution);
         bool rebuilt = false;
         if (!octree_.built() || geometry != geometry_fingerprint_) {
             octree_.build(frame, resolution);
@@ -194,6 +179,7 @@ MethodInfo method_info() {
     info.name = "vct";
     info.description = "voxel cone tracing on a GPU-built sparse voxel octree: direct light plus one diffuse bounce, "
                        "or ambient occlusion";
+    info.indirect_bounces = 1;
     info.knobs = {
         {"resolution", 4, 500, true, "leaf voxels across the scene's largest extent (voxel size = extent / this)"},
         {"diffuse_cones", 1, VCT_MAX_CONES, true, "cones gathering diffuse indirect light per pixel"},

@@ -1,0 +1,76 @@
+#include "renderer/passes/light_geometry.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace bounce::passes {
+namespace {
+
+class Fnv1a {
+public:
+    template <typename T>
+    void add(const T& value) {
+        const auto* p = reinterpret_cast<const unsigned char*>(&value);
+        for (std::size_t i = 0; i < sizeof(T); ++i) hash_ = (hash_ ^ p[i]) * 1099511628211ull;
+    }
+    std::uint64_t value() const { return hash_; }
+
+private:
+    std::uint64_t hash_ = 1469598103934665603ull;
+};
+
+void add_geometry(Fnv1a& hash, const scene::Scene& scene) {
+    for (const scene::Object& object : scene.objects) {
+        hash.add(object.mesh);
+        hash.add(object.transform);
+    }
+    hash.add(scene.objects.size());
+}
+
+}  // namespace
+
+bool has_power(const scene::Light& light) {
+    const glm::vec3 radiant = light.radiant();
+    return radiant.x > 0.0f || radiant.y > 0.0f || radiant.z > 0.0f;
+}
+
+float farthest_distance(const scene::Aabb& bounds, const glm::vec3& from) {
+    return std::max(bounds.farthest_distance(from) * 1.01f, 1e-6f);
+}
+
+glm::vec3 up_for(const glm::vec3& direction) {
+    return std::abs(direction.y) > 0.99f ? glm::vec3(0.0f, 0.0f, 1.0f) : glm::vec3(0.0f, 1.0f, 0.0f);
+}
+
+std::uint64_t geometry_fingerprint(const scene::Scene& scene) {
+    Fnv1a hash;
+    add_geometry(hash, scene);
+    return hash.value();
+}
+
+std::uint64_t light_view_fingerprint(const scene::Scene& scene, int size) {
+    Fnv1a hash;
+    hash.add(size);
+    for (const scene::Light& light : scene.lights) {
+        hash.add(light.type);
+        hash.add(light.position);
+        hash.add(light.direction);
+        hash.add(light.radiant());  // power 0 <-> > 0 decides whether a map exists
+        hash.add(light.inner_cone);
+        hash.add(light.outer_cone);
+    }
+    hash.add(scene.lights.size());
+    add_geometry(hash, scene);
+    return hash.value();
+}
+
+void set_light_uniforms(const gpu::ShaderProgram& program, const scene::Light& light) {
+    program.set("u_light_type", static_cast<int>(light.type));
+    program.set("u_light_position", light.position);
+    program.set("u_light_direction", glm::normalize(light.direction));
+    program.set("u_light_radiant", light.radiant());
+    program.set("u_light_cos_inner", std::cos(light.inner_cone));
+    program.set("u_light_cos_outer", std::cos(light.outer_cone));
+}
+
+}  // namespace bounce::passes
