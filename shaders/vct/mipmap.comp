@@ -15,6 +15,8 @@ layout(local_size_x = 64) in;
 layout(binding = VCT_IMAGE_POOL, rgba16f) coherent uniform image3D u_pool;
 layout(binding = VCT_IMAGE_DIRECTIONAL_POOL, rgba16f) coherent uniform image3D u_directional_pool;
 
+const float kWeight[3] = float[3](0.25, 0.5, 0.25);
+
 uniform uint u_level;  // the level written; u_level + 1 is read
 uniform uint u_first_node;
 uniform uint u_node_count;
@@ -54,12 +56,43 @@ vec4 fetch_voxel(uint level, ivec3 p, uint parent, ivec3 parent_base, uint direc
     return vec4(0.0);
 }
 
-const float kWeight[3] = float[3](0.25, 0.5, 0.25);
+#ifdef ANISOTROPIC
+// Composites the rows of `values` (the 27 child voxels around the parent's, x fastest) along
+// direction `direction` and averages them with their weights.
+vec4 directional_average(vec4 values[27], uint direction) {
+    int axis = int(direction / 2u);
+    bool forward = (direction % 2u) == 0u;  // the cone travels towards +axis: -1 is in front
+    const float kLength[3] = float[3](0.5, 1.0, 0.5);  // in child voxels: the row spans the parent
+    ivec3 stride = ivec3(1, 3, 9);
+    int along = stride[axis], across_u = stride[(axis + 1) % 3], across_v = stride[(axis + 2) % 3];
+    vec4 sum = vec4(0.0);
+    for (int v = 0; v < 3; ++v) {
+        for (int u = 0; u < 3; ++u) {
+            vec3 radiance = vec3(0.0);
+            float transmittance = 1.0;
+            for (int step = 0; step < 3; ++step) {  // front to back
+                int s = forward ? step : 2 - step;
+                vec4 child = values[u * across_u + v * across_v + s * along];
+                float alpha = clamp(child.a, 0.0, 1.0);
+                if (alpha <= 0.0) continue;
+                float corrected = 1.0 - pow(max(1.0 - alpha, 0.0), kLength[s]);
+                radiance += transmittance * child.rgb * (corrected / alpha);
+                transmittance *= 1.0 - corrected;
+            }
+            sum += kWeight[u] * kWeight[v] * vec4(radiance, 1.0 - transmittance);
+        }
+    }
+    return sum;
+}
+#endif
 
 void main() {
     uint index = thread_index();
 #ifdef ANISOTROPIC
-    const uint directions = 6u;
+    // Above the leaves every direction reads its own pool; from the isotropic leaves one thread
+    // reads the 27 voxels once and writes all six directions.
+    const bool from_leaves = u_level + 1u == u_leaf_level;
+    uint directions = from_leaves ? 1u : 6u;
 #else
     const uint directions = 1u;
 #endif
@@ -70,42 +103,23 @@ void main() {
     ivec3 offset = ivec3(voxel % 3u, (voxel / 3u) % 3u, voxel / 9u);
     ivec3 base = 4 * ivec3(node_coord[node].xyz);  // the children's lattice starts here
     ivec3 center = base + 2 * offset;
-    vec4 sum = vec4(0.0);
+    vec4 values[27];
+    for (int i = 0; i < 27; ++i) {
+        ivec3 o = ivec3(i % 3, (i / 3) % 3, i / 9) - 1;
+        values[i] = fetch_voxel(u_level + 1u, center + o, node, base, direction);
+    }
 #ifdef ANISOTROPIC
-    int axis = int(direction / 2u);
-    int toward = (direction % 2u) == 0u ? 1 : -1;  // the way the cone travels along `axis`
-    ivec3 across_u = ivec3(0), across_v = ivec3(0);
-    across_u[(axis + 1) % 3] = 1;
-    across_v[(axis + 2) % 3] = 1;
-    ivec3 along = ivec3(0);
-    along[axis] = toward;
-    const float kLength[3] = float[3](0.5, 1.0, 0.5);  // in child voxels
-    for (int v = -1; v <= 1; ++v) {
-        for (int u = -1; u <= 1; ++u) {
-            vec3 radiance = vec3(0.0);
-            float transmittance = 1.0;
-            for (int s = -1; s <= 1; ++s) {  // front to back
-                vec4 child = fetch_voxel(u_level + 1u, center + u * across_u + v * across_v + s * along, node, base,
-                                         direction);
-                float alpha = clamp(child.a, 0.0, 1.0);
-                if (alpha <= 0.0) continue;
-                float corrected = 1.0 - pow(max(1.0 - alpha, 0.0), kLength[s + 1]);
-                radiance += transmittance * child.rgb * (corrected / alpha);
-                transmittance *= 1.0 - corrected;
-            }
-            sum += kWeight[u + 1] * kWeight[v + 1] * vec4(radiance, 1.0 - transmittance);
+    if (from_leaves) {
+        for (uint k = 0u; k < 6u; ++k) {
+            imageStore(u_directional_pool, directional_brick_origin(node, k) + offset, directional_average(values, k));
         }
+    } else {
+        imageStore(u_directional_pool, directional_brick_origin(node, direction) + offset,
+                   directional_average(values, direction));
     }
-    imageStore(u_directional_pool, directional_brick_origin(node, direction) + offset, sum);
 #else
-    for (int z = -1; z <= 1; ++z) {
-        for (int y = -1; y <= 1; ++y) {
-            for (int x = -1; x <= 1; ++x) {
-                float w = kWeight[x + 1] * kWeight[y + 1] * kWeight[z + 1];
-                sum += w * fetch_voxel(u_level + 1u, center + ivec3(x, y, z), node, base, 0u);
-            }
-        }
-    }
+    vec4 sum = vec4(0.0);
+    for (int i = 0; i < 27; ++i) sum += kWeight[i % 3] * kWeight[(i / 3) % 3] * kWeight[i / 9] * values[i];
     imageStore(u_pool, brick_origin(node) + offset, sum);
 #endif
 }

@@ -254,7 +254,9 @@ void SparseVoxelOctree::inject(const passes::PassContext& context, const passes:
         mipmap.set("u_level", static_cast<unsigned>(level));
         mipmap.set("u_first_node", static_cast<unsigned>(range.first));
         mipmap.set("u_node_count", static_cast<unsigned>(range.count));
-        mipmap.dispatch_threads(range.count * 27 * (anisotropic ? 6 : 1));
+        // Anisotropic levels above the leaves take a thread per direction (see mipmap.comp).
+        const bool per_direction = anisotropic && level + 1 < grid_.leaf_level;
+        mipmap.dispatch_threads(range.count * 27 * (per_direction ? 6 : 1));
         glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
     }
     glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT);
