@@ -3,9 +3,22 @@
 layout(std430, binding = VCT_BINDING_LEAF_SUMS) coherent buffer LeafSums { uint leaf_sums[]; };
 layout(std430, binding = VCT_BINDING_LEAF_LIGHT) coherent buffer LeafLight { uint leaf_light[]; };
 
-uniform uint u_first_leaf;  // node index of the first leaf: leaves are allocated last, contiguously
+// Leaves are allocated last, contiguously: the static part's, then (after the dynamic part's inner
+// nodes) the dynamic part's. Leaf data holds the static leaves, then the dynamic ones.
+uniform uint u_first_leaf;
+uniform uint u_static_leaf_count;
+uniform uint u_first_dynamic_leaf;  // 0xFFFFFFFF without a dynamic part
 
-uint leaf_slot(uint leaf, uint slot) { return (leaf - u_first_leaf) * 8u + slot; }
+uint leaf_index(uint leaf) {
+    return leaf >= u_first_dynamic_leaf ? u_static_leaf_count + (leaf - u_first_dynamic_leaf) : leaf - u_first_leaf;
+}
+
+// The node of leaf number `index` (the inverse of leaf_index).
+uint leaf_node(uint index) {
+    return index < u_static_leaf_count ? u_first_leaf + index : u_first_dynamic_leaf + (index - u_static_leaf_count);
+}
+
+uint leaf_slot(uint leaf, uint slot) { return leaf_index(leaf) * 8u + slot; }
 
 #define VCT_DEFINE_FLOAT_ADD(name, buffer)                                                   \
     void name(uint index, float value) {                                                    \

@@ -16,7 +16,7 @@ uniform float u_radiance_scale;
 void main() {
     uint index = thread_index();
     if (index >= u_leaf_count * 27u) return;
-    uint leaf = u_first_leaf + index / 27u;
+    uint leaf = leaf_node(index / 27u);
     uint voxel = index % 27u;
     uvec3 offset = uvec3(voxel % 3u, (voxel / 3u) % 3u, voxel / 9u);
     uvec3 lattice = node_coord[leaf].xyz * 2u + offset;

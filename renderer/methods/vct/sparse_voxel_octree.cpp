@@ -58,16 +58,56 @@ OctreeGrid grid_for(const scene::Aabb& bounds, int resolution) {
     return grid;
 }
 
-void SparseVoxelOctree::build(const passes::PassContext& context, int resolution) {
+void SparseVoxelOctree::build(const passes::PassContext& context, int resolution, const ObjectFilter& include) {
     grid_ = grid_for(context.scene.world_bounds(), resolution);
     if (!counters_) counters_ = gpu::Buffer(VCT_COUNTERS * sizeof(std::uint32_t), nullptr, GL_DYNAMIC_STORAGE_BIT);
-    voxelize(context);
+    voxelize(context, include);
+    node_count_ = 1;
+    ensure_node_capacity(std::max<std::size_t>(node_capacity_, 4096));
+    clear_buffer(node_children_);
+    clear_buffer(node_coords_);  // the root: cell 0, level 0
+    levels_.assign(1, {{0, 1}});
     subdivide(context);
-    accumulate_leaves(context);
-    fragments_ = gpu::Buffer();  // only the build reads them
+    static_leaves_ = levels_.back().front().count;
+    counts_.leaves = static_leaves_;
+    counts_.dynamic_nodes = counts_.dynamic_leaves = 0;
+    accumulate_leaves(context, 0);
+    fragments_ = gpu::Buffer();  // only builds read them
 
-    bricks_per_axis_ = cube_side_for(node_count_);
-    directional_pool_ = gpu::Texture();
+    // What update_dynamic() restores.
+    static_levels_ = levels_;
+    static_node_count_ = node_count_;
+    static_children_ = gpu::Buffer(node_count_ * sizeof(std::uint32_t), nullptr);
+    glCopyNamedBufferSubData(node_children_.id(), static_children_.id(), 0, 0,
+                             static_cast<GLsizeiptr>(static_children_.bytes()));
+    static_leaf_sums_ = gpu::Buffer(leaf_sums_.bytes(), nullptr);
+    glCopyNamedBufferSubData(leaf_sums_.id(), static_leaf_sums_.id(), 0, 0, static_cast<GLsizeiptr>(leaf_sums_.bytes()));
+    allocate_pools();
+}
+
+void SparseVoxelOctree::update_dynamic(const passes::PassContext& context, const ObjectFilter& include) {
+    BOUNCE_CHECK(built(), "vct: dynamic objects voxelized before the static octree was built");
+    glCopyNamedBufferSubData(static_children_.id(), node_children_.id(), 0, 0,
+                             static_cast<GLsizeiptr>(static_children_.bytes()));
+    levels_ = static_levels_;
+    node_count_ = static_node_count_;
+    voxelize(context, include);
+    subdivide(context);
+    counts_.dynamic_nodes = node_count_ - static_node_count_;
+    counts_.dynamic_leaves = levels_.back().size() > 1 ? levels_.back().back().count : 0;
+    counts_.leaves = static_leaves_ + counts_.dynamic_leaves;
+    const std::size_t static_slots = static_leaves_ * 8;
+    accumulate_leaves(context, static_slots);
+    fragments_ = gpu::Buffer();
+    allocate_pools();
+}
+
+void SparseVoxelOctree::allocate_pools() {
+    const int bricks_per_axis = cube_side_for(node_count_);
+    leaf_light_ = gpu::Buffer(std::max<std::size_t>(counts_.leaves, 1) * 8 * 3 * sizeof(float), nullptr);
+    directional_pool_ = gpu::Texture();  // sized at injection
+    if (pool_ && bricks_per_axis == bricks_per_axis_) return;
+    bricks_per_axis_ = bricks_per_axis;
     GLint max_3d = 0;
     glGetIntegerv(GL_MAX_3D_TEXTURE_SIZE, &max_3d);
     const int pool_side = VCT_BRICK * bricks_per_axis_;
@@ -79,10 +119,9 @@ void SparseVoxelOctree::build(const passes::PassContext& context, int resolution
     pool_ = gpu::Texture({GL_TEXTURE_3D, GL_RGBA16F, pool_side, pool_side, pool_side});
     pool_.set_filter(GL_LINEAR, GL_LINEAR);
     pool_.set_wrap(GL_CLAMP_TO_EDGE);
-    leaf_light_ = gpu::Buffer(counts_.leaves * 8 * 3 * sizeof(float), nullptr);
 }
 
-void SparseVoxelOctree::voxelize(const passes::PassContext& context) {
+void SparseVoxelOctree::voxelize(const passes::PassContext& context, const ObjectFilter& include) {
     gpu::GpuTimers::Scope timing(context.timers, "vct_voxelize");
     const int lattice_points = grid_.lattice_max() + 1;
     glNamedFramebufferParameteri(voxelize_target_.id(), GL_FRAMEBUFFER_DEFAULT_WIDTH, lattice_points);
@@ -107,6 +146,7 @@ void SparseVoxelOctree::voxelize(const passes::PassContext& context) {
         bind_storage(VCT_BINDING_FRAGMENTS, fragments_);
         program.set("u_fragment_capacity", static_cast<unsigned>(fragment_capacity_));
         context.gpu_scene.for_each_primitive([&](const scene::Object& object, const gpu::GpuPrimitive& primitive) {
+            if (!include(static_cast<std::size_t>(&object - context.scene.objects.data()))) return;
             gpu::set_object_transform(program, object.transform);
             context.gpu_scene.bind_material(program, primitive.material);
             gpu::GpuScene::draw(primitive);
@@ -121,17 +161,13 @@ void SparseVoxelOctree::voxelize(const passes::PassContext& context) {
 
 void SparseVoxelOctree::subdivide(const passes::PassContext& context) {
     gpu::GpuTimers::Scope timing(context.timers, "vct_octree_build");
-    node_count_ = 1;
-    ensure_node_capacity(std::max<std::size_t>(node_capacity_, 4096));
-    clear_buffer(node_children_);
-    clear_buffer(node_coords_);  // the root: cell 0, level 0
-    levels_.assign(1, {0, 1});
     const gpu::ShaderProgram& flag = context.shaders.get(gpu::ProgramSource::compute_shader("vct/flag_nodes.comp"));
     const gpu::ShaderProgram& allocate =
         context.shaders.get(gpu::ProgramSource::compute_shader("vct/allocate_nodes.comp"));
     set_octree_uniforms(flag);
     set_octree_uniforms(allocate);
     flag.set("u_fragment_count", static_cast<unsigned>(counts_.fragments));
+    const bool appending = levels_.size() > 1;  // a static tree is there: new nodes go after it
     for (int level = 0; level < grid_.leaf_level; ++level) {
         std::array<std::uint32_t, 8> counters{};
         counters[VCT_COUNTER_NODES] = static_cast<std::uint32_t>(node_count_);
@@ -143,24 +179,34 @@ void SparseVoxelOctree::subdivide(const passes::PassContext& context) {
         const std::size_t flagged = read_counters()[VCT_COUNTER_FLAGGED];
         ensure_node_capacity(node_count_ + 8 * flagged);
         bind_buffers();
-        allocate.set("u_first_node", static_cast<unsigned>(levels_.back().first));
-        allocate.set("u_node_count", static_cast<unsigned>(levels_.back().count));
-        allocate.dispatch_threads(levels_.back().count);
+        for (const LevelRange& range : levels_[static_cast<std::size_t>(level)]) {
+            allocate.set("u_first_node", static_cast<unsigned>(range.first));
+            allocate.set("u_node_count", static_cast<unsigned>(range.count));
+            allocate.dispatch_threads(range.count);
+        }
         storage_barrier();
-        levels_.push_back({node_count_, 8 * flagged});
+        const LevelRange children{node_count_, 8 * flagged};
+        if (!appending) {
+            levels_.push_back({children});
+        } else if (flagged > 0) {
+            levels_[static_cast<std::size_t>(level) + 1].push_back(children);
+        }
         node_count_ += 8 * flagged;
         const std::size_t allocated = read_counters()[VCT_COUNTER_NODES];
         BOUNCE_CHECK(allocated == node_count_, "vct octree level {}: {} nodes allocated, {} expected", level + 1,
                      allocated, node_count_);
     }
     counts_.nodes = node_count_;
-    counts_.leaves = levels_.back().count;
 }
 
-void SparseVoxelOctree::accumulate_leaves(const passes::PassContext& context) {
+void SparseVoxelOctree::accumulate_leaves(const passes::PassContext& context, std::size_t kept_slots) {
     gpu::GpuTimers::Scope timing(context.timers, "vct_leaf_sums");
     leaf_sums_ = gpu::Buffer(std::max<std::size_t>(counts_.leaves, 1) * 8 * VCT_LEAF_SUM_WORDS * 4, nullptr);
     clear_buffer(leaf_sums_);
+    if (kept_slots > 0) {
+        glCopyNamedBufferSubData(static_leaf_sums_.id(), leaf_sums_.id(), 0, 0,
+                                 static_cast<GLsizeiptr>(kept_slots * VCT_LEAF_SUM_WORDS * 4));
+    }
     const gpu::ShaderProgram& program =
         context.shaders.get(gpu::ProgramSource::compute_shader("vct/accumulate_leaves.comp"));
     set_octree_uniforms(program);
@@ -226,8 +272,8 @@ void SparseVoxelOctree::inject(const passes::PassContext& context, const passes:
     if (!anisotropic) {
         directional_pool_ = gpu::Texture();
     } else if (!directional_pool_) {
-        // Inner nodes come before the leaves: their bricks, six each, indexed by node.
-        const std::size_t inner = levels_.back().first;
+        // Inner nodes come before the last leaves: their bricks, six each, indexed by node.
+        const std::size_t inner = levels_.back().back().first;
         inner_bricks_per_axis_ = cube_side_for(inner);
         const int side = VCT_BRICK * inner_bricks_per_axis_;
         GLint max_3d = 0;
@@ -250,13 +296,14 @@ void SparseVoxelOctree::inject(const passes::PassContext& context, const passes:
         "vct/mipmap.comp", anisotropic ? std::vector<std::string>{"ANISOTROPIC"} : std::vector<std::string>{}));
     set_octree_uniforms(mipmap);
     for (int level = grid_.leaf_level - 1; level >= 0; --level) {
-        const LevelRange& range = levels_[static_cast<std::size_t>(level)];
         mipmap.set("u_level", static_cast<unsigned>(level));
-        mipmap.set("u_first_node", static_cast<unsigned>(range.first));
-        mipmap.set("u_node_count", static_cast<unsigned>(range.count));
-        // Anisotropic levels above the leaves take a thread per direction (see mipmap.comp).
-        const bool per_direction = anisotropic && level + 1 < grid_.leaf_level;
-        mipmap.dispatch_threads(range.count * 27 * (per_direction ? 6 : 1));
+        for (const LevelRange& range : levels_[static_cast<std::size_t>(level)]) {
+            mipmap.set("u_first_node", static_cast<unsigned>(range.first));
+            mipmap.set("u_node_count", static_cast<unsigned>(range.count));
+            // Anisotropic levels above the leaves take a thread per direction (see mipmap.comp).
+            const bool per_direction = anisotropic && level + 1 < grid_.leaf_level;
+            mipmap.dispatch_threads(range.count * 27 * (per_direction ? 6 : 1));
+        }
         glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
     }
     glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT);
@@ -289,7 +336,11 @@ void SparseVoxelOctree::set_octree_uniforms(const gpu::ShaderProgram& program) c
     program.set("u_lattice_spacing", grid_.spacing);
     program.set("u_bricks_per_axis", static_cast<unsigned>(std::max(bricks_per_axis_, 1)));
     program.set("u_inner_bricks_per_axis", static_cast<unsigned>(std::max(inner_bricks_per_axis_, 1)));
-    program.set("u_first_leaf", static_cast<unsigned>(levels_.empty() ? 0 : levels_.back().first));
+    const bool has_dynamic = levels_.size() > 1 && levels_.back().size() > 1;
+    program.set("u_first_leaf", static_cast<unsigned>(levels_.empty() ? 0 : levels_.back().front().first));
+    program.set("u_static_leaf_count", static_cast<unsigned>(static_leaves_));
+    program.set("u_first_dynamic_leaf",
+                has_dynamic ? static_cast<unsigned>(levels_.back().back().first) : 0xFFFFFFFFu);
 }
 
 void SparseVoxelOctree::bind_buffers() const {

@@ -17,6 +17,7 @@
 #include "renderer/passes/pass_context.hpp"
 
 #include <array>
+#include <functional>
 #include <cstdint>
 #include <vector>
 
@@ -39,13 +40,24 @@ public:
         std::size_t fragments = 0;
         std::size_t nodes = 0;
         std::size_t leaves = 0;
+        std::size_t dynamic_nodes = 0;   // of `nodes`, appended for moving objects
+        std::size_t dynamic_leaves = 0;  // of `leaves`
         std::size_t injected_photons = 0;
         std::size_t dropped_photons = 0;  // landed where no leaf is
         std::size_t stray_slots = 0;      // lattice points with flux but no surface
         float max_radiance = 0.0f;
     };
 
-    void build(const passes::PassContext& context, int resolution);
+    // Which objects a voxelization draws (by index in the scene).
+    using ObjectFilter = std::function<bool(std::size_t object)>;
+
+    // The static part: the objects `include` accepts, voxelized, subdivided and summed from scratch
+    // over a grid fitted to the whole scene. Drops any dynamic part.
+    void build(const passes::PassContext& context, int resolution, const ObjectFilter& include);
+    // The dynamic part (paper §4.2.2): the static tree is restored as the build left it, then the
+    // objects `include` accepts are voxelized and their nodes appended after the static ones, so the
+    // static part is never rebuilt. The light must be injected again afterwards.
+    void update_dynamic(const passes::PassContext& context, const ObjectFilter& include);
     // `anisotropic`: inner levels get six directional voxels (paper §9) instead of one.
     void inject(const passes::PassContext& context, const passes::LightViewMaps& maps, bool anisotropic);
     bool anisotropic() const { return anisotropic_; }
@@ -58,13 +70,18 @@ public:
     const OctreeGrid& grid() const { return grid_; }
     const Counts& counts() const { return counts_; }
     std::size_t node_bytes() const { return node_children_.bytes() + node_coords_.bytes(); }
-    std::size_t leaf_bytes() const { return leaf_sums_.bytes() + leaf_light_.bytes(); }
+    std::size_t leaf_bytes() const {
+        return leaf_sums_.bytes() + leaf_light_.bytes() + static_children_.bytes() + static_leaf_sums_.bytes();
+    }
     std::size_t pool_bytes() const { return pool_.bytes() + directional_pool_.bytes(); }
 
 private:
-    void voxelize(const passes::PassContext& context);
+    void voxelize(const passes::PassContext& context, const ObjectFilter& include);
+    // Subdivides for the current fragments from the tree as it stands, appending nodes level by level.
     void subdivide(const passes::PassContext& context);
-    void accumulate_leaves(const passes::PassContext& context);
+    // Sizes the leaf data for every leaf, keeping the first `kept_slots` slots, and sums the fragments.
+    void accumulate_leaves(const passes::PassContext& context, std::size_t kept_slots);
+    void allocate_pools();
     void ensure_node_capacity(std::size_t nodes);
     void set_octree_uniforms(const gpu::ShaderProgram& program) const;
     void bind_buffers() const;
@@ -77,7 +94,12 @@ private:
     };
 
     OctreeGrid grid_;
-    std::vector<LevelRange> levels_;
+    // Node ranges per level: one range per level for the static part, a second once a dynamic part
+    // was appended. Leaves (level D) are the last range of each part.
+    std::vector<std::vector<LevelRange>> levels_;
+    std::vector<std::vector<LevelRange>> static_levels_;
+    std::size_t static_node_count_ = 0;
+    std::size_t static_leaves_ = 0;
     std::size_t node_count_ = 0;
     std::size_t node_capacity_ = 0;
     std::size_t fragment_capacity_ = 1 << 16;
@@ -87,6 +109,7 @@ private:
     float radiance_scale_ = 1.0f;
     Counts counts_;
     gpu::Buffer counters_, fragments_, node_children_, node_coords_, leaf_sums_, leaf_light_;
+    gpu::Buffer static_children_, static_leaf_sums_;  // the static part as built, restored per update
     gpu::Texture pool_, directional_pool_;
     gpu::Framebuffer voxelize_target_;
 };

@@ -2,7 +2,6 @@
 
 #include "renderer/methods/vct/sparse_voxel_octree.hpp"
 #include "renderer/passes/direct_light_pass.hpp"
-#include "renderer/passes/light_geometry.hpp"
 #include "renderer/passes/light_view_maps.hpp"
 #include "vct/vct_layout.h"
 
@@ -74,15 +73,7 @@ public:
         const bool has_geometry = !frame.scene.world_bounds().empty();
         if (!has_geometry) return;
 
-        const int resolution = frame.knob_int("resolution");
-        const std::uint64_t geometry = passes::geometry_fingerprint(frame.scene) ^ static_cast<std::uint64_t>(resolution);
-        bool rebuilt = false;
-        if (!octree_.built() || geometry != geometry_fingerprint_) {
-            octree_.build(frame, resolution);
-            geometry_fingerprint_ = geometry;
-            ++builds_;
-            rebuilt = true;
-        }
+        const bool rebuilt = update_octree(frame);
         const bool maps_drawn = light_views_.render(frame, frame.knob_int("light_view_size"));
         const bool anisotropic = frame.knob_int("anisotropic") != 0;
         if (rebuilt || maps_drawn || anisotropic != octree_.anisotropic()) {
@@ -111,7 +102,10 @@ public:
 
     std::map<std::string, double> statistics() const override {
         const auto& counts = octree_.counts();
-        return {{"octree_builds", static_cast<double>(builds_)},
+        return {{"octree_builds", static_cast<double>(static_builds_)},
+                {"dynamic_revoxelizations", static_cast<double>(dynamic_updates_)},
+                {"dynamic_objects", static_cast<double>(std::count(dynamic_.begin(), dynamic_.end(), true))},
+                {"octree_dynamic_nodes", static_cast<double>(counts.dynamic_nodes)},
                 {"light_injections", static_cast<double>(injections_)},
                 {"octree_levels", static_cast<double>(octree_.grid().leaf_level + 1)},
                 {"octree_nodes", static_cast<double>(counts.nodes)},
@@ -126,6 +120,53 @@ public:
     }
 
 private:
+    // Static part: built once per geometry and resolution, from every object that has not moved.
+    // An object that moves for the first time becomes dynamic: the static part is rebuilt once
+    // without it, and from then on only the dynamic part is revoxelized when dynamic objects move.
+    // Returns whether the octree changed (the light must be injected again).
+    bool update_octree(const FrameContext& frame) {
+        const scene::Scene& scene = frame.scene;
+        const int resolution = frame.knob_int("resolution");
+        const bool fresh = !octree_.built() || resolution != resolution_ || scene.objects.size() != build_transforms_.size();
+        if (fresh) dynamic_.assign(scene.objects.size(), false);
+        bool newly_dynamic = false;
+        if (!fresh) {
+            for (std::size_t i = 0; i < scene.objects.size(); ++i) {
+                if (!dynamic_[i] && scene.objects[i].transform != build_transforms_[i]) {
+                    dynamic_[i] = true;
+                    newly_dynamic = true;
+                }
+            }
+        }
+        auto is_static = [this](std::size_t object) { return !dynamic_[object]; };
+        auto is_dynamic = [this](std::size_t object) { return static_cast<bool>(dynamic_[object]); };
+        bool changed = false;
+        if (fresh || newly_dynamic) {
+            octree_.build(frame, resolution, is_static);
+            resolution_ = resolution;
+            build_transforms_.clear();
+            for (const scene::Object& object : scene.objects) build_transforms_.push_back(object.transform);
+            ++static_builds_;
+            dynamic_fingerprint_ = 0;
+            changed = true;
+        }
+        if (std::find(dynamic_.begin(), dynamic_.end(), true) != dynamic_.end()) {
+            std::uint64_t fingerprint = 1469598103934665603ull;
+            for (std::size_t i = 0; i < scene.objects.size(); ++i) {
+                if (!dynamic_[i]) continue;
+                const auto* bytes = reinterpret_cast<const unsigned char*>(&scene.objects[i].transform);
+                for (std::size_t b = 0; b < sizeof(glm::mat4); ++b) fingerprint = (fingerprint ^ bytes[b]) * 1099511628211ull;
+            }
+            if (changed || fingerprint != dynamic_fingerprint_) {
+                octree_.update_dynamic(frame, is_dynamic);
+                dynamic_fingerprint_ = fingerprint;
+                ++dynamic_updates_;
+                changed = true;
+            }
+        }
+        return changed;
+    }
+
     void trace(const FrameContext& frame, bool ambient_occlusion) {
         gpu::GpuTimers::Scope timing(frame.timers, "vct_cone_trace");
         const int count = frame.knob_int("diffuse_cones");
@@ -167,8 +208,12 @@ private:
     passes::LightViewMaps light_views_;
     SparseVoxelOctree octree_;
     passes::FullscreenTriangle triangle_;
-    std::uint64_t geometry_fingerprint_ = 0;
-    std::size_t builds_ = 0;
+    int resolution_ = 0;
+    std::vector<glm::mat4> build_transforms_;  // every object's transform at the last static build
+    std::vector<bool> dynamic_;                // objects that have moved since
+    std::uint64_t dynamic_fingerprint_ = 0;
+    std::size_t static_builds_ = 0;
+    std::size_t dynamic_updates_ = 0;
     std::size_t injections_ = 0;
 };
 
