@@ -78,6 +78,21 @@ TEST(Vct, CornellAgainstReferencePerPreset) {
     EXPECT_LT(ultra, draft);
 }
 
+// A second bounce: against the reference with two bounces, the two-bounce frame is closer than the
+// one-bounce frame, and its mean within 10%. Measured on llvmpipe (64x64, medium): relMSE 0.080 with
+// one bounce, 0.045 with two; mean 5% low.
+TEST(Vct, SecondBounceMatchesTheTwoBounceReference) {
+    const scene::Scene scene = scene::make_cornell_box();
+    const image::Frame truth = reference_frame(scene, 2, false, 512);
+    const auto one = image::compare(render_vct(scene, "medium").frame, truth);
+    const auto two = image::compare(render_vct(scene, "medium", {{"bounces", 2}}).frame, truth);
+    std::printf("vct medium vs 2-bounce reference: 1 bounce relMSE %.4f mean %.4f, 2 bounces relMSE %.4f mean %.4f, "
+                "reference %.4f\n",
+                one.rel_mse, one.mean_test, two.rel_mse, two.mean_test, two.mean_reference);
+    EXPECT_LT(two.rel_mse, one.rel_mse);
+    EXPECT_NEAR(two.mean_test, two.mean_reference, 0.10 * two.mean_reference);
+}
+
 // Isotropic inner voxels let walls fade to half opacity per level, so cones see through them and
 // lose light: the anisotropic voxels (paper §9) must be measurably better on the same octree.
 TEST(Vct, AnisotropicVoxelsKeepWallsOpaque) {

@@ -41,6 +41,16 @@ gpu::Buffer copy_grown(const gpu::Buffer& old, std::size_t bytes) {
 
 }  // namespace
 
+void set_cone_uniforms(const gpu::ShaderProgram& program, const ConeSettings& settings) {
+    glProgramUniform4fv(program.id(), glGetUniformLocation(program.id(), "u_cones"),
+                        static_cast<GLsizei>(settings.cones.size()), &settings.cones[0].x);
+    program.set("u_cone_count", static_cast<int>(settings.cones.size()));
+    program.set("u_cone_tan", settings.tan_half_aperture);
+    program.set("u_step", settings.step);
+    program.set("u_max_distance", settings.max_distance);
+    program.set("u_ao_lambda", settings.ao_lambda);
+}
+
 OctreeGrid grid_for(const scene::Aabb& bounds, int resolution) {
     if (bounds.empty()) BOUNCE_FAIL("the scene has no geometry to voxelize");
     const glm::vec3 extent = bounds.extent();
@@ -218,7 +228,7 @@ void SparseVoxelOctree::accumulate_leaves(const passes::PassContext& context, st
 }
 
 void SparseVoxelOctree::inject(const passes::PassContext& context, const passes::LightViewMaps& maps,
-                               bool anisotropic) {
+                               bool anisotropic, const ConeSettings* second_bounce) {
     BOUNCE_CHECK(built(), "vct: light injected before the octree was built");
     const std::size_t slots = counts_.leaves * 8;
     {
@@ -252,6 +262,27 @@ void SparseVoxelOctree::inject(const passes::PassContext& context, const passes:
     counts_.injected_photons = counters[VCT_COUNTER_INJECTED_PHOTONS];
     counts_.dropped_photons = counters[VCT_COUNTER_DROPPED_PHOTONS];
     counts_.stray_slots = counters[VCT_COUNTER_STRAY_SLOTS];
+    anisotropic_ = anisotropic;
+    resolve_and_mipmap(context);
+    bounces_ = 1;
+    if (second_bounce == nullptr) return;
+    {
+        gpu::GpuTimers::Scope timing(context.timers, "vct_second_bounce");
+        const gpu::ShaderProgram& program = context.shaders.get(gpu::ProgramSource::compute_shader(
+            "vct/bounce.comp", anisotropic ? std::vector<std::string>{"ANISOTROPIC"} : std::vector<std::string>{}));
+        bind_for_tracing(program);
+        set_cone_uniforms(program, *second_bounce);
+        program.set("u_slot_count", static_cast<unsigned>(slots));
+        program.dispatch_threads(slots);
+        storage_barrier();
+    }
+    resolve_and_mipmap(context);
+    bounces_ = 2;
+}
+
+void SparseVoxelOctree::resolve_and_mipmap(const passes::PassContext& context) {
+    const bool anisotropic = anisotropic_;
+    const auto counters = read_counters();
     std::memcpy(&counts_.max_radiance, &counters[VCT_COUNTER_MAX_RADIANCE], sizeof(float));
     // Half floats hold up to 65504: the pool stores radiance relative to the brightest voxel.
     radiance_scale_ = counts_.max_radiance > 0.0f && std::isfinite(counts_.max_radiance) ? 1.0f / counts_.max_radiance
@@ -268,7 +299,6 @@ void SparseVoxelOctree::inject(const passes::PassContext& context, const passes:
         resolve.dispatch_threads(counts_.leaves * 27);
         glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
     }
-    anisotropic_ = anisotropic;
     if (!anisotropic) {
         directional_pool_ = gpu::Texture();
     } else if (!directional_pool_) {

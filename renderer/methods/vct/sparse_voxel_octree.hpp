@@ -34,6 +34,17 @@ struct OctreeGrid {
 // when the resolution needs more levels than the lattice packing holds.
 OctreeGrid grid_for(const scene::Aabb& bounds, int resolution);
 
+// The cones a gather traces (vct/cone.glsl): tangent-space axes with their cosine weights in w.
+struct ConeSettings {
+    std::vector<glm::vec4> cones;
+    float tan_half_aperture = 0.5f;
+    float step = 0.5f;          // in cone diameters
+    float max_distance = 1.0f;  // world units
+    float ao_lambda = 1.0f;
+};
+
+void set_cone_uniforms(const gpu::ShaderProgram& program, const ConeSettings& settings);
+
 class SparseVoxelOctree {
 public:
     struct Counts {
@@ -59,7 +70,11 @@ public:
     // static part is never rebuilt. The light must be injected again afterwards.
     void update_dynamic(const passes::PassContext& context, const ObjectFilter& include);
     // `anisotropic`: inner levels get six directional voxels (paper §9) instead of one.
-    void inject(const passes::PassContext& context, const passes::LightViewMaps& maps, bool anisotropic);
+    // `second_bounce`: the leaves then gather the first bounce with these cones and the bricks and
+    // mipmaps are rebuilt, so a gather from the octree sees two bounces.
+    void inject(const passes::PassContext& context, const passes::LightViewMaps& maps, bool anisotropic,
+                const ConeSettings* second_bounce);
+    int bounces() const { return bounces_; }
     bool anisotropic() const { return anisotropic_; }
     bool built() const { return node_count_ > 0; }
 
@@ -82,6 +97,8 @@ private:
     // Sizes the leaf data for every leaf, keeping the first `kept_slots` slots, and sums the fragments.
     void accumulate_leaves(const passes::PassContext& context, std::size_t kept_slots);
     void allocate_pools();
+    // Scales the leaf radiance into the pool, fills the leaf bricks and mipmaps every inner level.
+    void resolve_and_mipmap(const passes::PassContext& context);
     void ensure_node_capacity(std::size_t nodes);
     void set_octree_uniforms(const gpu::ShaderProgram& program) const;
     void bind_buffers() const;
@@ -106,6 +123,7 @@ private:
     int bricks_per_axis_ = 0;
     int inner_bricks_per_axis_ = 0;
     bool anisotropic_ = false;
+    int bounces_ = 1;
     float radiance_scale_ = 1.0f;
     Counts counts_;
     gpu::Buffer counters_, fragments_, node_children_, node_coords_, leaf_sums_, leaf_light_;

@@ -76,8 +76,10 @@ public:
         const bool rebuilt = update_octree(frame);
         const bool maps_drawn = light_views_.render(frame, frame.knob_int("light_view_size"));
         const bool anisotropic = frame.knob_int("anisotropic") != 0;
-        if (rebuilt || maps_drawn || anisotropic != octree_.anisotropic()) {
-            octree_.inject(frame, light_views_, anisotropic);
+        const int bounces = frame.knob_int("bounces");
+        if (rebuilt || maps_drawn || anisotropic != octree_.anisotropic() || bounces != octree_.bounces()) {
+            const ConeSettings cones = cone_settings(frame);
+            octree_.inject(frame, light_views_, anisotropic, bounces >= 2 ? &cones : nullptr);
             ++injections_;
         }
         trace(frame, ambient_occlusion);
@@ -167,28 +169,29 @@ private:
         return changed;
     }
 
+    static ConeSettings cone_settings(const FrameContext& frame) {
+        const int count = frame.knob_int("diffuse_cones");
+        const double aperture_degrees = frame.knob("aperture");
+        const float aperture = aperture_degrees > 0.0 ? static_cast<float>(aperture_degrees * std::numbers::pi / 180.0)
+                                                      : default_cone_aperture(count);
+        ConeSettings settings;
+        for (const DiffuseCone& cone : diffuse_cones(count)) settings.cones.emplace_back(cone.axis, cone.weight);
+        settings.tan_half_aperture = std::tan(aperture);
+        settings.step = static_cast<float>(frame.knob("step"));
+        settings.max_distance = glm::length(frame.scene.world_bounds().extent());
+        settings.ao_lambda = static_cast<float>(frame.knob("ao_lambda"));
+        return settings;
+    }
+
     void trace(const FrameContext& frame, bool ambient_occlusion) {
         gpu::GpuTimers::Scope timing(frame.timers, "vct_cone_trace");
-        const int count = frame.knob_int("diffuse_cones");
-        const std::vector<DiffuseCone> cones = diffuse_cones(count);
-        const double aperture_degrees = frame.knob("aperture");
-        const float aperture =
-            aperture_degrees > 0.0 ? static_cast<float>(aperture_degrees * std::numbers::pi / 180.0) : default_cone_aperture(count);
         const gpu::ShaderProgram& program = frame.shaders.get(
             {"common/fullscreen.vert", "vct/cone_trace.frag",
              octree_.anisotropic() ? std::vector<std::string>{"ANISOTROPIC"} : std::vector<std::string>{}});
         program.use();
         octree_.bind_for_tracing(program);
-        std::vector<glm::vec4> packed;
-        for (const DiffuseCone& cone : cones) packed.emplace_back(cone.axis, cone.weight);
-        glProgramUniform4fv(program.id(), glGetUniformLocation(program.id(), "u_cones"),
-                            static_cast<GLsizei>(packed.size()), &packed[0].x);
-        program.set("u_cone_count", static_cast<int>(cones.size()));
-        program.set("u_cone_tan", std::tan(aperture));
-        program.set("u_step", static_cast<float>(frame.knob("step")));
-        program.set("u_max_distance", glm::length(frame.scene.world_bounds().extent()));
+        set_cone_uniforms(program, cone_settings(frame));
         program.set("u_ambient_occlusion", ambient_occlusion ? 1 : 0);
-        program.set("u_ao_lambda", static_cast<float>(frame.knob("ao_lambda")));
         program.set("u_camera_position", frame.camera.position);
 
         glBindFramebuffer(GL_FRAMEBUFFER, frame.output.id());
@@ -222,14 +225,14 @@ private:
 MethodInfo method_info() {
     MethodInfo info;
     info.name = "vct";
-    info.description = "voxel cone tracing on a GPU-built sparse voxel octree: direct light plus one diffuse bounce, "
-                       "or ambient occlusion";
-    info.indirect_bounces = 1;
+    info.description = "voxel cone tracing on a GPU-built sparse voxel octree: direct light plus one or two diffuse "
+                       "bounces, or ambient occlusion";
     info.knobs = {
         {"resolution", 4, 500, true, "leaf voxels across the scene's largest extent (voxel size = extent / this)"},
         {"diffuse_cones", 1, VCT_MAX_CONES, true, "cones gathering diffuse indirect light per pixel"},
         {"aperture", 0, 89, false, "cone half aperture in degrees; 0: the cones' share of the hemisphere"},
         {"step", 0.05, 4, false, "cone march step in cone diameters"},
+        {"bounces", 1, 2, true, "indirect bounces: 1, or 2 (the leaves gather the first bounce before the pixels do)"},
         {"anisotropic", 0, 1, true, "1: six directional voxels per inner voxel (paper §9); 0: one isotropic"},
         {"light_view_size", 16, 4096, true, "texels per side of each light-view map (photons per light view)"},
         {"shadow_map_size", 16, 8192, true, "texels per side of each shadow map (direct light)"},
@@ -237,7 +240,7 @@ MethodInfo method_info() {
         {"ao_lambda", 0, 1e6, false, "ambient occlusion falloff 1 / (1 + lambda r), per metre"}};
     auto preset = [](double resolution, double cones, double step, double light_view, double shadow) {
         return KnobValues{{"resolution", resolution}, {"diffuse_cones", cones}, {"aperture", 0},
-                          {"step", step}, {"anisotropic", 1}, {"light_view_size", light_view}, {"shadow_map_size", shadow},
+                          {"step", step}, {"bounces", 1}, {"anisotropic", 1}, {"light_view_size", light_view}, {"shadow_map_size", shadow},
                           {"ao", 0}, {"ao_lambda", 1}};
     };
     info.presets = {{"draft", preset(24, 6, 1.0, 128, 512)},
