@@ -1,6 +1,7 @@
 #include "renderer/scene/shading.hpp"
 
 #include <algorithm>
+#include <cstdint>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -148,6 +149,48 @@ LightIncidence light_incidence(const Light& light, const glm::vec3& p) {
         result.irradiance *= spot_attenuation(light, glm::dot(-result.l, light.direction));
     }
     return result;
+}
+
+std::vector<glm::vec2> specular_albedo_table(int size, int samples_per_entry) {
+    std::vector<glm::vec2> table(static_cast<std::size_t>(size) * static_cast<std::size_t>(size));
+    const glm::vec3 n(0.0f, 0.0f, 1.0f);
+    for (int row = 0; row < size; ++row) {
+        const float roughness = (static_cast<float>(row) + 0.5f) / static_cast<float>(size);
+        const float alpha = ggx_alpha(roughness);
+        for (int column = 0; column < size; ++column) {
+            const float n_dot_v = (static_cast<float>(column) + 0.5f) / static_cast<float>(size);
+            const glm::vec3 v(std::sqrt(std::max(0.0f, 1.0f - n_dot_v * n_dot_v)), 0.0f, n_dot_v);
+            double a = 0.0, b = 0.0;
+            for (int i = 0; i < samples_per_entry; ++i) {
+                // Hammersley points; h with density D(h) cos(theta_h).
+                const float u1 = (static_cast<float>(i) + 0.5f) / static_cast<float>(samples_per_entry);
+                std::uint32_t bits = static_cast<std::uint32_t>(i);
+                bits = (bits << 16u) | (bits >> 16u);
+                bits = ((bits & 0x55555555u) << 1u) | ((bits & 0xAAAAAAAAu) >> 1u);
+                bits = ((bits & 0x33333333u) << 2u) | ((bits & 0xCCCCCCCCu) >> 2u);
+                bits = ((bits & 0x0F0F0F0Fu) << 4u) | ((bits & 0xF0F0F0F0u) >> 4u);
+                bits = ((bits & 0x00FF00FFu) << 8u) | ((bits & 0xFF00FF00u) >> 8u);
+                const float u2 = static_cast<float>(bits) * 2.3283064365386963e-10f;
+                const float tan2 = alpha * alpha * u1 / (1.0f - u1);
+                const float cos_h = 1.0f / std::sqrt(1.0f + tan2);
+                const float sin_h = std::sqrt(std::max(0.0f, 1.0f - cos_h * cos_h));
+                const float phi = 2.0f * 3.14159265358979f * u2;
+                const glm::vec3 h(sin_h * std::cos(phi), sin_h * std::sin(phi), cos_h);
+                const float v_dot_h = glm::dot(v, h);
+                const glm::vec3 l = 2.0f * v_dot_h * h - v;
+                if (l.z <= 0.0f || v_dot_h <= 0.0f) continue;
+                // D V cos_l / pdf(l), pdf(l) = D cos_h / (4 v.h): the D cancels.
+                const float weight = smith_visibility(l.z, n_dot_v, alpha) * l.z * 4.0f * v_dot_h / cos_h;
+                const float m = 1.0f - v_dot_h;
+                const float fresnel_weight = m * m * m * m * m;
+                a += weight * (1.0f - fresnel_weight);
+                b += weight * fresnel_weight;
+            }
+            table[static_cast<std::size_t>(row * size + column)] =
+                glm::vec2(static_cast<float>(a / samples_per_entry), static_cast<float>(b / samples_per_entry));
+        }
+    }
+    return table;
 }
 
 }  // namespace bounce::scene

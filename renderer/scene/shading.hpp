@@ -7,6 +7,8 @@
 
 #include <glm/glm.hpp>
 
+#include <vector>
+
 namespace bounce::scene {
 
 struct SurfaceMaterial {
@@ -41,6 +43,12 @@ float specular_sampling_probability(const SurfaceMaterial& material);
 BrdfSample sample_brdf(const SurfaceMaterial& material, const glm::vec3& n, const glm::vec3& v, float u1, float u2,
                        float u3);
 float brdf_pdf(const SurfaceMaterial& material, const glm::vec3& n, const glm::vec3& v, const glm::vec3& l);
+// The specular lobe's directional albedo, split by Fresnel: for view cosine `n_dot_v` and
+// perceptual roughness, (A, B) with integral of D V (F0 + (1 - F0) Fw) cos over the hemisphere
+// = F0 A + B (Fw: Schlick's weight of v.h). Row-major, `size` x `size`, rows by roughness, columns
+// by n.v, both sampled at cell centres; by GGX importance sampling of the half vector.
+std::vector<glm::vec2> specular_albedo_table(int size, int samples_per_entry);
+
 // An orthonormal basis (t, b, n) for a unit n, continuous except at n = (0, 0, -1).
 void orthonormal_basis(const glm::vec3& n, glm::vec3& t, glm::vec3& b);
 

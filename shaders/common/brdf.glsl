@@ -55,6 +55,14 @@ vec3 diffuse_albedo(SurfaceMaterial m) {
     return (1.0 - mean_fresnel) * (1.0 - mean_fresnel) * (1.0 - m.metallic) * m.base_color;
 }
 
+// The specular part of evaluate_brdf integrated over the hemisphere (its directional albedo), from
+// the (A, B) split of scene::specular_albedo_table for this n.v and roughness.
+vec3 specular_albedo(SurfaceMaterial m, vec2 ab) {
+    vec3 dielectric = vec3(m.specular * (DIELECTRIC_F0 * ab.x + ab.y));
+    vec3 metal = m.base_color * ab.x + ab.y;
+    return mix(dielectric, metal, m.metallic);
+}
+
 // f(l, v) for unit vectors; zero when either is below the surface.
 vec3 evaluate_brdf(SurfaceMaterial m, vec3 n, vec3 v, vec3 l) {
     float n_dot_l = dot(n, l);

@@ -25,7 +25,7 @@ void main() {
     mat3 frame = cone_frame(n);
     vec3 irradiance = vec3(0.0);
     for (int i = 0; i < u_cone_count; ++i) {
-        irradiance += u_cones[i].w * trace_cone(p, n, frame * u_cones[i].xyz).radiance;
+        irradiance += u_cones[i].w * trace_cone(p, n, frame * u_cones[i].xyz, u_cone_tan).radiance;
     }
     vec3 radiance = leaf_light_at(slot) + finite_or_zero(albedo * INV_PI * irradiance * u_radiance_unscale);
     leaf_light[slot * 3u] = floatBitsToUint(radiance.r);

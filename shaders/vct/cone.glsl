@@ -14,7 +14,7 @@ uniform vec3 u_directional_pool_texel;
 uniform float u_radiance_unscale;    // the pool holds radiance / this
 uniform int u_cone_count;
 uniform vec4 u_cones[VCT_MAX_CONES];  // tangent-space axis (z = normal), w = integral of cos over its cell
-uniform float u_cone_tan;            // tangent of the cones' half aperture
+uniform float u_cone_tan;            // tangent of the diffuse cones' half aperture
 uniform float u_step;                // step length in cone diameters
 uniform float u_max_distance;
 uniform float u_ao_lambda;
@@ -60,13 +60,13 @@ struct ConeResult {
     float occlusion;  // the hit probability weighted by f(r)
 };
 
-ConeResult trace_cone(vec3 p, vec3 n, vec3 direction) {
+ConeResult trace_cone(vec3 p, vec3 n, vec3 direction, float cone_tan) {
     ConeResult result = ConeResult(vec3(0.0), 0.0);
     float opacity = 0.0;
     float t = u_lattice_spacing;
     float leaf_level = float(u_leaf_level);
     while (t < u_max_distance && opacity < 0.99) {
-        float diameter = max(2.0 * t * u_cone_tan, u_lattice_spacing);
+        float diameter = max(2.0 * t * cone_tan, u_lattice_spacing);
         float level = clamp(leaf_level - log2(diameter / u_lattice_spacing), 0.0, leaf_level);
         float voxel = u_lattice_spacing * exp2(leaf_level - level);
         // A surface's own voxels reach about one voxel of each level from it (the mipmap's support)

@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <numbers>
 
@@ -91,6 +92,29 @@ TEST(Vct, SecondBounceMatchesTheTwoBounceReference) {
                 one.rel_mse, one.mean_test, two.rel_mse, two.mean_test, two.mean_reference);
     EXPECT_LT(two.rel_mse, one.rel_mse);
     EXPECT_NEAR(two.mean_test, two.mean_reference, 0.10 * two.mean_reference);
+}
+
+// The specular cone on glossy white surfaces (roughness 0.3): closer to the reference than the
+// diffuse cones alone; a matte scene gets neither the cone nor its albedo table. Measured on
+// llvmpipe (64x64, medium): relMSE 0.034 with the cone, 0.043 without; means 5% and 10% low.
+TEST(Vct, SpecularConeOnGlossySurfaces) {
+    scene::Scene glossy = scene::make_cornell_box();
+    glossy.materials[0].roughness = 0.3f;
+    glossy.materials[0].specular = 1.0f;
+    const image::Frame truth = reference_frame(glossy, 1, false, 512);
+    const auto with_cone = render_vct(glossy, "medium");
+    const auto without = image::compare(render_vct(glossy, "medium", {{"specular", 0}}).frame, truth);
+    const auto error = image::compare(with_cone.frame, truth);
+    std::printf("vct medium, glossy: specular cone relMSE %.4f mean %.4f, without %.4f mean %.4f, reference %.4f\n",
+                error.rel_mse, error.mean_test, without.rel_mse, without.mean_test, error.mean_reference);
+    EXPECT_LT(error.rel_mse, without.rel_mse);
+    EXPECT_LT(std::abs(error.mean_test - error.mean_reference), std::abs(without.mean_test - without.mean_reference));
+    auto holds_table = [](const RenderResult& result) {
+        return std::any_of(result.stats.resident.begin(), result.stats.resident.end(),
+                           [](const auto& s) { return s.name == "vct.specular_albedo"; });
+    };
+    EXPECT_TRUE(holds_table(with_cone));
+    EXPECT_FALSE(holds_table(render_vct(scene::make_cornell_box(), "medium")));
 }
 
 // Isotropic inner voxels let walls fade to half opacity per level, so cones see through them and

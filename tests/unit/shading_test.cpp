@@ -179,3 +179,43 @@ TEST(BrdfSampling, PdfIntegratesToOneAndEstimatesAgreeWithQuadrature) {
 
 }  // namespace
 }  // namespace bounce::scene
+
+namespace bounce::scene {
+namespace {
+
+// The (A, B) table against brute-force quadrature of evaluate_brdf over the hemisphere: a white
+// metal (F0 = 1) integrates to A + B, a black one (F0 = 0) to B. 2% covers both quadratures.
+TEST(SpecularAlbedoTable, MatchesHemisphereQuadratureOfTheBrdf) {
+    constexpr int kSize = 8;
+    const std::vector<glm::vec2> table = specular_albedo_table(kSize, 4096);
+    const glm::vec3 n(0.0f, 0.0f, 1.0f);
+    for (int row : {1, 3, 6}) {
+        for (int column : {1, 4, 7}) {
+            const float roughness = (row + 0.5f) / kSize;
+            const float n_dot_v = (column + 0.5f) / kSize;
+            const glm::vec3 v(std::sqrt(1.0f - n_dot_v * n_dot_v), 0.0f, n_dot_v);
+            double white = 0.0, black = 0.0;
+            constexpr int kTheta = 1024, kPhi = 512;
+            for (int i = 0; i < kTheta; ++i) {
+                const double cos_theta = (i + 0.5) / kTheta;  // uniform in cos: d(omega) = d(cos) d(phi)
+                const double sin_theta = std::sqrt(1.0 - cos_theta * cos_theta);
+                for (int j = 0; j < kPhi; ++j) {
+                    const double phi = 2.0 * 3.14159265358979 * (j + 0.5) / kPhi;
+                    const glm::vec3 l(static_cast<float>(sin_theta * std::cos(phi)),
+                                      static_cast<float>(sin_theta * std::sin(phi)), static_cast<float>(cos_theta));
+                    SurfaceMaterial metal{glm::vec3(1.0f), 1.0f, roughness, 1.0f};
+                    const double weight = cos_theta * (1.0 / kTheta) * (2.0 * 3.14159265358979 / kPhi);
+                    white += evaluate_brdf(metal, n, v, l).x * weight;
+                    metal.base_color = glm::vec3(0.0f);
+                    black += evaluate_brdf(metal, n, v, l).x * weight;
+                }
+            }
+            const glm::vec2 ab = table[static_cast<std::size_t>(row * kSize + column)];
+            EXPECT_NEAR(ab.x + ab.y, white, 0.02 * white) << "roughness " << roughness << " n.v " << n_dot_v;
+            EXPECT_NEAR(ab.y, black, 0.02 * white) << "roughness " << roughness << " n.v " << n_dot_v;
+        }
+    }
+}
+
+}  // namespace
+}  // namespace bounce::scene

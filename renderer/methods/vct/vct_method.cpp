@@ -3,6 +3,7 @@
 #include "renderer/methods/vct/sparse_voxel_octree.hpp"
 #include "renderer/passes/direct_light_pass.hpp"
 #include "renderer/passes/light_view_maps.hpp"
+#include "renderer/scene/shading.hpp"
 #include "vct/vct_layout.h"
 
 #include <fmt/format.h>
@@ -59,6 +60,17 @@ float default_cone_aperture(int count) {
 
 namespace {
 
+// Whether any primitive's material (the default one included) reflects specularly.
+bool has_specular_lobe(const scene::Scene& scene) {
+    for (const scene::Mesh& mesh : scene.meshes) {
+        for (const scene::Primitive& primitive : mesh.primitives) {
+            const scene::Material& material = scene.material(primitive.material);
+            if (material.metallic > 0.0f || material.specular > 0.0f) return true;
+        }
+    }
+    return false;
+}
+
 class VctMethod final : public Method {
 public:
     std::string_view name() const override { return "vct"; }
@@ -87,7 +99,7 @@ public:
 
     std::vector<ResidentStructure> resident() const override {
         const auto& counts = octree_.counts();
-        return {
+        std::vector<ResidentStructure> structures = {
             {"gbuffer", gbuffer_.bytes(), "surface attributes at the frame size"},
             {"shadow_maps", shadows_.bytes(), fmt::format("direct light: {} lights with power", shadows_.map_count())},
             {"light_view_maps", light_views_.bytes(),
@@ -100,6 +112,11 @@ public:
             {"brick_pool", octree_.pool_bytes(),
              fmt::format("{} bricks of 3x3x3 RGBA16F voxels, one per node{}", counts.nodes,
                          octree_.anisotropic() ? ", and six directional bricks per inner node" : "")}};
+        if (specular_albedo_) {
+            structures.push_back({"specular_albedo", specular_albedo_.bytes(),
+                                  "the specular lobe's directional albedo for the specular cone (a material is glossy)"});
+        }
+        return structures;
     }
 
     std::map<std::string, double> statistics() const override {
@@ -185,9 +202,24 @@ private:
 
     void trace(const FrameContext& frame, bool ambient_occlusion) {
         gpu::GpuTimers::Scope timing(frame.timers, "vct_cone_trace");
-        const gpu::ShaderProgram& program = frame.shaders.get(
-            {"common/fullscreen.vert", "vct/cone_trace.frag",
-             octree_.anisotropic() ? std::vector<std::string>{"ANISOTROPIC"} : std::vector<std::string>{}});
+        std::vector<std::string> defines;
+        if (octree_.anisotropic()) defines.push_back("ANISOTROPIC");
+        // No specular cone, and no albedo table, where no material has a specular lobe.
+        const bool specular = frame.knob_int("specular") != 0 && has_specular_lobe(frame.scene);
+        if (specular) {
+            defines.push_back("SPECULAR_CONE");
+            if (!specular_albedo_) {
+                constexpr int kSize = 32;
+                const std::vector<glm::vec2> table = scene::specular_albedo_table(kSize, 1024);
+                specular_albedo_ = gpu::Texture({GL_TEXTURE_2D, GL_RG32F, kSize, kSize});
+                glTextureSubImage2D(specular_albedo_.id(), 0, 0, 0, kSize, kSize, GL_RG, GL_FLOAT, table.data());
+                specular_albedo_.set_filter(GL_LINEAR, GL_LINEAR);
+                specular_albedo_.set_wrap(GL_CLAMP_TO_EDGE);
+            }
+            glBindTextureUnit(VCT_UNIT_SPECULAR_ALBEDO, specular_albedo_.id());
+        }
+        const gpu::ShaderProgram& program =
+            frame.shaders.get({"common/fullscreen.vert", "vct/cone_trace.frag", defines});
         program.use();
         octree_.bind_for_tracing(program);
         set_cone_uniforms(program, cone_settings(frame));
@@ -211,6 +243,7 @@ private:
     passes::LightViewMaps light_views_;
     SparseVoxelOctree octree_;
     passes::FullscreenTriangle triangle_;
+    gpu::Texture specular_albedo_;
     int resolution_ = 0;
     std::vector<glm::mat4> build_transforms_;  // every object's transform at the last static build
     std::vector<bool> dynamic_;                // objects that have moved since
@@ -232,6 +265,7 @@ MethodInfo method_info() {
         {"diffuse_cones", 1, VCT_MAX_CONES, true, "cones gathering diffuse indirect light per pixel"},
         {"aperture", 0, 89, false, "cone half aperture in degrees; 0: the cones' share of the hemisphere"},
         {"step", 0.05, 4, false, "cone march step in cone diameters"},
+        {"specular", 0, 1, true, "1: a specular cone for glossy materials (none where no material is glossy)"},
         {"bounces", 1, 2, true, "indirect bounces: 1, or 2 (the leaves gather the first bounce before the pixels do)"},
         {"anisotropic", 0, 1, true, "1: six directional voxels per inner voxel (paper §9); 0: one isotropic"},
         {"light_view_size", 16, 4096, true, "texels per side of each light-view map (photons per light view)"},
@@ -240,7 +274,7 @@ MethodInfo method_info() {
         {"ao_lambda", 0, 1e6, false, "ambient occlusion falloff 1 / (1 + lambda r), per metre"}};
     auto preset = [](double resolution, double cones, double step, double light_view, double shadow) {
         return KnobValues{{"resolution", resolution}, {"diffuse_cones", cones}, {"aperture", 0},
-                          {"step", step}, {"bounces", 1}, {"anisotropic", 1}, {"light_view_size", light_view}, {"shadow_map_size", shadow},
+                          {"step", step}, {"specular", 1}, {"bounces", 1}, {"anisotropic", 1}, {"light_view_size", light_view}, {"shadow_map_size", shadow},
                           {"ao", 0}, {"ao_lambda", 1}};
     };
     info.presets = {{"draft", preset(24, 6, 1.0, 128, 512)},
