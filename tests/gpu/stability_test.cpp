@@ -17,14 +17,19 @@ scene::Scene cornell_with_intensity(float intensity) {
     return scene;
 }
 
-RenderRequest small_request() {
-    RenderRequest request;
-    request.width = request.height = 48;
-    request.preset = "draft";
-    return request;
-}
+// Every test runs for each GPU method.
+class Stability : public ::testing::TestWithParam<std::string> {
+protected:
+    RenderRequest small_request() const {
+        RenderRequest request;
+        request.method = GetParam();
+        request.width = request.height = 48;
+        request.preset = "draft";
+        return request;
+    }
+};
 
-TEST(Stability, ZeroAndHugeIntensityStayFiniteAndLinear) {
+TEST_P(Stability, ZeroAndHugeIntensityStayFiniteAndLinear) {
     const auto zero = render_scene(cornell_with_intensity(0.0f), small_request());
     EXPECT_EQ(zero.frame.non_finite_count(), 0u);
     for (std::size_t i = 0; i < zero.frame.rgba.size(); i += 4) ASSERT_EQ(zero.frame.rgba[i], 0.0f);
@@ -48,7 +53,7 @@ TEST(Stability, ZeroAndHugeIntensityStayFiniteAndLinear) {
     EXPECT_EQ(huge.frame.display_rgba8[brightest], 255);
 }
 
-TEST(Stability, DegenerateAndCoincidentTrianglesStayFinite) {
+TEST_P(Stability, DegenerateAndCoincidentTrianglesStayFinite) {
     scene::Scene scene = scene::make_cornell_box();
     scene::Primitive degenerate;
     degenerate.material = 0;
@@ -84,7 +89,7 @@ TEST(Stability, DegenerateAndCoincidentTrianglesStayFinite) {
     EXPECT_EQ(result.frame.non_finite_count(), 0u);
 }
 
-TEST(Stability, ExtremeMaterialsStayFinite) {
+TEST_P(Stability, ExtremeMaterialsStayFinite) {
     for (float roughness : {0.0f, 1e-4f, 1.0f}) {
         for (float metallic : {0.0f, 1.0f}) {
             scene::Scene scene = scene::make_cornell_box();
@@ -100,7 +105,7 @@ TEST(Stability, ExtremeMaterialsStayFinite) {
     }
 }
 
-TEST(Stability, TinyAndOddFrameSizes) {
+TEST_P(Stability, TinyAndOddFrameSizes) {
     for (const auto& [w, h] : std::vector<std::pair<int, int>>{{1, 1}, {1, 37}, {257, 3}}) {
         RenderRequest request = small_request();
         request.width = w;
@@ -116,7 +121,7 @@ TEST(Stability, TinyAndOddFrameSizes) {
 }
 
 // Scaling the scene by k and point intensities by k^2 leaves every radiance unchanged.
-TEST(Stability, UniformScaleInvariance) {
+TEST_P(Stability, UniformScaleInvariance) {
     const auto base = render_scene(scene::make_cornell_box(), small_request());
     for (float k : {1e-3f, 1e4f}) {
         scene::Scene scaled = scene::make_cornell_box();
@@ -145,6 +150,9 @@ TEST(Stability, UniformScaleInvariance) {
         EXPECT_LT(differing, base.frame.rgba.size() * 3 / 4 / 50) << "scale " << k;
     }
 }
+
+INSTANTIATE_TEST_SUITE_P(Methods, Stability, ::testing::Values("direct", "vct"),
+                         [](const ::testing::TestParamInfo<std::string>& info) { return info.param; });
 
 }  // namespace
 }  // namespace bounce::test
