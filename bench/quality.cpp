@@ -148,30 +148,33 @@ std::string vct_passes_markdown(Renderer& renderer, const scene::Scene& scene, c
     const char* passes[] = {"vct_voxelize", "vct_octree_build", "vct_leaf_sums", "light_view_maps", "vct_inject",
                             "vct_bricks",   "vct_mipmap",       "vct_cone_trace"};
     std::string md =
-        "| size | preset | voxelize | octree build | leaf sums | light views | inject | bricks | mipmap | cone trace | "
-        "cold GPU ms | warm GPU ms | warm wall ms | nodes | octree MiB | resident MiB |\n"
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+        "| size | preset | structure | voxelize | octree build | leaf sums | light views | inject | bricks | mipmap | "
+        "cone trace | cold GPU ms | warm GPU ms | warm wall ms | nodes | structure MiB | resident MiB |\n"
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
     for (const int size : sizes) {
         for (const auto& preset : methods::preset_names()) {
-            auto resources = renderer.upload(scene);
-            RenderRequest request;
-            request.method = "vct";
-            request.preset = preset;
-            request.width = request.height = size;
-            request.make_display_image = false;
-            const RenderResult cold = renderer.render(*resources, request);
-            const RenderResult warm = renderer.render(*resources, request);
-            std::map<std::string, double> ms;
-            for (const auto& pass : cold.stats.passes) ms[pass.pass] += pass.gpu_ms;
-            md += fmt::format("| {}² | {} ", size, preset);
-            for (const char* pass : passes) md += fmt::format("| {:.1f} ", ms[pass]);
-            md += fmt::format("| {:.1f} | {:.1f} | {:.1f} | {:.0f} | {:.2f} | {:.1f} |\n", cold.stats.gpu_ms,
-                              warm.stats.gpu_ms, warm.stats.render_ms,
-                              cold.stats.method_statistics.at("octree_nodes"),
-                              cold.stats.method_statistics.at("octree_bytes") / 1048576.0,
-                              cold.stats.resident_bytes / 1048576.0);
-            log::info("bench", "vct passes {}x{} {}: cold {:.0f} ms, warm {:.0f} ms", size, size, preset,
-                      cold.stats.gpu_ms, warm.stats.gpu_ms);
+            for (const int dense : {0, 1}) {
+                auto resources = renderer.upload(scene);
+                RenderRequest request;
+                request.method = "vct";
+                request.preset = preset;
+                request.knobs = {{"dense", dense}};
+                request.width = request.height = size;
+                request.make_display_image = false;
+                const RenderResult cold = renderer.render(*resources, request);
+                const RenderResult warm = renderer.render(*resources, request);
+                std::map<std::string, double> ms;
+                for (const auto& pass : cold.stats.passes) ms[pass.pass] += pass.gpu_ms;
+                md += fmt::format("| {}² | {} | {} ", size, preset, dense ? "dense" : "sparse");
+                for (const char* pass : passes) md += fmt::format("| {:.1f} ", ms[pass]);
+                md += fmt::format("| {:.1f} | {:.1f} | {:.1f} | {:.0f} | {:.2f} | {:.1f} |\n", cold.stats.gpu_ms,
+                                  warm.stats.gpu_ms, warm.stats.render_ms,
+                                  cold.stats.method_statistics.at("octree_nodes"),
+                                  cold.stats.method_statistics.at("octree_bytes") / 1048576.0,
+                                  cold.stats.resident_bytes / 1048576.0);
+                log::info("bench", "vct passes {}x{} {} {}: cold {:.0f} ms, warm {:.0f} ms", size, size, preset,
+                          dense ? "dense" : "sparse", cold.stats.gpu_ms, warm.stats.gpu_ms);
+            }
         }
     }
     return md;
@@ -360,7 +363,8 @@ int main(int argc, char** argv) {
             if (bench_scene.name == "cornell") {
                 details += "\n## vct per pass (bench/quality)\n\nThe built-in Cornell box. Cold: a fresh scene, so the "
                            "octree is built, the light injected and mipmapped, then cones traced; warm: the same view "
-                           "again (cones only). Octree MiB: nodes, leaf data and brick pools.\n\n" +
+                           "again (cones only). Sparse: the octree; dense: the same pipeline over every level's "
+                           "full lattice (knob `dense`). Structure MiB: nodes, leaf data and voxel pools.\n\n" +
                            vct_passes_markdown(renderer, bench_scene.scene, {256, 512});
             }
             if (bench_scene.name == "thin_wall") {

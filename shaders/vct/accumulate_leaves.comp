@@ -16,9 +16,9 @@ void main() {
     if (index >= u_fragment_count) return;
     uint base = index * VCT_FRAGMENT_WORDS;
     uvec3 lattice = unpack_lattice(fragments[base]);
-    uint leaf = owner_leaf(lattice);
-    if (leaf == VCT_NODE_NONE) return;  // cannot happen: the fragment's own leaf was allocated
-    uint slot = leaf_slot(leaf, slot_index(lattice & 1u)) * VCT_LEAF_SUM_WORDS;
+    uint slot = lattice_slot(lattice);
+    if (slot == VCT_NODE_NONE) return;  // cannot happen: the fragment's own leaf was allocated
+    slot *= VCT_LEAF_SUM_WORDS;
     float area = uintBitsToFloat(fragments[base + 6u]);
     vec3 albedo = unpackUnorm4x8(fragments[base + 1u]).rgb;
     vec3 normal = unpackSnorm4x8(fragments[base + 2u]).xyz;

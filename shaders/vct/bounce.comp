@@ -19,8 +19,7 @@ void main() {
     if (!(dot(normal_sum, normal_sum) > 0.0)) return;  // opposite faces cancel: no side to gather from
     vec3 n = normalize(normal_sum);
     vec3 albedo = vec3(leaf_sum(slot, 1u), leaf_sum(slot, 2u), leaf_sum(slot, 3u)) / area;
-    uint s = slot % 8u;
-    uvec3 lattice = node_coord[leaf_node(slot / 8u)].xyz * 2u + uvec3(s & 1u, (s >> 1u) & 1u, s >> 2u);
+    uvec3 lattice = slot_lattice(slot);
     vec3 p = u_grid_origin + vec3(lattice) * u_lattice_spacing;
     mat3 frame = cone_frame(n);
     vec3 irradiance = vec3(0.0);

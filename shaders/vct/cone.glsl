@@ -27,6 +27,24 @@ vec4 sample_level(vec3 world, uint level, vec3 direction) {
     vec3 q = (world - u_grid_origin) / spacing;
     float side = exp2(float(level));
     if (any(lessThan(q, vec3(0.0))) || any(greaterThan(q, vec3(2.0 * side)))) return vec4(0.0);
+#ifdef DENSE
+    // Every lattice point is a texel of its level's layer.
+    vec3 texel = q + 0.5;
+#ifdef ANISOTROPIC
+    if (level < u_leaf_level) {
+        vec3 share = direction * direction;
+        vec4 value = vec4(0.0);
+        for (uint axis = 0u; axis < 3u; ++axis) {
+            if (share[axis] <= 0.0) continue;
+            uint k = 2u * axis + (direction[axis] >= 0.0 ? 0u : 1u);
+            vec3 layer = vec3(0.0, 0.0, float(u_dense_z[level * 6u + k]));
+            value += share[axis] * textureLod(u_pool, (texel + layer) * u_pool_texel, 0.0);
+        }
+        return value;
+    }
+#endif
+    return textureLod(u_pool, (texel + vec3(0.0, 0.0, float(u_dense_z[level * 6u]))) * u_pool_texel, 0.0);
+#else
     uvec3 cell = uvec3(min(floor(q * 0.5), vec3(side - 1.0)));
     uint node = find_node(cell, level);
     if (node == VCT_NODE_NONE) return vec4(0.0);
@@ -45,6 +63,7 @@ vec4 sample_level(vec3 world, uint level, vec3 direction) {
     }
 #endif
     return textureLod(u_pool, (vec3(brick_origin(node)) + in_brick) * u_pool_texel, 0.0);
+#endif
 }
 
 vec4 sample_quadrilinear(vec3 world, float level, vec3 direction) {

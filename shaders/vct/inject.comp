@@ -49,12 +49,11 @@ void main() {
     // Half the flux to each voxel of the pair, as voxelization gives each half the area.
     for (int i = 0; i < 2; ++i) {
         ivec3 lattice = voxels.lower + i * voxels.step;
-        uint leaf = any(lessThan(lattice, ivec3(0))) ? VCT_NODE_NONE : owner_leaf(uvec3(lattice));
-        if (leaf == VCT_NODE_NONE) {
+        uint slot = any(lessThan(lattice, ivec3(0))) ? VCT_NODE_NONE : lattice_slot(uvec3(lattice));
+        if (slot == VCT_NODE_NONE) {
             atomicAdd(counters[VCT_COUNTER_DROPPED_PHOTONS], 1u);
             continue;
         }
-        uint slot = leaf_slot(leaf, slot_index(uvec3(lattice) & 1u));
         atomicAdd(counters[VCT_COUNTER_INJECTED_PHOTONS], 1u);
         add_leaf_light(slot * 3u, 0.5 * flux.r);
         add_leaf_light(slot * 3u + 1u, 0.5 * flux.g);

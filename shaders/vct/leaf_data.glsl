@@ -20,6 +20,27 @@ uint leaf_node(uint index) {
 
 uint leaf_slot(uint leaf, uint slot) { return leaf_index(leaf) * 8u + slot; }
 
+#ifdef DENSE
+// The dense variant: one slot per leaf-level lattice point.
+uint lattice_slot(uvec3 lattice) {
+    if (any(greaterThanEqual(lattice, uvec3(u_dense_side)))) return VCT_NODE_NONE;
+    return lattice.x + u_dense_side * (lattice.y + u_dense_side * lattice.z);
+}
+uvec3 slot_lattice(uint slot) {
+    return uvec3(slot % u_dense_side, (slot / u_dense_side) % u_dense_side, slot / (u_dense_side * u_dense_side));
+}
+#else
+// The slot of a lattice point: in the leaf that owns it, VCT_NODE_NONE where there is none.
+uint lattice_slot(uvec3 lattice) {
+    uint leaf = owner_leaf(lattice);
+    return leaf == VCT_NODE_NONE ? VCT_NODE_NONE : leaf_slot(leaf, slot_index(lattice & 1u));
+}
+uvec3 slot_lattice(uint slot) {
+    uint s = slot % 8u;
+    return node_coord[leaf_node(slot / 8u)].xyz * 2u + uvec3(s & 1u, (s >> 1u) & 1u, s >> 2u);
+}
+#endif
+
 #define VCT_DEFINE_FLOAT_ADD(name, buffer)                                                   \
     void name(uint index, float value) {                                                    \
         if (value == 0.0) return;                                                           \

@@ -28,6 +28,7 @@ vec4 load_brick(uint node, ivec3 offset, uint level, uint direction) {
     return imageLoad(u_pool, brick_origin(node) + offset);
 }
 
+#ifndef DENSE
 // The level-`level` voxel at lattice point `p` (lattice of that level), zero where the tree is empty.
 vec4 fetch_voxel(uint level, ivec3 p, uint parent, ivec3 parent_base, uint direction) {
     int side = 1 << level;
@@ -55,6 +56,7 @@ vec4 fetch_voxel(uint level, ivec3 p, uint parent, ivec3 parent_base, uint direc
     }
     return vec4(0.0);
 }
+#endif
 
 #ifdef ANISOTROPIC
 // Composites the rows of `values` (the 27 child voxels around the parent's, x fastest) along
@@ -86,40 +88,73 @@ vec4 directional_average(vec4 values[27], uint direction) {
 }
 #endif
 
+#ifdef DENSE
+// The level-`level` voxel at lattice point `p`, seen along `direction` where the level is
+// anisotropic: a texel of that level's layer.
+vec4 fetch_dense(uint level, ivec3 p, uint direction) {
+    int side = (1 << (level + 1u)) + 1;
+    if (any(lessThan(p, ivec3(0))) || any(greaterThanEqual(p, ivec3(side)))) return vec4(0.0);
+#ifdef ANISOTROPIC
+    uint k = level < u_leaf_level ? direction : 0u;
+#else
+    uint k = 0u;
+#endif
+    return imageLoad(u_pool, p + ivec3(0, 0, u_dense_z[level * 6u + k]));
+}
+#endif
+
 void main() {
     uint index = thread_index();
 #ifdef ANISOTROPIC
-    // Above the leaves every direction reads its own pool; from the isotropic leaves one thread
+    // Above the leaves every direction reads its own voxels; from the isotropic leaves one thread
     // reads the 27 voxels once and writes all six directions.
     const bool from_leaves = u_level + 1u == u_leaf_level;
     uint directions = from_leaves ? 1u : 6u;
 #else
     const uint directions = 1u;
 #endif
+#ifdef DENSE
+    uint side = (1u << (u_level + 1u)) + 1u;
+    if (index >= side * side * side * directions) return;
+    uint direction = index % directions;
+    uint point = index / directions;
+    ivec3 target = ivec3(point % side, (point / side) % side, point / (side * side));
+    ivec3 center = 2 * target;
+#else
     if (index >= u_node_count * 27u * directions) return;
     uint direction = index % directions;
     uint node = u_first_node + index / (27u * directions);
     uint voxel = (index / directions) % 27u;
-    ivec3 offset = ivec3(voxel % 3u, (voxel / 3u) % 3u, voxel / 9u);
+    ivec3 target = ivec3(voxel % 3u, (voxel / 3u) % 3u, voxel / 9u);  // in the node's brick
     ivec3 base = 4 * ivec3(node_coord[node].xyz);  // the children's lattice starts here
-    ivec3 center = base + 2 * offset;
+    ivec3 center = base + 2 * target;
+#endif
     vec4 values[27];
     for (int i = 0; i < 27; ++i) {
         ivec3 o = ivec3(i % 3, (i / 3) % 3, i / 9) - 1;
+#ifdef DENSE
+        values[i] = fetch_dense(u_level + 1u, center + o, direction);
+#else
         values[i] = fetch_voxel(u_level + 1u, center + o, node, base, direction);
+#endif
     }
 #ifdef ANISOTROPIC
-    if (from_leaves) {
-        for (uint k = 0u; k < 6u; ++k) {
-            imageStore(u_directional_pool, directional_brick_origin(node, k) + offset, directional_average(values, k));
-        }
-    } else {
-        imageStore(u_directional_pool, directional_brick_origin(node, direction) + offset,
-                   directional_average(values, direction));
+    for (uint k = 0u; k < 6u; ++k) {
+        if (!from_leaves && k != direction) continue;
+        vec4 value = directional_average(values, k);
+#ifdef DENSE
+        imageStore(u_pool, target + ivec3(0, 0, u_dense_z[u_level * 6u + k]), value);
+#else
+        imageStore(u_directional_pool, directional_brick_origin(node, k) + target, value);
+#endif
     }
 #else
     vec4 sum = vec4(0.0);
     for (int i = 0; i < 27; ++i) sum += kWeight[i % 3] * kWeight[(i / 3) % 3] * kWeight[i / 9] * values[i];
-    imageStore(u_pool, brick_origin(node) + offset, sum);
+#ifdef DENSE
+    imageStore(u_pool, target + ivec3(0, 0, u_dense_z[u_level * 6u]), sum);
+#else
+    imageStore(u_pool, brick_origin(node) + target, sum);
+#endif
 #endif
 }

@@ -15,6 +15,11 @@ uniform vec3 u_grid_origin;        // world position of lattice point 0 (the roo
 uniform float u_lattice_spacing;   // world distance between leaf-level voxels (half a leaf)
 uniform uint u_bricks_per_axis;    // bricks along each axis of the brick pool
 uniform uint u_inner_bricks_per_axis;  // the same for the directional pool (inner nodes only)
+#ifdef DENSE
+// The dense variant: no nodes; every lattice point of every level is a texel of the pool.
+uniform uint u_dense_side;                       // lattice points per axis at the leaf level
+uniform int u_dense_z[VCT_MAX_DENSE_LAYERS];     // first z of level l, direction k at l * 6 + k
+#endif
 
 // The node at `level` whose cell is `cell` (cell coordinates at that level), or VCT_NODE_NONE where
 // the tree is empty.

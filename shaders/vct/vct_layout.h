@@ -41,6 +41,9 @@
 
 // Brick side in voxels: vertex-centred 3x3x3 bricks, voxel centres on node corners (paper §4.1).
 #define VCT_BRICK 3
+// Dense variant: one 3D texture holds every level's full lattice, stacked along z; the leaf level
+// once, each inner level once (isotropic) or six times (anisotropic). Layer index: level * 6 + k.
+#define VCT_MAX_DENSE_LAYERS 60
 #define VCT_MAX_CONES 32
 #define VCT_MAX_LATTICE 1023u
 

@@ -117,6 +117,45 @@ TEST(Vct, SpecularConeOnGlossySurfaces) {
     EXPECT_FALSE(holds_table(render_vct(scene::make_cornell_box(), "medium")));
 }
 
+// The dense variant runs the same pipeline over full lattices: it must render the same light
+// (relMSE against the reference within 1.5x of the sparse octree's, at the same voxel size) while
+// holding more memory than the sparse octree, which allocates only where surfaces are.
+TEST(Vct, DenseVariantMatchesTheSparseOctree) {
+    const scene::Scene scene = scene::make_cornell_box();
+    const image::Frame truth = reference_frame(scene, 1, false, 256);
+    const auto sparse = render_vct(scene, "medium");
+    const auto dense = render_vct(scene, "medium", {{"dense", 1}});
+    const auto sparse_error = image::compare(sparse.frame, truth);
+    const auto dense_error = image::compare(dense.frame, truth);
+    const double sparse_bytes = sparse.stats.method_statistics.at("octree_bytes");
+    const double dense_bytes = dense.stats.method_statistics.at("octree_bytes");
+    std::printf("vct medium: sparse relMSE %.4f mean %.4f %.1f MiB, dense relMSE %.4f mean %.4f %.1f MiB\n",
+                sparse_error.rel_mse, sparse_error.mean_test, sparse_bytes / 1048576.0, dense_error.rel_mse,
+                dense_error.mean_test, dense_bytes / 1048576.0);
+    EXPECT_EQ(dense.stats.method_statistics.at("dense"), 1.0);
+    EXPECT_EQ(dense.stats.method_statistics.at("octree_nodes"), 0.0);
+    EXPECT_LT(dense_error.rel_mse, 1.5 * sparse_error.rel_mse);
+    EXPECT_NEAR(dense_error.mean_test, sparse_error.mean_test, 0.05 * sparse_error.mean_test);
+    EXPECT_GT(dense_bytes, sparse_bytes);
+
+    // The rest of the pipeline on the dense variant: a second bounce adds light; a moved block is
+    // revoxelized as a dynamic part without rebuilding the static one.
+    const auto two_bounces = render_vct(scene, "medium", {{"dense", 1}, {"bounces", 2}});
+    EXPECT_EQ(two_bounces.frame.non_finite_count(), 0u);
+    EXPECT_GT(image::compare(two_bounces.frame, truth).mean_test, 1.05 * dense_error.mean_test);
+    scene::Scene moving = scene::make_cornell_box();
+    auto resources = shared_renderer().upload(moving);
+    const RenderRequest request = vct_request("low", {{"dense", 1}});
+    shared_renderer().render(*resources, request);
+    moving.objects[*moving.find_object("short_block")].transform[3] += glm::vec4(0.1f, 0.0f, 0.0f, 0.0f);
+    shared_renderer().render(*resources, request);
+    moving.objects[*moving.find_object("short_block")].transform[3] += glm::vec4(0.0f, 0.0f, 0.1f, 0.0f);
+    const auto moved = shared_renderer().render(*resources, request);
+    EXPECT_EQ(moved.stats.method_statistics.at("octree_builds"), 2.0);
+    EXPECT_EQ(moved.stats.method_statistics.at("dynamic_revoxelizations"), 2.0);
+    EXPECT_LT(image::compare(moved.frame, reference_frame(moving, 1, false, 256)).rel_mse, 1.5 * dense_error.rel_mse);
+}
+
 // Isotropic inner voxels let walls fade to half opacity per level, so cones see through them and
 // lose light: the anisotropic voxels (paper §9) must be measurably better on the same octree.
 TEST(Vct, AnisotropicVoxelsKeepWallsOpaque) {

@@ -14,6 +14,7 @@ namespace bounce::methods::vct {
 namespace {
 
 constexpr int kMaxLeafLevel = 8;  // lattice coordinates up to 2^9 fit the 10-bit packing
+constexpr int kMaxDenseLeafLevel = 6;  // 129^3 lattice points: 86 MiB of leaf sums already
 
 std::size_t grown(std::size_t needed) { return std::max<std::size_t>(needed + needed / 2, 1024); }
 
@@ -68,10 +69,35 @@ OctreeGrid grid_for(const scene::Aabb& bounds, int resolution) {
     return grid;
 }
 
-void SparseVoxelOctree::build(const passes::PassContext& context, int resolution, const ObjectFilter& include) {
+void SparseVoxelOctree::build(const passes::PassContext& context, int resolution, const ObjectFilter& include,
+                              bool dense) {
     grid_ = grid_for(context.scene.world_bounds(), resolution);
+    dense_ = dense;
+    if (dense && grid_.leaf_level > kMaxDenseLeafLevel) {
+        throw InputError(fmt::format("vct dense: resolution {} needs a {}^3 lattice; at most resolution {} ({}^3) is "
+                                     "supported densely (the sparse octree has no such limit)",
+                                     resolution, grid_.lattice_max() + 1, (2 << kMaxDenseLeafLevel) - 4,
+                                     (2 << kMaxDenseLeafLevel) + 1));
+    }
     if (!counters_) counters_ = gpu::Buffer(VCT_COUNTERS * sizeof(std::uint32_t), nullptr, GL_DYNAMIC_STORAGE_BIT);
     voxelize(context, include);
+    if (dense) {
+        node_children_ = gpu::Buffer();
+        node_coords_ = gpu::Buffer();
+        node_capacity_ = 0;
+        node_count_ = 0;
+        levels_.clear();
+        static_levels_.clear();
+        counts_.nodes = counts_.leaves = counts_.dynamic_nodes = counts_.dynamic_leaves = 0;
+        accumulate_leaves(context, 0);
+        fragments_ = gpu::Buffer();
+        static_children_ = gpu::Buffer();
+        static_leaf_sums_ = gpu::Buffer(leaf_sums_.bytes(), nullptr);
+        glCopyNamedBufferSubData(leaf_sums_.id(), static_leaf_sums_.id(), 0, 0, static_cast<GLsizeiptr>(leaf_sums_.bytes()));
+        allocate_pools();
+        built_ = true;
+        return;
+    }
     node_count_ = 1;
     ensure_node_capacity(std::max<std::size_t>(node_capacity_, 4096));
     clear_buffer(node_children_);
@@ -93,10 +119,17 @@ void SparseVoxelOctree::build(const passes::PassContext& context, int resolution
     static_leaf_sums_ = gpu::Buffer(leaf_sums_.bytes(), nullptr);
     glCopyNamedBufferSubData(leaf_sums_.id(), static_leaf_sums_.id(), 0, 0, static_cast<GLsizeiptr>(leaf_sums_.bytes()));
     allocate_pools();
+    built_ = true;
 }
 
 void SparseVoxelOctree::update_dynamic(const passes::PassContext& context, const ObjectFilter& include) {
     BOUNCE_CHECK(built(), "vct: dynamic objects voxelized before the static octree was built");
+    if (dense_) {
+        voxelize(context, include);
+        accumulate_leaves(context, slot_count());
+        fragments_ = gpu::Buffer();
+        return;
+    }
     glCopyNamedBufferSubData(static_children_.id(), node_children_.id(), 0, 0,
                              static_cast<GLsizeiptr>(static_children_.bytes()));
     levels_ = static_levels_;
@@ -112,10 +145,53 @@ void SparseVoxelOctree::update_dynamic(const passes::PassContext& context, const
     allocate_pools();
 }
 
+std::size_t SparseVoxelOctree::slot_count() const {
+    if (!dense_) return counts_.leaves * 8;
+    const auto side = static_cast<std::size_t>(grid_.lattice_max() + 1);
+    return side * side * side;
+}
+
+std::vector<std::string> SparseVoxelOctree::program_defines() const {
+    std::vector<std::string> defines;
+    if (dense_) defines.push_back("DENSE");
+    if (anisotropic_) defines.push_back("ANISOTROPIC");
+    return defines;
+}
+
+void SparseVoxelOctree::allocate_dense_pool() {
+    if (pool_ && dense_pool_anisotropic_ == anisotropic_) return;
+    // Level D once, then every inner level once or (anisotropic) six times, stacked along z.
+    const int side = grid_.lattice_max() + 1;
+    int z = 0;
+    dense_z_.fill(0);
+    dense_z_[static_cast<std::size_t>(grid_.leaf_level * 6)] = z;
+    z += side;
+    for (int level = grid_.leaf_level - 1; level >= 0; --level) {
+        for (int k = 0; k < (anisotropic_ ? 6 : 1); ++k) {
+            dense_z_[static_cast<std::size_t>(level * 6 + k)] = z;
+            z += (2 << level) + 1;
+        }
+    }
+    GLint max_3d = 0;
+    glGetIntegerv(GL_MAX_3D_TEXTURE_SIZE, &max_3d);
+    if (z > max_3d) {
+        throw InputError(fmt::format("vct dense: the levels need a {}x{}x{} texture; the GPU allows {} per side", side,
+                                     side, z, max_3d));
+    }
+    pool_ = gpu::Texture({GL_TEXTURE_3D, GL_RGBA16F, side, side, z});
+    pool_.set_filter(GL_LINEAR, GL_LINEAR);
+    pool_.set_wrap(GL_CLAMP_TO_EDGE);
+    dense_pool_anisotropic_ = anisotropic_;
+}
+
 void SparseVoxelOctree::allocate_pools() {
-    const int bricks_per_axis = cube_side_for(node_count_);
-    leaf_light_ = gpu::Buffer(std::max<std::size_t>(counts_.leaves, 1) * 8 * 3 * sizeof(float), nullptr);
+    leaf_light_ = gpu::Buffer(std::max<std::size_t>(slot_count(), 1) * 3 * sizeof(float), nullptr);
     directional_pool_ = gpu::Texture();  // sized at injection
+    if (dense_) {
+        pool_ = gpu::Texture();  // sized at injection, by the anisotropic knob
+        return;
+    }
+    const int bricks_per_axis = cube_side_for(node_count_);
     if (pool_ && bricks_per_axis == bricks_per_axis_) return;
     bricks_per_axis_ = bricks_per_axis;
     GLint max_3d = 0;
@@ -211,14 +287,14 @@ void SparseVoxelOctree::subdivide(const passes::PassContext& context) {
 
 void SparseVoxelOctree::accumulate_leaves(const passes::PassContext& context, std::size_t kept_slots) {
     gpu::GpuTimers::Scope timing(context.timers, "vct_leaf_sums");
-    leaf_sums_ = gpu::Buffer(std::max<std::size_t>(counts_.leaves, 1) * 8 * VCT_LEAF_SUM_WORDS * 4, nullptr);
+    leaf_sums_ = gpu::Buffer(std::max<std::size_t>(slot_count(), 1) * VCT_LEAF_SUM_WORDS * 4, nullptr);
     clear_buffer(leaf_sums_);
     if (kept_slots > 0) {
         glCopyNamedBufferSubData(static_leaf_sums_.id(), leaf_sums_.id(), 0, 0,
                                  static_cast<GLsizeiptr>(kept_slots * VCT_LEAF_SUM_WORDS * 4));
     }
     const gpu::ShaderProgram& program =
-        context.shaders.get(gpu::ProgramSource::compute_shader("vct/accumulate_leaves.comp"));
+        context.shaders.get(gpu::ProgramSource::compute_shader("vct/accumulate_leaves.comp", program_defines()));
     set_octree_uniforms(program);
     program.set("u_fragment_count", static_cast<unsigned>(counts_.fragments));
     bind_buffers();
@@ -230,13 +306,14 @@ void SparseVoxelOctree::accumulate_leaves(const passes::PassContext& context, st
 void SparseVoxelOctree::inject(const passes::PassContext& context, const passes::LightViewMaps& maps,
                                bool anisotropic, const ConeSettings* second_bounce) {
     BOUNCE_CHECK(built(), "vct: light injected before the octree was built");
-    const std::size_t slots = counts_.leaves * 8;
+    anisotropic_ = anisotropic;
+    const std::size_t slots = slot_count();
     {
         gpu::GpuTimers::Scope timing(context.timers, "vct_inject");
         clear_buffer(leaf_light_);
         write_counters({});
         bind_buffers();
-        const gpu::ShaderProgram& program = context.shaders.get(gpu::ProgramSource::compute_shader("vct/inject.comp"));
+        const gpu::ShaderProgram& program = context.shaders.get(gpu::ProgramSource::compute_shader("vct/inject.comp", program_defines()));
         set_octree_uniforms(program);
         glBindTextureUnit(0, maps.position().id());
         glBindTextureUnit(1, maps.normal().id());
@@ -252,7 +329,7 @@ void SparseVoxelOctree::inject(const passes::PassContext& context, const passes:
         }
         storage_barrier();
         const gpu::ShaderProgram& radiance =
-            context.shaders.get(gpu::ProgramSource::compute_shader("vct/leaf_radiance.comp"));
+            context.shaders.get(gpu::ProgramSource::compute_shader("vct/leaf_radiance.comp", program_defines()));
         set_octree_uniforms(radiance);
         radiance.set("u_slot_count", static_cast<unsigned>(slots));
         radiance.dispatch_threads(slots);
@@ -262,14 +339,13 @@ void SparseVoxelOctree::inject(const passes::PassContext& context, const passes:
     counts_.injected_photons = counters[VCT_COUNTER_INJECTED_PHOTONS];
     counts_.dropped_photons = counters[VCT_COUNTER_DROPPED_PHOTONS];
     counts_.stray_slots = counters[VCT_COUNTER_STRAY_SLOTS];
-    anisotropic_ = anisotropic;
     resolve_and_mipmap(context);
     bounces_ = 1;
     if (second_bounce == nullptr) return;
     {
         gpu::GpuTimers::Scope timing(context.timers, "vct_second_bounce");
-        const gpu::ShaderProgram& program = context.shaders.get(gpu::ProgramSource::compute_shader(
-            "vct/bounce.comp", anisotropic ? std::vector<std::string>{"ANISOTROPIC"} : std::vector<std::string>{}));
+        const gpu::ShaderProgram& program =
+            context.shaders.get(gpu::ProgramSource::compute_shader("vct/bounce.comp", program_defines()));
         bind_for_tracing(program);
         set_cone_uniforms(program, *second_bounce);
         program.set("u_slot_count", static_cast<unsigned>(slots));
@@ -287,19 +363,20 @@ void SparseVoxelOctree::resolve_and_mipmap(const passes::PassContext& context) {
     // Half floats hold up to 65504: the pool stores radiance relative to the brightest voxel.
     radiance_scale_ = counts_.max_radiance > 0.0f && std::isfinite(counts_.max_radiance) ? 1.0f / counts_.max_radiance
                                                                                           : 1.0f;
+    if (dense_) allocate_dense_pool();
     glBindImageTexture(VCT_IMAGE_POOL, pool_.id(), 0, GL_TRUE, 0, GL_READ_WRITE, GL_RGBA16F);
 
     {
         gpu::GpuTimers::Scope timing(context.timers, "vct_bricks");
         const gpu::ShaderProgram& resolve =
-            context.shaders.get(gpu::ProgramSource::compute_shader("vct/resolve_bricks.comp"));
+            context.shaders.get(gpu::ProgramSource::compute_shader("vct/resolve_bricks.comp", program_defines()));
         set_octree_uniforms(resolve);
         resolve.set("u_leaf_count", static_cast<unsigned>(counts_.leaves));
         resolve.set("u_radiance_scale", radiance_scale_);
-        resolve.dispatch_threads(counts_.leaves * 27);
+        resolve.dispatch_threads(dense_ ? slot_count() : counts_.leaves * 27);
         glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
     }
-    if (!anisotropic) {
+    if (!anisotropic || dense_) {
         directional_pool_ = gpu::Texture();
     } else if (!directional_pool_) {
         // Inner nodes come before the last leaves: their bricks, six each, indexed by node.
@@ -317,22 +394,28 @@ void SparseVoxelOctree::resolve_and_mipmap(const passes::PassContext& context) {
         directional_pool_.set_filter(GL_LINEAR, GL_LINEAR);
         directional_pool_.set_wrap(GL_CLAMP_TO_EDGE);
     }
-    if (anisotropic) {
+    if (directional_pool_) {
         glBindImageTexture(VCT_IMAGE_DIRECTIONAL_POOL, directional_pool_.id(), 0, GL_TRUE, 0, GL_READ_WRITE,
                            GL_RGBA16F);
     }
     gpu::GpuTimers::Scope timing(context.timers, "vct_mipmap");
-    const gpu::ShaderProgram& mipmap = context.shaders.get(gpu::ProgramSource::compute_shader(
-        "vct/mipmap.comp", anisotropic ? std::vector<std::string>{"ANISOTROPIC"} : std::vector<std::string>{}));
+    const gpu::ShaderProgram& mipmap =
+        context.shaders.get(gpu::ProgramSource::compute_shader("vct/mipmap.comp", program_defines()));
     set_octree_uniforms(mipmap);
     for (int level = grid_.leaf_level - 1; level >= 0; --level) {
         mipmap.set("u_level", static_cast<unsigned>(level));
+        // Anisotropic levels above the leaves take a thread per direction (see mipmap.comp).
+        const std::size_t per_voxel = anisotropic && level + 1 < grid_.leaf_level ? 6 : 1;
+        if (dense_) {
+            const auto side = static_cast<std::size_t>((2 << level) + 1);
+            mipmap.dispatch_threads(side * side * side * per_voxel);
+            glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+            continue;
+        }
         for (const LevelRange& range : levels_[static_cast<std::size_t>(level)]) {
             mipmap.set("u_first_node", static_cast<unsigned>(range.first));
             mipmap.set("u_node_count", static_cast<unsigned>(range.count));
-            // Anisotropic levels above the leaves take a thread per direction (see mipmap.comp).
-            const bool per_direction = anisotropic && level + 1 < grid_.leaf_level;
-            mipmap.dispatch_threads(range.count * 27 * (per_direction ? 6 : 1));
+            mipmap.dispatch_threads(range.count * 27 * per_voxel);
         }
         glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
     }
@@ -343,7 +426,7 @@ void SparseVoxelOctree::bind_for_tracing(const gpu::ShaderProgram& program) cons
     set_octree_uniforms(program);
     bind_buffers();
     glBindTextureUnit(VCT_UNIT_POOL, pool_.id());
-    program.set("u_pool_texel", glm::vec3(1.0f / static_cast<float>(pool_.width())));
+    program.set("u_pool_texel", 1.0f / glm::vec3(pool_.desc().width, pool_.desc().height, pool_.desc().depth));
     if (directional_pool_) {
         glBindTextureUnit(VCT_UNIT_DIRECTIONAL_POOL, directional_pool_.id());
         const float side = static_cast<float>(directional_pool_.width());
@@ -366,6 +449,11 @@ void SparseVoxelOctree::set_octree_uniforms(const gpu::ShaderProgram& program) c
     program.set("u_lattice_spacing", grid_.spacing);
     program.set("u_bricks_per_axis", static_cast<unsigned>(std::max(bricks_per_axis_, 1)));
     program.set("u_inner_bricks_per_axis", static_cast<unsigned>(std::max(inner_bricks_per_axis_, 1)));
+    if (dense_) {
+        program.set("u_dense_side", static_cast<unsigned>(grid_.lattice_max() + 1));
+        glProgramUniform1iv(program.id(), glGetUniformLocation(program.id(), "u_dense_z"),
+                            static_cast<GLsizei>(dense_z_.size()), dense_z_.data());
+    }
     const bool has_dynamic = levels_.size() > 1 && levels_.back().size() > 1;
     program.set("u_first_leaf", static_cast<unsigned>(levels_.empty() ? 0 : levels_.back().front().first));
     program.set("u_static_leaf_count", static_cast<unsigned>(static_leaves_));

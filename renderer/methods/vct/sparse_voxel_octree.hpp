@@ -11,6 +11,9 @@
 //   leaf slot, the leaf bricks, and the Gaussian mipmap of every inner level.
 // - Bricks: 3x3x3 voxels on node corners in one RGBA16F 3D pool (premultiplied radiance, opacity),
 //   brick i of node i, so hardware trilinear filtering works inside a brick.
+// - Dense variant: the same passes over every level's full lattice in one 3D texture, no nodes.
+// - Dynamic part: nodes for moving objects appended after the static tree, which is restored from
+//   a copy before each update and never rebuilt.
 #pragma once
 
 #include "renderer/passes/light_view_maps.hpp"
@@ -64,7 +67,12 @@ public:
 
     // The static part: the objects `include` accepts, voxelized, subdivided and summed from scratch
     // over a grid fitted to the whole scene. Drops any dynamic part.
-    void build(const passes::PassContext& context, int resolution, const ObjectFilter& include);
+    // `dense`: the same pipeline over the full lattice of every level in one 3D texture, with no
+    // nodes (the sparse-versus-dense trade, measured).
+    void build(const passes::PassContext& context, int resolution, const ObjectFilter& include, bool dense);
+    bool dense() const { return dense_; }
+    // The defines every program that reads the structure needs (DENSE, ANISOTROPIC).
+    std::vector<std::string> program_defines() const;
     // The dynamic part (paper §4.2.2): the static tree is restored as the build left it, then the
     // objects `include` accepts are voxelized and their nodes appended after the static ones, so the
     // static part is never rebuilt. The light must be injected again afterwards.
@@ -76,7 +84,7 @@ public:
                 const ConeSettings* second_bounce);
     int bounces() const { return bounces_; }
     bool anisotropic() const { return anisotropic_; }
-    bool built() const { return node_count_ > 0; }
+    bool built() const { return built_; }
 
     // Binds the node buffers and the brick pool, and sets the octree uniforms of vct/octree.glsl
     // and the pool's of vct/cone_trace.frag.
@@ -97,6 +105,9 @@ private:
     // Sizes the leaf data for every leaf, keeping the first `kept_slots` slots, and sums the fragments.
     void accumulate_leaves(const passes::PassContext& context, std::size_t kept_slots);
     void allocate_pools();
+    void allocate_dense_pool();
+    // Leaf data slots: 8 per leaf, or one per lattice point (dense).
+    std::size_t slot_count() const;
     // Scales the leaf radiance into the pool, fills the leaf bricks and mipmaps every inner level.
     void resolve_and_mipmap(const passes::PassContext& context);
     void ensure_node_capacity(std::size_t nodes);
@@ -123,6 +134,10 @@ private:
     int bricks_per_axis_ = 0;
     int inner_bricks_per_axis_ = 0;
     bool anisotropic_ = false;
+    bool dense_ = false;
+    bool built_ = false;
+    std::array<int, 60> dense_z_{};  // VCT_MAX_DENSE_LAYERS: first z of each level's layer
+    bool dense_pool_anisotropic_ = false;
     int bounces_ = 1;
     float radiance_scale_ = 1.0f;
     Counts counts_;

@@ -110,8 +110,11 @@ public:
             {"octree_leaf_data", octree_.leaf_bytes(),
              "per leaf voxel: surface area, albedo, normal, emission, radiance (for re-injection)"},
             {"brick_pool", octree_.pool_bytes(),
-             fmt::format("{} bricks of 3x3x3 RGBA16F voxels, one per node{}", counts.nodes,
-                         octree_.anisotropic() ? ", and six directional bricks per inner node" : "")}};
+             octree_.dense()
+                 ? fmt::format("dense: every level's full lattice of RGBA16F voxels ({}^3 at the leaves){}",
+                               octree_.grid().lattice_max() + 1, octree_.anisotropic() ? ", inner levels six times" : "")
+                 : fmt::format("{} bricks of 3x3x3 RGBA16F voxels, one per node{}", counts.nodes,
+                               octree_.anisotropic() ? ", and six directional bricks per inner node" : "")}};
         if (specular_albedo_) {
             structures.push_back({"specular_albedo", specular_albedo_.bytes(),
                                   "the specular lobe's directional albedo for the specular cone (a material is glossy)"});
@@ -127,6 +130,7 @@ public:
                 {"octree_dynamic_nodes", static_cast<double>(counts.dynamic_nodes)},
                 {"light_injections", static_cast<double>(injections_)},
                 {"octree_levels", static_cast<double>(octree_.grid().leaf_level + 1)},
+                {"dense", octree_.dense() ? 1.0 : 0.0},
                 {"octree_nodes", static_cast<double>(counts.nodes)},
                 {"octree_leaves", static_cast<double>(counts.leaves)},
                 {"octree_bricks", static_cast<double>(counts.nodes)},
@@ -146,7 +150,9 @@ private:
     bool update_octree(const FrameContext& frame) {
         const scene::Scene& scene = frame.scene;
         const int resolution = frame.knob_int("resolution");
-        const bool fresh = !octree_.built() || resolution != resolution_ || scene.objects.size() != build_transforms_.size();
+        const bool dense = frame.knob_int("dense") != 0;
+        const bool fresh = !octree_.built() || resolution != resolution_ || dense != octree_.dense() ||
+                           scene.objects.size() != build_transforms_.size();
         if (fresh) dynamic_.assign(scene.objects.size(), false);
         bool newly_dynamic = false;
         if (!fresh) {
@@ -161,7 +167,7 @@ private:
         auto is_dynamic = [this](std::size_t object) { return static_cast<bool>(dynamic_[object]); };
         bool changed = false;
         if (fresh || newly_dynamic) {
-            octree_.build(frame, resolution, is_static);
+            octree_.build(frame, resolution, is_static, dense);
             resolution_ = resolution;
             build_transforms_.clear();
             for (const scene::Object& object : scene.objects) build_transforms_.push_back(object.transform);
@@ -202,8 +208,7 @@ private:
 
     void trace(const FrameContext& frame, bool ambient_occlusion) {
         gpu::GpuTimers::Scope timing(frame.timers, "vct_cone_trace");
-        std::vector<std::string> defines;
-        if (octree_.anisotropic()) defines.push_back("ANISOTROPIC");
+        std::vector<std::string> defines = octree_.program_defines();
         // No specular cone, and no albedo table, where no material has a specular lobe.
         const bool specular = frame.knob_int("specular") != 0 && has_specular_lobe(frame.scene);
         if (specular) {
@@ -267,6 +272,7 @@ MethodInfo method_info() {
         {"step", 0.05, 4, false, "cone march step in cone diameters"},
         {"specular", 0, 1, true, "1: a specular cone for glossy materials (none where no material is glossy)"},
         {"bounces", 1, 2, true, "indirect bounces: 1, or 2 (the leaves gather the first bounce before the pixels do)"},
+        {"dense", 0, 1, true, "1: the same pipeline over a dense 3D texture of every level instead of the sparse octree"},
         {"anisotropic", 0, 1, true, "1: six directional voxels per inner voxel (paper §9); 0: one isotropic"},
         {"light_view_size", 16, 4096, true, "texels per side of each light-view map (photons per light view)"},
         {"shadow_map_size", 16, 8192, true, "texels per side of each shadow map (direct light)"},
@@ -274,7 +280,7 @@ MethodInfo method_info() {
         {"ao_lambda", 0, 1e6, false, "ambient occlusion falloff 1 / (1 + lambda r), per metre"}};
     auto preset = [](double resolution, double cones, double step, double light_view, double shadow) {
         return KnobValues{{"resolution", resolution}, {"diffuse_cones", cones}, {"aperture", 0},
-                          {"step", step}, {"specular", 1}, {"bounces", 1}, {"anisotropic", 1}, {"light_view_size", light_view}, {"shadow_map_size", shadow},
+                          {"step", step}, {"specular", 1}, {"bounces", 1}, {"dense", 0}, {"anisotropic", 1}, {"light_view_size", light_view}, {"shadow_map_size", shadow},
                           {"ao", 0}, {"ao_lambda", 1}};
     };
     info.presets = {{"draft", preset(24, 6, 1.0, 128, 512)},
