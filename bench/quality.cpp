@@ -142,6 +142,17 @@ void write_csv(const fs::path& path, const std::vector<Row>& rows) {
     }
 }
 
+// A square frame of linear radiance only (no display image).
+RenderRequest linear_request(const std::string& method, const std::string& preset, methods::KnobValues knobs, int size) {
+    RenderRequest request;
+    request.method = method;
+    request.preset = preset;
+    request.knobs = std::move(knobs);
+    request.width = request.height = size;
+    request.make_display_image = false;
+    return request;
+}
+
 // vct in detail: per-pass GPU ms of a cold frame (octree built, light injected, mipmapped, cones
 // traced) and of a warm one (cones only), with the octree's size, at each preset and frame size.
 std::string vct_passes_markdown(Renderer& renderer, const scene::Scene& scene, const std::vector<int>& sizes) {
@@ -155,12 +166,7 @@ std::string vct_passes_markdown(Renderer& renderer, const scene::Scene& scene, c
         for (const auto& preset : methods::preset_names()) {
             for (const int dense : {0, 1}) {
                 auto resources = renderer.upload(scene);
-                RenderRequest request;
-                request.method = "vct";
-                request.preset = preset;
-                request.knobs = {{"dense", dense}};
-                request.width = request.height = size;
-                request.make_display_image = false;
+                const RenderRequest request = linear_request("vct", preset, {{"dense", dense}}, size);
                 const RenderResult cold = renderer.render(*resources, request);
                 const RenderResult warm = renderer.render(*resources, request);
                 std::map<std::string, double> ms;
@@ -206,21 +212,14 @@ std::string leak_markdown(Renderer& renderer, const scene::Scene& scene, const i
     auto resources = renderer.upload(scene);
     for (const auto& preset : methods::preset_names()) {
         for (const int anisotropic : {1, 0}) {
-            RenderRequest request;
-            request.method = "vct";
-            request.preset = preset;
-            request.knobs = {{"anisotropic", anisotropic}};
-            request.width = request.height = size;
-            request.make_display_image = false;
+            const RenderRequest request = linear_request("vct", preset, {{"anisotropic", anisotropic}}, size);
             const double leak = leak_of(renderer.render(*resources, request).frame);
             md += fmt::format("| vct | {} | {} | {:.4f} |\n", preset, anisotropic ? "on" : "off", leak);
             log::info("bench", "thin_wall leak vct {} anisotropic={}: {:.4f}", preset, anisotropic, leak);
         }
     }
-    RenderRequest direct;
-    direct.width = direct.height = size;
-    direct.make_display_image = false;
-    md += fmt::format("| direct | medium | — | {:.4f} |\n", leak_of(renderer.render(*resources, direct).frame));
+    md += fmt::format("| direct | medium | — | {:.4f} |\n",
+                      leak_of(renderer.render(*resources, linear_request("direct", "medium", {}, size)).frame));
     return md;
 }
 
@@ -325,11 +324,7 @@ int main(int argc, char** argv) {
             for (const auto& method : registry.names()) {
                 if (registry.find(method).device != methods::MethodDevice::gpu) continue;  // measured below
                 for (const auto& preset : methods::preset_names()) {
-                    RenderRequest request;
-                    request.method = method;
-                    request.preset = preset;
-                    request.width = request.height = options.size;
-                    request.make_display_image = false;
+                    const RenderRequest request = linear_request(method, preset, {}, options.size);
                     renderer.render(*resources, request);  // warm-up: shaders, structures
                     std::vector<RenderResult> results;
                     for (int r = 0; r < options.repeats; ++r) results.push_back(renderer.render(*resources, request));

@@ -28,27 +28,13 @@ vec4 sample_level(vec3 world, uint level, vec3 direction) {
     float side = exp2(float(level));
     if (any(lessThan(q, vec3(0.0))) || any(greaterThan(q, vec3(2.0 * side)))) return vec4(0.0);
 #ifdef DENSE
-    // Every lattice point is a texel of its level's layer.
-    vec3 texel = q + 0.5;
-#ifdef ANISOTROPIC
-    if (level < u_leaf_level) {
-        vec3 share = direction * direction;
-        vec4 value = vec4(0.0);
-        for (uint axis = 0u; axis < 3u; ++axis) {
-            if (share[axis] <= 0.0) continue;
-            uint k = 2u * axis + (direction[axis] >= 0.0 ? 0u : 1u);
-            vec3 layer = vec3(0.0, 0.0, float(u_dense_z[level * 6u + k]));
-            value += share[axis] * textureLod(u_pool, (texel + layer) * u_pool_texel, 0.0);
-        }
-        return value;
-    }
-#endif
-    return textureLod(u_pool, (texel + vec3(0.0, 0.0, float(u_dense_z[level * 6u]))) * u_pool_texel, 0.0);
+    vec3 texel = q + 0.5;  // every lattice point is a texel of its level's layer
 #else
     uvec3 cell = uvec3(min(floor(q * 0.5), vec3(side - 1.0)));
     uint node = find_node(cell, level);
     if (node == VCT_NODE_NONE) return vec4(0.0);
     vec3 in_brick = (q - 2.0 * vec3(cell)) + 0.5;
+#endif
 #ifdef ANISOTROPIC
     if (level < u_leaf_level) {
         vec3 share = direction * direction;
@@ -56,12 +42,20 @@ vec4 sample_level(vec3 world, uint level, vec3 direction) {
         for (uint axis = 0u; axis < 3u; ++axis) {
             if (share[axis] <= 0.0) continue;
             uint k = 2u * axis + (direction[axis] >= 0.0 ? 0u : 1u);
-            vec3 texel = vec3(directional_brick_origin(node, k)) + in_brick;
-            value += share[axis] * textureLod(u_directional_pool, texel * u_directional_pool_texel, 0.0);
+#ifdef DENSE
+            vec3 uvw = (texel + vec3(0.0, 0.0, float(u_dense_z[level * 6u + k]))) * u_pool_texel;
+            value += share[axis] * textureLod(u_pool, uvw, 0.0);
+#else
+            vec3 uvw = (vec3(directional_brick_origin(node, k)) + in_brick) * u_directional_pool_texel;
+            value += share[axis] * textureLod(u_directional_pool, uvw, 0.0);
+#endif
         }
         return value;
     }
 #endif
+#ifdef DENSE
+    return textureLod(u_pool, (texel + vec3(0.0, 0.0, float(u_dense_z[level * 6u]))) * u_pool_texel, 0.0);
+#else
     return textureLod(u_pool, (vec3(brick_origin(node)) + in_brick) * u_pool_texel, 0.0);
 #endif
 }
