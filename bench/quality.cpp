@@ -190,25 +190,7 @@ std::string vct_passes_markdown(Renderer& renderer, const scene::Scene& scene, c
 // the method's mean radiance over those pixels, relative to the reference's mean over the lit ones.
 std::string leak_markdown(Renderer& renderer, const scene::Scene& scene, const image::Frame& truth, int size) {
     std::string md = "| method | preset | anisotropic | leak (dark-pixel mean / lit-pixel mean) |\n|---|---|---|---|\n";
-    auto leak_of = [&](const image::Frame& frame) {
-        double dark = 0.0, lit = 0.0;
-        std::size_t dark_count = 0, lit_count = 0;
-        for (int y = 0; y < size; ++y) {
-            for (int x = 0; x < size; ++x) {
-                const glm::vec4 r = truth.at(x, y);
-                const glm::vec4 t = frame.at(x, y);
-                if (r.a <= 0.0f) continue;  // no geometry
-                if (r.r + r.g + r.b == 0.0f) {
-                    dark += (t.r + t.g + t.b) / 3.0;
-                    ++dark_count;
-                } else {
-                    lit += (r.r + r.g + r.b) / 3.0;
-                    ++lit_count;
-                }
-            }
-        }
-        return dark_count && lit > 0.0 ? (dark / dark_count) / (lit / lit_count) : 0.0;
-    };
+    auto leak_of = [&](const image::Frame& frame) { return image::leak(frame, truth).ratio; };
     auto resources = renderer.upload(scene);
     for (const auto& preset : methods::preset_names()) {
         for (const int anisotropic : {1, 0}) {

@@ -50,4 +50,29 @@ ErrorMetrics compare(const Frame& test, const Frame& reference) {
     return metrics;
 }
 
+Leak leak(const Frame& test, const Frame& reference) {
+    BOUNCE_CHECK(test.width == reference.width && test.height == reference.height &&
+                     test.rgba.size() == reference.rgba.size(),
+                 "cannot measure leakage of a {}x{} image against a {}x{} reference", test.width, test.height,
+                 reference.width, reference.height);
+    Leak result;
+    double dark = 0.0, lit = 0.0;
+    for (std::size_t i = 0; i + 3 < reference.rgba.size(); i += 4) {
+        const float* r = &reference.rgba[i];
+        const float* t = &test.rgba[i];
+        if (!(r[3] > 0.0f) || !finite_rgb(r) || !finite_rgb(t)) continue;
+        if (r[0] == 0.0f && r[1] == 0.0f && r[2] == 0.0f) {
+            dark += (t[0] + t[1] + t[2]) / 3.0;
+            ++result.dark_pixels;
+        } else {
+            lit += (r[0] + r[1] + r[2]) / 3.0;
+            ++result.lit_pixels;
+        }
+    }
+    if (result.dark_pixels > 0 && result.lit_pixels > 0 && lit > 0.0) {
+        result.ratio = (dark / static_cast<double>(result.dark_pixels)) / (lit / static_cast<double>(result.lit_pixels));
+    }
+    return result;
+}
+
 }  // namespace bounce::image

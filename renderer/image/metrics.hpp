@@ -22,4 +22,14 @@ struct ErrorMetrics {
 // is non-finite are counted and left out of the error sums.
 ErrorMetrics compare(const Frame& test, const Frame& reference);
 
+// Light leaking into regions the reference proves dark: the test's mean RGB radiance over the
+// pixels where the reference has geometry (alpha > 0) and exactly zero radiance, relative to the
+// reference's mean over its lit pixels. 0 when either set is empty. Throws Error on a size mismatch.
+struct Leak {
+    double ratio = 0.0;
+    std::size_t dark_pixels = 0;
+    std::size_t lit_pixels = 0;
+};
+Leak leak(const Frame& test, const Frame& reference);
+
 }  // namespace bounce::image

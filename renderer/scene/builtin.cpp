@@ -47,6 +47,20 @@ Material lambertian(const std::string& name, const glm::vec3& reflectance) {
     return material;
 }
 
+// A one-primitive mesh, appended to the scene, and an object that places it at `origin` (metres).
+Object mesh_object(Scene& scene, const std::string& name, Primitive primitive, const glm::vec3& origin) {
+    Mesh mesh;
+    mesh.name = name;
+    mesh.bounds = primitive.bounds;
+    mesh.primitives.push_back(std::move(primitive));
+    scene.meshes.push_back(std::move(mesh));
+    Object object;
+    object.name = name;
+    object.mesh = static_cast<int>(scene.meshes.size()) - 1;
+    object.initial_transform = object.transform = glm::translate(glm::mat4(1.0f), origin);
+    return object;
+}
+
 // A block from its five published faces (mm), as an object whose origin is its base centre.
 Object add_block(Scene& scene, const std::string& name, const std::array<Quad, 5>& faces_mm, int material) {
     glm::vec3 centre_mm(0.0f);
@@ -54,23 +68,13 @@ Object add_block(Scene& scene, const std::string& name, const std::array<Quad, 5
         for (const glm::vec3& p : face) centre_mm += p / 20.0f;
     const glm::vec3 origin{centre_mm.x * kMillimetre, 0.0f, centre_mm.z * kMillimetre};
 
-    Mesh mesh;
-    mesh.name = name;
     Primitive primitive;
     primitive.material = material;
     for (const Quad& face : faces_mm) {
         const glm::vec3 face_centre = (face[0] + face[1] + face[2] + face[3]) * 0.25f;
         add_quad(primitive, face, face_centre - centre_mm, origin);  // outward
     }
-    mesh.bounds = primitive.bounds;
-    mesh.primitives.push_back(std::move(primitive));
-    scene.meshes.push_back(std::move(mesh));
-
-    Object object;
-    object.name = name;
-    object.mesh = static_cast<int>(scene.meshes.size()) - 1;
-    object.initial_transform = object.transform = glm::translate(glm::mat4(1.0f), origin);
-    return object;
+    return mesh_object(scene, name, std::move(primitive), origin);
 }
 
 }  // namespace
@@ -149,8 +153,6 @@ Scene make_cornell_box() {
 int add_box(Scene& scene, const std::string& name, const glm::vec3& lo, const glm::vec3& hi, int material) {
     const glm::vec3 centre = (lo + hi) * 0.5f;
     const glm::vec3 a = (lo - centre) / kMillimetre, b = (hi - centre) / kMillimetre;
-    Mesh mesh;
-    mesh.name = name;
     Primitive primitive;
     primitive.material = material;
     const std::array<std::pair<Quad, glm::vec3>, 6> faces{{
@@ -162,14 +164,7 @@ int add_box(Scene& scene, const std::string& name, const glm::vec3& lo, const gl
         {{{{a.x, a.y, b.z}, {b.x, a.y, b.z}, {b.x, b.y, b.z}, {a.x, b.y, b.z}}}, {0, 0, 1}},
     }};
     for (const auto& [quad, facing] : faces) add_quad(primitive, quad, facing, glm::vec3(0.0f));
-    mesh.bounds = primitive.bounds;
-    mesh.primitives.push_back(std::move(primitive));
-    scene.meshes.push_back(std::move(mesh));
-    Object object;
-    object.name = name;
-    object.mesh = static_cast<int>(scene.meshes.size()) - 1;
-    object.initial_transform = object.transform = glm::translate(glm::mat4(1.0f), centre);
-    scene.objects.push_back(object);
+    scene.objects.push_back(mesh_object(scene, name, std::move(primitive), centre));
     return static_cast<int>(scene.objects.size()) - 1;
 }
 

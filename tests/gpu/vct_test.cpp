@@ -181,24 +181,9 @@ TEST(Vct, ThinWallLeaksLittleLight) {
     scene::add_box(scene, "slab", {-0.01f, 0.36f, -0.01f}, {0.57f, 0.38f, 0.57f}, 0);
     const image::Frame truth = reference_frame(scene, 1, false, 16);
     auto leak_of = [&](const image::Frame& frame) {
-        double dark = 0.0, lit = 0.0;
-        std::size_t dark_count = 0, lit_count = 0;
-        for (int y = 0; y < kSize; ++y) {
-            for (int x = 0; x < kSize; ++x) {
-                const glm::vec4 r = truth.at(x, y);
-                if (r.a <= 0.0f) continue;
-                if (r.r + r.g + r.b == 0.0f) {
-                    const glm::vec4 t = frame.at(x, y);
-                    dark += (t.r + t.g + t.b) / 3.0;
-                    ++dark_count;
-                } else {
-                    lit += (r.r + r.g + r.b) / 3.0;
-                    ++lit_count;
-                }
-            }
-        }
-        EXPECT_GT(dark_count, static_cast<std::size_t>(kSize * kSize / 2));  // most of the view is below
-        return (dark / static_cast<double>(dark_count)) / (lit / static_cast<double>(lit_count));
+        const image::Leak leak = image::leak(frame, truth);
+        EXPECT_GT(leak.dark_pixels, static_cast<std::size_t>(kSize * kSize / 2));  // most of the view is below
+        return leak.ratio;
     };
     const double anisotropic = leak_of(render_vct(scene, "medium").frame);
     const double isotropic = leak_of(render_vct(scene, "medium", {{"anisotropic", 0}}).frame);

@@ -53,6 +53,29 @@ TEST(Metrics, NonFinitePixelsAreCountedAndLeftOut) {
     EXPECT_EQ(m.rel_mse, 0.0);
 }
 
+// Two dark pixels of the reference get 0.1 and 0.3 (mean 0.2); its two lit pixels average 2:
+// ratio 0.1. A pixel without geometry is ignored.
+TEST(Metrics, LeakIsDarkPixelMeanOverLitPixelMean) {
+    Frame reference = constant(5, 1, 0.0f), test = constant(5, 1, 0.0f);
+    auto set = [](Frame& frame, int x, float value, float alpha) {
+        for (int c = 0; c < 3; ++c) frame.rgba[static_cast<std::size_t>(x) * 4 + c] = value;
+        frame.rgba[static_cast<std::size_t>(x) * 4 + 3] = alpha;
+    };
+    set(reference, 0, 0.0f, 1.0f);
+    set(reference, 1, 0.0f, 1.0f);
+    set(reference, 2, 1.0f, 1.0f);
+    set(reference, 3, 3.0f, 1.0f);
+    set(reference, 4, 0.0f, 0.0f);
+    set(test, 0, 0.1f, 1.0f);
+    set(test, 1, 0.3f, 1.0f);
+    set(test, 4, 50.0f, 1.0f);
+    const Leak leak = image::leak(test, reference);
+    EXPECT_EQ(leak.dark_pixels, 2u);
+    EXPECT_EQ(leak.lit_pixels, 2u);
+    EXPECT_NEAR(leak.ratio, 0.1, 1e-7);
+    EXPECT_EQ(image::leak(reference, reference).ratio, 0.0);
+}
+
 TEST(Metrics, SizeMismatchIsAnError) {
     EXPECT_THROW(compare(constant(2, 2, 0.0f), constant(2, 3, 0.0f)), Error);
 }
