@@ -127,6 +127,10 @@ void Framebuffer::attach_depth_layer(const Texture& texture, int layer, int leve
     glNamedFramebufferTextureLayer(id(), GL_DEPTH_ATTACHMENT, texture.id(), level, layer);
 }
 
+void Framebuffer::attach_depth_stencil(const Texture& texture) {
+    glNamedFramebufferTexture(id(), GL_DEPTH_STENCIL_ATTACHMENT, texture.id(), 0);
+}
+
 void Framebuffer::set_draw_buffers(int count) {
     GLenum buffers[8];
     for (int i = 0; i < count && i < 8; ++i) buffers[i] = GL_COLOR_ATTACHMENT0 + i;

@@ -114,6 +114,7 @@ public:
     void attach_color_layer(int index, const Texture& texture, int layer, int level = 0);
     void attach_depth(const Texture& texture, int level = 0);
     void attach_depth_layer(const Texture& texture, int layer, int level = 0);
+    void attach_depth_stencil(const Texture& texture);  // a GL_DEPTH24_STENCIL8 texture
     void set_draw_buffers(int count);
     // Throws Error with the status name and `what` when incomplete.
     void check_complete(const char* what) const;

@@ -28,6 +28,13 @@ void StateCache::apply(const PipelineState& state) {
             glBlendFunc(GL_ONE, GL_ONE);
         }
     }
+    if (all || old.stencil != state.stencil) {
+        set_enabled(GL_STENCIL_TEST, state.stencil != Stencil::none);
+        // The write mask also gates stencil clears, so it stays open unless a pass only tests.
+        glStencilMask(state.stencil == Stencil::marked ? 0x00 : 0xFF);
+        glStencilFunc(state.stencil == Stencil::marked ? GL_EQUAL : GL_ALWAYS, 1, 0xFF);
+        glStencilOp(GL_KEEP, GL_KEEP, state.stencil == Stencil::mark ? GL_REPLACE : GL_KEEP);
+    }
     if (all || old.polygon_offset_factor != state.polygon_offset_factor ||
         old.polygon_offset_units != state.polygon_offset_units) {
         const bool offset = state.polygon_offset_factor != 0.0f || state.polygon_offset_units != 0.0f;

@@ -10,6 +10,9 @@ namespace bounce::gpu {
 
 enum class Blend { none, additive };
 enum class Cull { none, back, front };
+// Stencil use, always with reference value 1: `mark` writes 1 where fragments pass, `marked` keeps
+// only fragments where 1 was written (and writes nothing).
+enum class Stencil { none, mark, marked };
 
 struct PipelineState {
     bool depth_test = false;
@@ -17,6 +20,7 @@ struct PipelineState {
     GLenum depth_func = GL_LESS;
     Cull cull = Cull::none;
     Blend blend = Blend::none;
+    Stencil stencil = Stencil::none;
     // Depth offset for shadow-map rendering (glPolygonOffset); 0,0 disables it.
     float polygon_offset_factor = 0.0f;
     float polygon_offset_units = 0.0f;

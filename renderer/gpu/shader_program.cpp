@@ -176,6 +176,10 @@ void ShaderProgram::set(std::string_view name, const glm::mat4& value) const {
     glProgramUniformMatrix4fv(id(), location(name), 1, GL_FALSE, glm::value_ptr(value));
 }
 
+void ShaderProgram::set(std::string_view name, const glm::ivec2& value) const {
+    glProgramUniform2iv(id(), location(name), 1, glm::value_ptr(value));
+}
+
 void ShaderProgram::set(std::string_view name, const glm::ivec3& value) const {
     glProgramUniform3iv(id(), location(name), 1, glm::value_ptr(value));
 }

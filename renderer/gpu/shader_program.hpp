@@ -57,6 +57,7 @@ public:
     void set(std::string_view name, const glm::vec4& value) const;
     void set(std::string_view name, const glm::mat3& value) const;
     void set(std::string_view name, const glm::mat4& value) const;
+    void set(std::string_view name, const glm::ivec2& value) const;
     void set(std::string_view name, const glm::ivec3& value) const;
     void set(std::string_view name, unsigned value) const;
 

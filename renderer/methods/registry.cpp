@@ -2,6 +2,7 @@
 
 #include "renderer/base/error.hpp"
 #include "renderer/methods/direct/direct_method.hpp"
+#include "renderer/methods/isr/isr_method.hpp"
 #include "renderer/methods/vct/vct_method.hpp"
 #include "renderer/reference/reference_method.hpp"
 
@@ -27,6 +28,7 @@ const MethodRegistry& MethodRegistry::builtin() {
         MethodRegistry r;
         r.add(direct::method_info());
         r.add(vct::method_info());
+        r.add(isr::method_info());
         r.add(reference::method_info());
         return r;
     }();

@@ -22,7 +22,7 @@ std::vector<LightViewMaps::View> light_views(const scene::Light& light, std::siz
         for (int face = 0; face < 6; ++face) {
             const float texel = 2.0f / texels;  // tan(45 degrees) = 1
             views.push_back({index, projection * glm::lookAt(light.position, light.position + forward[face], up[face]),
-                             forward[face], texel * texel});
+                             forward[face], light.position, false, texel * texel});
         }
         return views;
     }
@@ -34,7 +34,7 @@ std::vector<LightViewMaps::View> light_views(const scene::Light& light, std::siz
         views.push_back({index,
                          glm::perspective(2.0f * half_angle, 1.0f, far * 1e-4f, far) *
                              glm::lookAt(light.position, light.position + direction, up_for(direction)),
-                         direction, texel * texel});
+                         direction, light.position, false, texel * texel});
         return views;
     }
     const glm::vec3 center = bounds.center();
@@ -43,9 +43,28 @@ std::vector<LightViewMaps::View> light_views(const scene::Light& light, std::siz
     views.push_back({index,
                      glm::ortho(-radius, radius, -radius, radius, radius * 0.5f, 3.0f * radius) *
                          glm::lookAt(center - direction * (2.0f * radius), center, up_for(direction)),
-                     direction, texel * texel});
+                     direction, center - direction * (2.0f * radius), true, texel * texel});
     return views;
 }
+
+namespace {
+// Whether every corner of the box lies outside one and the same clip plane of the view (then no
+// surface inside the box can reach the view). Exact in homogeneous clip space, corners behind the
+// eye included.
+bool frustum_misses(const glm::mat4& view_projection, const scene::Aabb& bounds) {
+    int outside[6] = {0, 0, 0, 0, 0, 0};
+    for (int corner = 0; corner < 8; ++corner) {
+        const glm::vec4 c = view_projection * glm::vec4(bounds.corner(corner), 1.0f);
+        outside[0] += c.x > c.w;
+        outside[1] += c.x < -c.w;
+        outside[2] += c.y > c.w;
+        outside[3] += c.y < -c.w;
+        outside[4] += c.z > c.w;
+        outside[5] += c.z < -c.w;
+    }
+    return std::any_of(std::begin(outside), std::end(outside), [](int count) { return count == 8; });
+}
+}  // namespace
 
 bool LightViewMaps::render(const PassContext& context, int size) {
     const std::uint64_t fingerprint = light_view_fingerprint(context.scene, size);
@@ -54,12 +73,18 @@ bool LightViewMaps::render(const PassContext& context, int size) {
     fingerprint_ = fingerprint;
     ++frames_drawn_;
     views_.clear();
+    views_culled_ = 0;
     const scene::Aabb bounds = context.scene.world_bounds();
     if (!bounds.empty()) {
         for (std::size_t i = 0; i < context.scene.lights.size(); ++i) {
             if (!has_power(context.scene.lights[i])) continue;  // no power: no photons
-            const auto light = light_views(context.scene.lights[i], i, bounds, size);
-            views_.insert(views_.end(), light.begin(), light.end());
+            for (const View& view : light_views(context.scene.lights[i], i, bounds, size)) {
+                if (frustum_misses(view.view_projection, bounds)) {
+                    ++views_culled_;
+                } else {
+                    views_.push_back(view);
+                }
+            }
         }
     }
     const int layers = std::max<int>(1, static_cast<int>(views_.size()));

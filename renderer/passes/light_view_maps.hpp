@@ -1,7 +1,8 @@
 // Light-view maps (reflective shadow maps): the scene rasterized from every light with power, one
 // view per spot or directional light and six per point light, each texel holding the world
-// position, normal and base colour of the surface the light reaches first. Every texel is a photon:
-// `photon_flux` in shaders/common/light_view.glsl gives the flux it carries. Maps are kept while the
+// position, normal and diffuse albedo of the surface the light reaches first. Every texel is a
+// photon: `photon_flux` in shaders/common/light_view.glsl gives the flux it carries. Views whose
+// frustum misses the scene's bounds (cube faces looking out of a room's corner) are not drawn. Maps are kept while the
 // lights, the object transforms and the size stay the same.
 #pragma once
 
@@ -18,6 +19,8 @@ public:
         std::size_t light = 0;
         glm::mat4 view_projection{1.0f};
         glm::vec3 forward{0.0f, 0.0f, -1.0f};
+        glm::vec3 origin{0.0f};  // the light's position; orthographic views: the eye behind the scene
+        bool orthographic = false;
         // Perspective views: the solid angle of a texel on the view axis (it falls off as cos^3
         // off-axis). Orthographic views: the area of a texel.
         float texel_measure = 0.0f;
@@ -30,9 +33,11 @@ public:
     // Texture arrays, one layer per view.
     const gpu::Texture& position() const { return position_; }  // RGBA32F: world position, w = 1 where hit
     const gpu::Texture& normal() const { return normal_; }      // RGBA16F: shading normal
-    const gpu::Texture& albedo() const { return albedo_; }      // RGBA8: base colour
+    const gpu::Texture& albedo() const { return albedo_; }      // RGBA8: diffuse albedo
     std::size_t bytes() const;
     std::size_t frames_drawn() const { return frames_drawn_; }
+    // Views of lights with power that were not drawn because they cannot see the scene.
+    std::size_t views_culled() const { return views_culled_; }
 
 private:
     std::vector<View> views_;
@@ -41,6 +46,7 @@ private:
     gpu::Framebuffer framebuffer_;
     std::uint64_t fingerprint_ = 0;
     std::size_t frames_drawn_ = 0;
+    std::size_t views_culled_ = 0;
 };
 
 // The views a light's maps are drawn from (its cube faces, its cone, or an orthographic box around

@@ -78,9 +78,22 @@ struct SurfaceHit {
     glm::vec3 emitted{0.0f};  // radiance towards the incoming ray
     bool front = true;
     std::uint32_t object = 0, primitive = 0, triangle = 0;
+    float distance = 0.0f;  // ray parameter of the hit (world units: ray directions are unit)
 };
 
 }  // namespace
+
+void check_settings(const PathTracerSettings& settings) {
+    if (settings.indirect_visibility) return;
+    if (settings.ambient_occlusion) {
+        throw InputError("reference: indirect_visibility = 0 does not apply to ambient occlusion (ao = 1)");
+    }
+    if (settings.max_bounces != 1) {
+        throw InputError(fmt::format("reference: indirect_visibility = 0 needs bounces = 1 (visibility is dropped on "
+                                     "the single indirect segment only), got bounces = {}",
+                                     settings.max_bounces));
+    }
+}
 
 struct PathTracer::Impl {
     const scene::Scene& scene;
@@ -205,7 +218,8 @@ struct PathTracer::Impl {
         return 2e-5f * magnitude;
     }
 
-    bool intersect(const glm::vec3& origin, const glm::vec3& direction, SurfaceHit& hit) const {
+    // The first surface along the ray beyond `tnear`.
+    bool intersect(const glm::vec3& origin, const glm::vec3& direction, SurfaceHit& hit, float tnear = 0.0f) const {
         RTCIntersectContext context;
         rtcInitIntersectContext(&context);
         RTCRayHit ray_hit{};
@@ -215,7 +229,7 @@ struct PathTracer::Impl {
         ray_hit.ray.dir_x = direction.x;
         ray_hit.ray.dir_y = direction.y;
         ray_hit.ray.dir_z = direction.z;
-        ray_hit.ray.tnear = 0.0f;
+        ray_hit.ray.tnear = tnear;
         ray_hit.ray.tfar = kInfinity;
         ray_hit.ray.mask = 0xFFFFFFFFu;
         ray_hit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
@@ -226,6 +240,7 @@ struct PathTracer::Impl {
         hit.object = ray_hit.hit.instID[0];
         hit.primitive = ray_hit.hit.geomID;
         hit.triangle = ray_hit.hit.primID;
+        hit.distance = ray_hit.ray.tfar;
         const scene::Object& object = scene.objects[hit.object];
         const scene::Primitive& primitive = scene.meshes[object.mesh].primitives[hit.primitive];
         const std::uint32_t i0 = primitive.indices[3 * hit.triangle], i1 = primitive.indices[3 * hit.triangle + 1],
@@ -377,16 +392,74 @@ struct PathTracer::Impl {
         return 1.0f - 1.0f / (1.0f + lambda * distance);
     }
 
-    glm::vec3 trace(glm::vec3 origin, glm::vec3 direction, int max_bounces, Random& random) const {
+    // The back of a single-sided surface absorbs, as it is culled in raster.
+    bool absorbs(const SurfaceHit& hit) const {
+        return !hit.front &&
+               !scene.material(scene.meshes[scene.objects[hit.object].mesh].primitives[hit.primitive].material).double_sided;
+    }
+
+    // MIS weight of emission found at `next` by a BRDF-sampled ray (density `brdf_pdf`, solid
+    // angle) from `from`, against sampling that emitter from `from` by light sampling.
+    float emission_weight(const SurfaceHit& from, const SurfaceHit& next, const glm::vec3& direction,
+                          float brdf_pdf) const {
+        const int base = emitter_base[next.object].empty() ? -1 : emitter_base[next.object][next.primitive];
+        if (base < 0) return 1.0f;
+        const glm::vec3 to = next.position - from.position;
+        const float d2 = glm::dot(to, to);
+        const float cos_light = std::abs(glm::dot(next.geometric_normal, direction));
+        const float light_pdf =
+            cos_light > 0.0f ? emitter_area_pdf(base + static_cast<int>(next.triangle)) * d2 / cos_light : 0.0f;
+        return brdf_pdf * brdf_pdf / (brdf_pdf * brdf_pdf + light_pdf * light_pdf);
+    }
+
+    // What `hit` reflects towards v of direct light alone, as the last vertex of a path estimates
+    // it: next-event estimation plus the MIS-weighted emission a BRDF-sampled ray finds.
+    glm::vec3 reflected_direct(const SurfaceHit& hit, const glm::vec3& v, Random& random) const {
+        if (absorbs(hit)) return glm::vec3(0.0f);
+        glm::vec3 total = direct_light(hit, v, random);
+        const scene::BrdfSample sample =
+            scene::sample_brdf(hit.material, hit.shading_normal, v, random.next(), random.next(), random.next());
+        if (!(sample.pdf > 0.0f) || glm::dot(sample.l, hit.geometric_normal) <= 0.0f) return total;
+        const float cos_theta = glm::dot(hit.shading_normal, sample.l);
+        const glm::vec3 weight =
+            scene::evaluate_brdf(hit.material, hit.shading_normal, v, sample.l) * (cos_theta / sample.pdf);
+        if (!(luminance(weight) > 0.0f)) return total;
+        SurfaceHit next;
+        if (!intersect(offset(hit, sample.l), sample.l, next)) return total;
+        if (glm::dot(next.emitted, glm::vec3(1.0f)) > 0.0f) {
+            total += weight * next.emitted * emission_weight(hit, next, sample.l, sample.pdf);
+        }
+        return total;
+    }
+
+    // indirect_visibility = false (max_bounces 1, checked by check_settings): the indirect ray
+    // from the first vertex `x` gathers the reflected direct light of every surface it crosses.
+    // Only the first surface's emission counts: emitters behind it are direct light, occluded.
+    glm::vec3 gather_without_visibility(const SurfaceHit& x, const glm::vec3& origin, const glm::vec3& direction,
+                                        float brdf_pdf, Random& random) const {
+        glm::vec3 total(0.0f);
+        float tnear = 0.0f;
+        for (bool first = true;; first = false) {
+            SurfaceHit y;
+            if (!intersect(origin, direction, y, tnear)) break;
+            if (first && glm::dot(y.emitted, glm::vec3(1.0f)) > 0.0f) {
+                total += y.emitted * emission_weight(x, y, direction, brdf_pdf);
+            }
+            total += reflected_direct(y, -direction, random);
+            // Past this surface (and a coincident one, such as the twin of a shared edge).
+            tnear = std::max(y.distance * (1.0f + 1e-5f) + epsilon(y.position), std::nextafter(y.distance, kInfinity));
+        }
+        return total;
+    }
+
+    glm::vec3 trace(glm::vec3 origin, glm::vec3 direction, int max_bounces, bool indirect_visibility,
+                    Random& random) const {
         glm::vec3 radiance(0.0f), throughput(1.0f);
         SurfaceHit hit;
         if (!intersect(origin, direction, hit)) return radiance;
         radiance += hit.emitted;
         for (int bounce = 0;; ++bounce) {
-            if (!hit.front && !scene.material(scene.meshes[scene.objects[hit.object].mesh]
-                                                  .primitives[hit.primitive].material).double_sided) {
-                break;  // the back of a single-sided surface absorbs, as it is culled in raster
-            }
+            if (absorbs(hit)) break;
             const glm::vec3 v = -direction;
             radiance += throughput * direct_light(hit, v, random);
             // The BRDF-sampled continuation: its emitter hit is weighted against light sampling.
@@ -398,21 +471,14 @@ struct PathTracer::Impl {
             if (!(luminance(throughput) > 0.0f)) break;
             origin = offset(hit, sample.l);
             direction = sample.l;
+            if (!indirect_visibility) {
+                radiance += throughput * gather_without_visibility(hit, origin, direction, sample.pdf, random);
+                break;
+            }
             SurfaceHit next;
             if (!intersect(origin, direction, next)) break;
             if (glm::dot(next.emitted, glm::vec3(1.0f)) > 0.0f) {
-                const int base = emitter_base[next.object].empty() ? -1 : emitter_base[next.object][next.primitive];
-                float weight = 1.0f;
-                if (base >= 0) {
-                    const glm::vec3 to = next.position - hit.position;
-                    const float d2 = glm::dot(to, to);
-                    const float cos_light = std::abs(glm::dot(next.geometric_normal, direction));
-                    const float light_pdf = cos_light > 0.0f
-                                                ? emitter_area_pdf(base + static_cast<int>(next.triangle)) * d2 / cos_light
-                                                : 0.0f;
-                    weight = sample.pdf * sample.pdf / (sample.pdf * sample.pdf + light_pdf * light_pdf);
-                }
-                radiance += throughput * next.emitted * weight;
+                radiance += throughput * next.emitted * emission_weight(hit, next, direction, sample.pdf);
             }
             if (bounce >= max_bounces) break;
             hit = next;
@@ -455,6 +521,7 @@ std::uint64_t PathTracer::rays_traced() const { return impl_->rays.load(); }
 void PathTracer::render(Accumulator& accumulator, const scene::Camera& camera, int count,
                         const PathTracerSettings& settings) const {
     BOUNCE_CHECK(count >= 0, "sample count {}", count);
+    check_settings(settings);
     const int width = accumulator.width(), height = accumulator.height();
     const float aspect = static_cast<float>(width) / static_cast<float>(height);
     const glm::mat4 inverse = glm::inverse(camera.projection(aspect, camera.far_plane_for(impl_->scene.world_bounds())) *
@@ -477,7 +544,8 @@ void PathTracer::render(Accumulator& accumulator, const scene::Camera& camera, i
                         const glm::vec3 radiance =
                             settings.ambient_occlusion
                                 ? glm::vec3(impl_->ambient_occlusion(camera.position, direction, settings.ao_lambda, random))
-                                : impl_->trace(camera.position, direction, settings.max_bounces, random);
+                                : impl_->trace(camera.position, direction, settings.max_bounces,
+                                               settings.indirect_visibility, random);
                         // A non-finite sample would poison the pixel forever: it is dropped (counted as 0).
                         if (std::isfinite(radiance.r) && std::isfinite(radiance.g) && std::isfinite(radiance.b)) {
                             sum += glm::dvec3(radiance);

@@ -10,6 +10,9 @@
 //   random numbers derived from (seed, p, s) alone, so rendering samples 0..N and then N..M gives
 //   exactly the image of 0..M at once (progressive refinement).
 // - An ambient-occlusion mode (see PathTracerSettings) measures the AO methods.
+// - indirect_visibility = false (with max_bounces 1) drops visibility on the one indirect segment,
+//   as instant-radiosity / RSM methods do: the first vertex gathers the reflected direct light of
+//   every surface its indirect ray crosses, not just the first one.
 // - Objects are Embree instances of per-mesh scenes: moving an object updates its instance
 //   transform and rebuilds only the top level.
 #pragma once
@@ -34,7 +37,16 @@ struct PathTracerSettings {
     // with f(r) = 1 / (1 + lambda r). Written to RGB alike; 0 where a camera ray hits nothing.
     bool ambient_occlusion = false;
     float ao_lambda = 1.0f;  // per metre
+    // false: the indirect ray from the first camera hit x passes through every surface y it
+    // crosses, adding what each y reflects of direct light (emission and shadow rays at y as for a
+    // visible y; emission only from the first y). Direct light at x is unchanged. Needs
+    // max_bounces 1 and no ambient occlusion (check_settings).
+    bool indirect_visibility = true;
 };
+
+// Throws InputError for settings that contradict each other (indirect_visibility = false with
+// max_bounces other than 1, or with ambient occlusion). render() checks them too.
+void check_settings(const PathTracerSettings& settings);
 
 // Running sums of radiance samples per pixel; frame() gives their mean.
 class Accumulator {

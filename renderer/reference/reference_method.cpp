@@ -11,9 +11,13 @@ methods::MethodInfo method_info() {
                   {"bounces", 0, 64, true, "indirect bounces (0: direct light only)"},
                   {"seed", 0, 4294967295.0, true, "random seed; the same seed gives the same image"},
                   {"ao", 0, 1, true, "1: ambient occlusion instead of radiance"},
-                  {"ao_lambda", 0, 1e6, false, "ambient occlusion falloff 1 / (1 + lambda r), per metre"}};
+                  {"ao_lambda", 0, 1e6, false, "ambient occlusion falloff 1 / (1 + lambda r), per metre"},
+                  {"indirect_visibility", 0, 1, true,
+                   "0: the indirect ray gathers direct light from every surface it crosses, unoccluded, as "
+                   "instant-radiosity / RSM methods do (needs bounces = 1)"}};
     auto preset = [](double spp) {
-        return methods::KnobValues{{"spp", spp}, {"bounces", 4}, {"seed", 1}, {"ao", 0}, {"ao_lambda", 1}};
+        return methods::KnobValues{{"spp", spp}, {"bounces", 4}, {"seed", 1}, {"ao", 0}, {"ao_lambda", 1},
+                                   {"indirect_visibility", 1}};
     };
     info.presets = {{"draft", preset(4)}, {"low", preset(16)}, {"medium", preset(64)}, {"high", preset(256)},
                     {"ultra", preset(1024)}};
@@ -27,6 +31,8 @@ ReferenceRequest request_from_knobs(const methods::KnobValues& knobs) {
     request.settings.seed = static_cast<std::uint64_t>(knobs.at("seed"));
     request.settings.ambient_occlusion = knobs.at("ao") != 0.0;
     request.settings.ao_lambda = static_cast<float>(knobs.at("ao_lambda"));
+    request.settings.indirect_visibility = knobs.at("indirect_visibility") != 0.0;
+    check_settings(request.settings);  // InputError: the daemon answers with an error reply
     return request;
 }
 

@@ -2,6 +2,7 @@
 // A light-view map texel: the surface a light reaches first (passes/light_view_maps.hpp).
 #include "common/shared_layout.h"
 #include "common/material.glsl"
+#include "common/brdf.glsl"
 
 in vec3 v_position;
 in vec3 v_normal;
@@ -16,5 +17,6 @@ void main() {
     SurfacePoint s = evaluate_surface(v_normal, v_tangent, v_uv, gl_FrontFacing);
     out_position = vec4(v_position, 1.0);
     out_normal = vec4(s.normal, 0.0);
-    out_albedo = vec4(s.base_color, 1.0);
+    // What the surface re-emits diffusely of the light it receives (virtual point lights).
+    out_albedo = vec4(diffuse_albedo(SurfaceMaterial(s.base_color, s.metallic, s.roughness, s.specular)), 1.0);
 }

@@ -2,12 +2,10 @@
 // Light injection (paper §8.2): every texel of a light-view map is a photon that carries the flux
 // the light sends through it, splatted into the leaf slots of the voxels where it lands (counted
 // per voxel: a photon that reaches both of its pair counts twice).
-// Point and spot views are perspective: a texel subtends u_texel_measure * cos^3 of its angle off
-// the axis. Directional views are orthographic: a texel is u_texel_measure of area under the
-// light's irradiance.
+// The flux per texel is common/light_view.glsl's photon_flux.
 layout(local_size_x = 64) in;
 #include "common/compute.glsl"
-#include "common/lights.glsl"
+#include "common/light_view.glsl"
 #include "vct/octree.glsl"
 #include "vct/leaf_data.glsl"
 
@@ -34,15 +32,7 @@ void main() {
     vec3 normal = texelFetch(u_view_normal, texel, 0).xyz;
     PunctualLight light = PunctualLight(u_light_type, u_light_position, u_light_direction, u_light_radiant,
                                         u_light_cos_inner, u_light_cos_outer);
-    vec3 flux;
-    if (u_light_type == BOUNCE_LIGHT_DIRECTIONAL) {
-        flux = u_light_radiant * u_texel_measure;
-    } else {
-        vec3 direction = normalize(position.xyz - u_light_position);
-        float cos_axis = dot(direction, u_view_forward);
-        flux = u_light_radiant * (u_texel_measure * cos_axis * cos_axis * cos_axis);
-        if (u_light_type == BOUNCE_LIGHT_SPOT) flux *= spot_attenuation(light, dot(direction, u_light_direction));
-    }
+    vec3 flux = photon_flux(light, position.xyz, u_view_forward, u_texel_measure);
     if (!(max(flux.r, max(flux.g, flux.b)) > 0.0)) return;
     vec3 n = safe_normalize(normal, u_view_forward);
     SurfaceVoxels voxels = surface_voxels(position.xyz, n, dominant_axis(n));

@@ -1,0 +1,222 @@
+#include "renderer/methods/isr/isr_method.hpp"
+
+#include "renderer/methods/isr/multires_buffer.hpp"
+#include "renderer/methods/isr/vpl_tree.hpp"
+#include "renderer/passes/direct_light_pass.hpp"
+#include "renderer/passes/light_view_maps.hpp"
+
+#include "common/shared_layout.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+namespace bounce::methods::isr {
+namespace {
+
+const char* mode_name(int mode) {
+    switch (mode) {
+        case ISR_MODE_NAIVE: return "naive RSM sampling";
+        case ISR_MODE_BASIC: return "basic image-space radiosity";
+        default: return "hierarchical image-space radiosity";
+    }
+}
+
+// The largest power of two not above `texels` (the VPL tree halves each level exactly).
+int power_of_two_floor(int texels) {
+    int size = 1;
+    while (size * 2 <= texels) size *= 2;
+    return size;
+}
+
+class IsrMethod final : public Method {
+public:
+    std::string_view name() const override { return "isr"; }
+
+    void render(const FrameContext& frame) override {
+        gbuffer_.render(frame);
+        shadows_.render(frame, frame.knob_int("shadow_map_size"));
+        direct_light_.render(frame, gbuffer_, shadows_);
+        if (frame.scene.world_bounds().empty()) return;
+
+        mode_ = frame.knob_int("mode");
+        const bool maps_drawn = light_views_.render(frame, power_of_two_floor(frame.knob_int("rsm_size")));
+        const bool tree_built = tree_.build(frame, light_views_, maps_drawn,
+                                            {static_cast<float>(frame.knob("depth_threshold")),
+                                             static_cast<float>(frame.knob("normal_threshold"))});
+        finest_level_ = std::max(0, tree_.top_level() - frame.knob_int("max_depth"));
+        if (mode_ != ISR_MODE_HIERARCHICAL && (tree_built || mode_ != cache_mode_ || finest_level_ != cache_level_)) {
+            tree_.select(frame, mode_, finest_level_);
+            cache_mode_ = mode_;
+            cache_level_ = finest_level_;
+            cached_vpls_ = tree_.cached_vpls();
+        }
+
+        if (!counters_) counters_ = gpu::Buffer(ISR_COUNTERS * sizeof(std::uint32_t), nullptr, GL_DYNAMIC_STORAGE_BIT);
+        const std::array<std::uint32_t, ISR_COUNTERS> zero{};
+        counters_.upload(0, sizeof(zero), zero.data());
+        glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ISR_BINDING_COUNTERS, counters_.id());
+
+        multires_.refine(frame, gbuffer_,
+                         {frame.knob_int("levels"), static_cast<float>(frame.knob("depth_threshold")),
+                          static_cast<float>(frame.knob("normal_threshold"))});
+        gather(frame);
+        multires_.upsample(frame);
+        composite(frame);
+        read_counters();
+    }
+
+    std::vector<ResidentStructure> resident() const override {
+        return {
+            {"gbuffer", gbuffer_.bytes(), "surface attributes at the frame size"},
+            {"shadow_maps", shadows_.bytes(), fmt::format("direct light: {} lights with power", shadows_.map_count())},
+            {"reflective_shadow_maps", light_views_.bytes(),
+             fmt::format("VPLs: {} light views of {}^2 texels ({} views that cannot see the scene not drawn)",
+                         light_views_.views().size(), light_views_.size(), light_views_.views_culled())},
+            {"vpl_tree", tree_.bytes(),
+             fmt::format("{}: {} patches from each texel up to {}^2 per view, and the VPL cache", mode_name(mode_),
+                         tree_.nodes(), ISR_TOP_PATCHES)},
+            {"multires_atlas", multires_.bytes(),
+             fmt::format("{} eye-space levels: irradiance, min-max depth and normals, stencil", multires_.levels())}};
+    }
+
+    std::map<std::string, double> statistics() const override {
+        std::map<std::string, double> stats = {
+            {"mode", static_cast<double>(mode_)},
+            {"rsm_views", static_cast<double>(light_views_.views().size())},
+            {"rsm_views_culled", static_cast<double>(light_views_.views_culled())},
+            {"rsm_size", static_cast<double>(light_views_.size())},
+            {"rsm_draws", static_cast<double>(light_views_.frames_drawn())},
+            {"vpl_tree_builds", static_cast<double>(tree_.builds())},
+            {"vpl_tree_nodes", static_cast<double>(tree_.nodes())},
+            {"vpl_finest_patch_texels", static_cast<double>(1 << finest_level_)},
+            {"multires_levels", static_cast<double>(multires_.levels())},
+            {"multires_fragments", static_cast<double>(fragments_)},
+            {"vpls_per_fragment_mean", fragments_ > 0 ? static_cast<double>(vpls_gathered_) / fragments_ : 0.0},
+            {"vpls_per_fragment_max", static_cast<double>(vpls_max_)},
+            {"resident_bytes", static_cast<double>(gbuffer_.bytes() + shadows_.bytes() + light_views_.bytes() +
+                                                   tree_.bytes() + multires_.bytes())}};
+        if (mode_ != ISR_MODE_HIERARCHICAL) stats["vpl_cache"] = static_cast<double>(cached_vpls_);
+        for (int level = 0; level < multires_.levels(); ++level) {
+            stats[fmt::format("multires_fragments_level_{}", level)] = static_cast<double>(level_fragments_[level]);
+        }
+        return stats;
+    }
+
+private:
+    // The gather, in draws of bounded work per fragment (GPU watchdogs, and software rasterizers'
+    // loop limits, cut long draws short): VPL-cache ranges, or ranges of top patches whose whole
+    // subtrees fit the same budget.
+    void gather(const FrameContext& frame) {
+        gpu::GpuTimers::Scope timing(frame.timers, "isr_gather");
+        constexpr std::size_t kVplsPerDraw = 16384;
+        const bool hierarchical = mode_ == ISR_MODE_HIERARCHICAL;
+        const gpu::ShaderProgram& program = frame.shaders.get(
+            {"common/fullscreen.vert", "isr/gather.frag", hierarchical ? std::vector<std::string>{}
+                                                                       : std::vector<std::string>{"VPL_CACHE"}});
+        program.use();
+        multires_.set_layout(program);
+        tree_.bind(program);
+        program.set("u_finest_level", finest_level_);
+        program.set("u_tau", static_cast<float>(frame.knob("tau")));
+        program.set("u_scene_radius", std::max(0.5f * glm::length(frame.scene.world_bounds().extent()), 1e-30f));
+        gbuffer_.bind_textures();
+        multires_.begin_gather(frame);
+        std::size_t items = cached_vpls_, per_draw = kVplsPerDraw;
+        if (hierarchical) {
+            const std::size_t top_side = static_cast<std::size_t>(tree_.size() >> tree_.top_level());
+            items = top_side * top_side * static_cast<std::size_t>(tree_.views());
+            std::size_t subtree = 0;  // nodes under one top patch, down to the finest level
+            for (int level = finest_level_; level <= tree_.top_level(); ++level) subtree += std::size_t{1} << (2 * (tree_.top_level() - level));
+            per_draw = std::max<std::size_t>(1, kVplsPerDraw / subtree);
+        }
+        for (std::size_t first = 0; first == 0 || first < items; first += per_draw) {
+            program.set("u_batch_first", static_cast<unsigned>(first));
+            program.set("u_batch_count", static_cast<unsigned>(std::min(per_draw, items - std::min(items, first))));
+            program.set("u_first_batch", first == 0 ? 1 : 0);
+            triangle_.draw();
+        }
+        multires_.count_gathered(frame);
+    }
+
+    void composite(const FrameContext& frame) {
+        gpu::GpuTimers::Scope timing(frame.timers, "isr_composite");
+        const gpu::ShaderProgram& program = frame.shaders.get({"common/fullscreen.vert", "isr/composite.frag", {}});
+        program.use();
+        gbuffer_.bind_textures();
+        glBindTextureUnit(BOUNCE_UNIT_HDR_INPUT, multires_.irradiance().id());
+        glBindFramebuffer(GL_FRAMEBUFFER, frame.output.id());
+        glViewport(0, 0, frame.width, frame.height);
+        frame.state.apply({.blend = gpu::Blend::additive});
+        triangle_.draw();
+    }
+
+    void read_counters() {
+        std::array<std::uint32_t, ISR_COUNTERS> counters{};
+        glGetNamedBufferSubData(counters_.id(), 0, sizeof(counters), counters.data());
+        fragments_ = 0;
+        for (int level = 0; level < ISR_MAX_LEVELS; ++level) {
+            level_fragments_[level] = counters[ISR_COUNTER_LEVEL_FRAGMENTS + level];
+            fragments_ += counters[ISR_COUNTER_LEVEL_FRAGMENTS + level];
+        }
+        vpls_gathered_ = (static_cast<std::uint64_t>(counters[ISR_COUNTER_VPLS_HIGH]) << 32) |
+                         counters[ISR_COUNTER_VPLS_LOW];
+        vpls_max_ = counters[ISR_COUNTER_VPLS_MAX];
+    }
+
+    passes::GBufferPass gbuffer_;
+    passes::ShadowMaps shadows_;
+    passes::DirectLightPass direct_light_;
+    passes::LightViewMaps light_views_;
+    VplTree tree_;
+    MultiresolutionBuffer multires_;
+    passes::FullscreenTriangle triangle_;
+    gpu::Buffer counters_;
+    int mode_ = ISR_MODE_HIERARCHICAL;
+    int finest_level_ = 0;
+    int cache_mode_ = -1, cache_level_ = -1;
+    std::uint32_t cached_vpls_ = 0;
+    std::array<std::uint64_t, ISR_MAX_LEVELS> level_fragments_{};
+    std::uint64_t fragments_ = 0, vpls_gathered_ = 0, vpls_max_ = 0;
+};
+
+}  // namespace
+
+MethodInfo method_info() {
+    MethodInfo info;
+    info.name = "isr";
+    info.description = "hierarchical image-space radiosity: direct light plus one diffuse bounce gathered from "
+                       "reflective-shadow-map VPLs at multiresolution eye-space patches (no indirect visibility)";
+    info.indirect_bounces = 1;
+    info.knobs = {
+        {"rsm_size", 16, 2048, true, "texels per side of each reflective shadow map (rounded down to a power of two)"},
+        {"levels", 1, ISR_MAX_LEVELS, true, "eye-space multiresolution levels (1: gather at every pixel)"},
+        {"depth_threshold", 0, 10, false,
+         "relative depth span that splits a patch, in eye and light space (0: full resolution)"},
+        {"normal_threshold", 0, 2, false, "normal-component span that splits a patch, in eye and light space"},
+        {"mode", 0, 2, true, "0: naive RSM sampling, 1: basic (per-frame light patches), 2: hierarchical (VPL tree)"},
+        {"tau", 0, 1e6, false,
+         "hierarchical: open a light patch while the bound on its irradiance exceeds tau times the irradiance all "
+         "reflected flux gives from the scene's radius (0: every VPL of the finest level)"},
+        {"max_depth", 0, ISR_MAX_TREE_LEVELS - 1, true,
+         "light-patch levels below the 16^2 top patches that traversal (or basic clustering, or naive sampling) may "
+         "reach"},
+        {"shadow_map_size", 16, 8192, true, "texels per side of each shadow map (direct light)"}};
+    auto preset = [](double rsm, double levels, double depth, double normal, double tau, double max_depth) {
+        return KnobValues{{"rsm_size", rsm},     {"levels", levels}, {"depth_threshold", depth},
+                          {"normal_threshold", normal}, {"mode", ISR_MODE_HIERARCHICAL}, {"tau", tau},
+                          {"max_depth", max_depth}, {"shadow_map_size", 2048}};
+    };
+    info.presets = {{"draft", preset(64, 5, 0.1, 0.5, 0.05, 2)},
+                    {"low", preset(128, 5, 0.05, 0.4, 0.02, 3)},
+                    {"medium", preset(128, 4, 0.03, 0.3, 0.01, 3)},
+                    {"high", preset(256, 4, 0.02, 0.2, 0.005, 4)},
+                    {"ultra", preset(256, 3, 0.01, 0.1, 0.002, 4)}};
+    info.create = [] { return std::make_unique<IsrMethod>(); };
+    return info;
+}
+
+}  // namespace bounce::methods::isr
