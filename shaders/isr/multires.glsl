@@ -26,6 +26,7 @@ bool patch_empty(vec4 depth) { return depth.z <= 0.0; }
 
 bool patch_discontinuous(vec4 depth, vec3 normal_min, vec3 normal_max) {
     if (depth.z < 1.0) return true;  // part background, part surface
-    if (depth.y - depth.x > u_depth_threshold * depth.x) return true;
-    return any(greaterThan(normal_max - normal_min, vec3(u_normal_threshold)));
+    // Spans at the threshold split too, so 0 means full resolution even on fronto-parallel walls.
+    if (depth.y - depth.x >= u_depth_threshold * depth.x) return true;
+    return any(greaterThanEqual(normal_max - normal_min, vec3(u_normal_threshold)));
 }

@@ -68,8 +68,8 @@ void main() {
             if (empty(children[c])) continue;
             radius = max(radius, distance(children[c].position_area.xyz, position) + children[c].normal_radius.w);
         }
-        bool discontinuous = flagged || covered < 4 || far - near > u_depth_threshold * near ||
-                             any(greaterThan(normal_max - normal_min, vec3(u_normal_threshold)));
+        bool discontinuous = flagged || covered < 4 || far - near >= u_depth_threshold * near ||
+                             any(greaterThanEqual(normal_max - normal_min, vec3(u_normal_threshold)));
         node.position_area = vec4(position, area);
         node.normal_radius = vec4(normal, radius);
         node.flux_far = vec4(flux, far);

@@ -1,6 +1,7 @@
 // Method `isr` against the path-traced reference with the one bounce it models: with indirect
-// visibility (the truth) and without it (what the paper's method approximates), per preset, per
-// mode and at the thresholds' limits; its VPL tree kept while only the camera moves.
+// visibility (the truth) and without it (what the paper's method computes: every directly lit
+// surface lights every point it faces), per preset, per light type and at the thresholds' limits;
+// its upsampling, its VPL selection modes, and what it keeps between frames.
 #include "gpu_fixture.hpp"
 #include "renderer/image/metrics.hpp"
 #include "renderer/reference/path_tracer.hpp"
@@ -8,6 +9,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 
 namespace bounce::test {
@@ -24,35 +27,269 @@ image::Frame reference_frame(const scene::Scene& scene, bool indirect_visibility
     return tracer.render(scene.cameras[0], kSize, kSize, spp, settings);
 }
 
-RenderResult render_isr(const scene::Scene& scene, const std::string& preset, methods::KnobValues knobs = {}) {
+// The Cornell box's two references, traced once for the whole test program.
+const image::Frame& cornell_reference(bool indirect_visibility) {
+    static const image::Frame with = reference_frame(scene::make_cornell_box(), true, 1024);
+    static const image::Frame without = reference_frame(scene::make_cornell_box(), false, 1024);
+    return indirect_visibility ? with : without;
+}
+
+RenderRequest isr_request(const std::string& preset, methods::KnobValues knobs = {}) {
     RenderRequest request;
     request.method = "isr";
     request.preset = preset;
     request.knobs = std::move(knobs);
     request.width = request.height = kSize;
-    return render_scene(scene, request);
+    return request;
 }
 
-TEST(Isr, Explore) {
-    const scene::Scene scene = scene::make_cornell_box();
-    const image::Frame truth = reference_frame(scene, true, 1024);
-    const image::Frame unoccluded = reference_frame(scene, false, 1024);
-    const image::ErrorMetrics vis = image::compare(unoccluded, truth);
-    std::printf("no-vis reference vs reference: relMSE %.4f mean %.4f vs %.4f\n", vis.rel_mse, vis.mean_test, vis.mean_reference);
-    for (const std::string preset : {"draft", "low", "medium", "high", "ultra"}) {
-        for (int mode : {0, 1, 2}) {
-            const auto result = render_isr(scene, preset, {{"mode", mode}});
-            const image::ErrorMetrics a = image::compare(result.frame, truth);
-            const image::ErrorMetrics b = image::compare(result.frame, unoccluded);
-            double ms = 0; for (const auto& t : result.stats.passes) if (t.pass.rfind("isr", 0) == 0 || t.pass == "light_view_maps") ms += t.gpu_ms;
-            std::printf("%.1f ms ", ms);
-            std::printf("isr %-6s mode %d relMSE %.4f (no-vis %.4f) mean %.4f vs %.4f / %.4f  vpl/frag %.0f max %.0f frags %.0f\n",
-                        preset.c_str(), mode, a.rel_mse, b.rel_mse, a.mean_test, a.mean_reference, b.mean_reference,
-                        result.stats.method_statistics.at("vpls_per_fragment_mean"),
-                        result.stats.method_statistics.at("vpls_per_fragment_max"),
-                        result.stats.method_statistics.at("multires_fragments"));
-        }
+RenderResult render_isr(const scene::Scene& scene, const std::string& preset, methods::KnobValues knobs = {}) {
+    return render_scene(scene, isr_request(preset, std::move(knobs)));
+}
+
+// Every pixel gathers, from every light-view texel: no eye-space or light-space clustering left.
+const methods::KnobValues kFullGather = {{"levels", 1}, {"mode", 2}, {"tau", 0}, {"max_depth", 11}};
+
+// `direct` with isr's shadow maps: subtracted from an isr frame, it leaves the indirect light.
+image::Frame direct_frame(const scene::Scene& scene) {
+    RenderRequest request;
+    request.method = "direct";
+    request.preset = "high";
+    request.knobs = {{"shadow_map_size", 2048}};
+    request.width = request.height = kSize;
+    return render_scene(scene, request).frame;
+}
+
+image::Frame difference(image::Frame a, const image::Frame& b) {
+    for (std::size_t i = 0; i < a.rgba.size(); ++i) {
+        if (i % 4 != 3) a.rgba[i] -= b.rgba[i];
     }
+    return a;
+}
+
+double stat(const RenderResult& result, const char* name) { return result.stats.method_statistics.at(name); }
+
+// A floor, and a wall behind it lit by `light`; the floor's light is mostly what the wall reflects.
+// Seen from above.
+scene::Scene wall_and_floor(const scene::Light& light) {
+    scene::Scene scene;
+    scene.materials.push_back(matte({0.8f, 0.8f, 0.8f}));
+    scene.materials.push_back(matte({0.9f, 0.5f, 0.3f}));
+    add_square(scene, "floor", {0.0f, 0.0f, 0.0f}, 1.0f, {0.0f, 1.0f, 0.0f}, 0);
+    add_square(scene, "wall", {0.0f, 1.0f, -1.0f}, 1.0f, {0.0f, 0.0f, 1.0f}, 1);
+    scene.lights.push_back(light);
+    scene.cameras.push_back(top_down_camera(3.0f, 0.9f));
+    return scene;
+}
+
+scene::Light light_of_type(scene::LightType type) {
+    scene::Light light;
+    light.type = type;
+    light.position = {0.0f, 1.0f, 0.2f};
+    // Spot: at the wall; directional: down onto the wall and the floor.
+    light.direction = glm::normalize(type == scene::LightType::directional ? glm::vec3(0.0f, -0.5f, -1.0f)
+                                                                            : glm::vec3(0.0f, 0.15f, -1.0f));
+    light.intensity = type == scene::LightType::directional ? 3.0f : 4.0f;
+    light.inner_cone = 0.5f;
+    light.outer_cone = 0.9f;  // wider than the paper's 90-degree spot
+    return light;
+}
+
+// Against the reference with the one bounce isr models, per preset (medium is the default).
+// Measured on llvmpipe (64x64), hierarchical mode: against the reference without indirect
+// visibility, relMSE draft 0.0145, low 0.0130, medium 0.0101, high 0.0059, ultra 0.0045; against
+// the true reference 0.115-0.119 at every preset, means 3% high. The two references differ by
+// relMSE 0.107 (mean 3% apart): nearly all of isr's error is the visibility the paper ignores
+// (the blocks' inner faces and the floor between them receive light through the blocks).
+TEST(Isr, CornellAgainstReferencePerPreset) {
+    const scene::Scene scene = scene::make_cornell_box();
+    const image::Frame& truth = cornell_reference(true);
+    const image::Frame& unoccluded = cornell_reference(false);
+    const double visibility = image::compare(unoccluded, truth).rel_mse;
+    std::printf("reference without indirect visibility: relMSE %.4f against the reference\n", visibility);
+    double previous = 1e30, draft = 0.0, ultra = 0.0;
+    for (const std::string preset : {"draft", "low", "medium", "high", "ultra"}) {
+        const auto result = render_isr(scene, preset);
+        const image::ErrorMetrics error = image::compare(result.frame, truth);
+        const image::ErrorMetrics approximation = image::compare(result.frame, unoccluded);
+        std::printf("isr %-6s relMSE %.4f (without visibility %.4f) mean %.4f vs %.4f; VPLs per fragment %.0f\n",
+                    preset.c_str(), error.rel_mse, approximation.rel_mse, error.mean_test, error.mean_reference,
+                    stat(result, "vpls_per_fragment_mean"));
+        EXPECT_EQ(error.non_finite_test, 0u) << preset;
+        EXPECT_NEAR(error.mean_test, error.mean_reference, 0.06 * error.mean_reference) << preset;
+        EXPECT_LE(error.rel_mse, 0.15) << preset;
+        EXPECT_LE(approximation.rel_mse, 1.10 * previous) << preset;  // tighter thresholds, smaller error
+        if (preset == "high") {
+            EXPECT_LE(approximation.rel_mse, 0.01);
+            // Visibility's share: isr's own approximation is under a tenth of the error.
+            EXPECT_LE(approximation.rel_mse, 0.1 * visibility);
+        }
+        if (preset == "draft") draft = approximation.rel_mse;
+        if (preset == "ultra") ultra = approximation.rel_mse;
+        previous = approximation.rel_mse;
+    }
+    EXPECT_LT(ultra, 0.5 * draft);
+}
+
+// With no clustering left, isr computes exactly the integral the unoccluded reference estimates:
+// measured relMSE 0.0012 with means 0.03% apart. Naive sampling and basic clustering at the finest
+// level gather the same VPLs as the full traversal, so all three give one image.
+TEST(Isr, FullGatherMatchesTheUnoccludedReference) {
+    const scene::Scene scene = scene::make_cornell_box();
+    const auto hierarchical = render_isr(scene, "low", kFullGather);
+    const image::ErrorMetrics error = image::compare(hierarchical.frame, cornell_reference(false));
+    std::printf("full gather: relMSE %.5f mean %.5f vs %.5f\n", error.rel_mse, error.mean_test, error.mean_reference);
+    EXPECT_LE(error.rel_mse, 0.003);
+    EXPECT_NEAR(error.mean_test, error.mean_reference, 0.01 * error.mean_reference);
+
+    methods::KnobValues knobs = kFullGather;
+    knobs["mode"] = 0;
+    const auto naive = render_isr(scene, "low", knobs);
+    knobs["mode"] = 1;
+    knobs["depth_threshold"] = 0;  // every light patch splits: basic keeps every texel
+    knobs["normal_threshold"] = 0;
+    const auto basic = render_isr(scene, "low", knobs);
+    EXPECT_EQ(stat(naive, "vpl_cache"), stat(basic, "vpl_cache"));
+    EXPECT_EQ(stat(hierarchical, "vpls_per_fragment_max"), stat(naive, "vpl_cache"));  // tau 0 opens every patch
+    EXPECT_LE(image::compare(naive.frame, hierarchical.frame).rel_mse, 1e-8);
+    EXPECT_LE(image::compare(basic.frame, hierarchical.frame).rel_mse, 1e-8);
+}
+
+// Eqs. 2-5 for every light type: the full gather's indirect light (isr minus `direct`) against the
+// unoccluded reference's (one bounce minus none) on a wall that lights a floor, with a spot wider
+// than the paper's 90 degrees, a point light (six views) and a directional light (an orthographic
+// view). Measured relMSE: spot 0.0003, point 0.0010, directional 0.0013; means within 1%.
+// (The direct light's own shadow-map error here, relMSE 0.011 point and 0.068 directional against
+// the reference, is not isr's and is taken out.)
+TEST(Isr, EveryLightTypeMatchesTheUnoccludedReference) {
+    for (const auto type : {scene::LightType::spot, scene::LightType::point, scene::LightType::directional}) {
+        const scene::Scene scene = wall_and_floor(light_of_type(type));
+        const auto result = render_isr(scene, "low", kFullGather);
+        reference::PathTracer tracer(scene);
+        reference::PathTracerSettings settings;
+        settings.max_bounces = 0;
+        settings.pixel_jitter = false;
+        const image::Frame truth_direct = tracer.render(scene.cameras[0], kSize, kSize, 64, settings);
+        const image::ErrorMetrics error =
+            image::compare(difference(result.frame, direct_frame(scene)),
+                           difference(reference_frame(scene, false, 1024), truth_direct));
+        std::printf("light type %d: indirect relMSE %.5f mean %.5f vs %.5f, %g views (%g culled)\n",
+                    static_cast<int>(type), error.rel_mse, error.mean_test, error.mean_reference,
+                    stat(result, "rsm_views"), stat(result, "rsm_views_culled"));
+        EXPECT_LE(error.rel_mse, 0.004) << static_cast<int>(type);
+        EXPECT_NEAR(error.mean_test, error.mean_reference, 0.02 * error.mean_reference) << static_cast<int>(type);
+    }
+}
+
+// A point light above everything: its upward cube face sees nothing of the scene and is not drawn,
+// and nothing is lost by it.
+TEST(Isr, LightViewsThatCannotSeeTheSceneAreNotDrawn) {
+    scene::Light light = light_of_type(scene::LightType::point);
+    light.position = {0.0f, 2.5f, 0.0f};
+    const scene::Scene scene = wall_and_floor(light);
+    const auto result = render_isr(scene, "low", kFullGather);
+    EXPECT_EQ(stat(result, "rsm_views"), 5.0);
+    EXPECT_EQ(stat(result, "rsm_views_culled"), 1.0);
+    reference::PathTracer tracer(scene);
+    reference::PathTracerSettings settings;
+    settings.max_bounces = 0;
+    settings.pixel_jitter = false;
+    const image::ErrorMetrics error =
+        image::compare(difference(result.frame, direct_frame(scene)),
+                       difference(reference_frame(scene, false, 1024),
+                                  tracer.render(scene.cameras[0], kSize, kSize, 64, settings)));
+    std::printf("point light above the scene: indirect relMSE %.5f mean %.5f vs %.5f\n", error.rel_mse,
+                error.mean_test, error.mean_reference);
+    EXPECT_LE(error.rel_mse, 0.004);
+    EXPECT_NEAR(error.mean_test, error.mean_reference, 0.02 * error.mean_reference);
+}
+
+// Depth and normal thresholds of zero split every patch: every covered pixel gathers on its own,
+// and the image is the single-level one.
+TEST(Isr, ZeroThresholdsGatherAtEveryPixel) {
+    const scene::Scene scene = scene::make_cornell_box();
+    const auto single = render_isr(scene, "low", {{"levels", 1}});
+    const auto multires = render_isr(scene, "low", {{"levels", 6}, {"depth_threshold", 0}, {"normal_threshold", 0}});
+    EXPECT_EQ(stat(multires, "multires_fragments"), stat(multires, "multires_fragments_level_0"));
+    EXPECT_EQ(stat(multires, "multires_fragments"), stat(single, "multires_fragments"));
+    EXPECT_LE(image::compare(multires.frame, single.frame).rel_mse, 1e-8);
+    // The default thresholds gather at far fewer fragments.
+    const auto coarse = render_isr(scene, "low");
+    EXPECT_LT(stat(coarse, "multires_fragments"), 0.5 * stat(single, "multires_fragments"));
+}
+
+// Upsampling blends neighbouring patches through every level between them: a floor lit by a wall
+// comes out of five levels of patches (up to 16 pixels wide) with no steps at patch borders: on the
+// floor away from the wall, no two neighbouring pixels of indirect light differ much more than the
+// per-pixel gather's neighbours do (nearest-patch upsampling would step by the gradient times a
+// patch width there).
+// Near the wall, where irradiance rises steeply, coarse patches read low: that is the eye-space
+// clustering error the thresholds trade (paper Fig. 9), bounded here by relMSE.
+TEST(Isr, UpsamplingLeavesNoStairSteps) {
+    const scene::Scene scene = wall_and_floor(light_of_type(scene::LightType::spot));
+    const auto fine = render_isr(scene, "low", {{"levels", 1}, {"tau", 0}});
+    const auto coarse = render_isr(scene, "low", {{"levels", 5}, {"tau", 0}, {"depth_threshold", 1}, {"normal_threshold", 1}});
+    EXPECT_GT(stat(coarse, "multires_fragments_level_4"), 0.0);
+    const image::Frame direct = direct_frame(scene);
+    // Largest step of the indirect light between horizontal or vertical neighbours on the floor, away from the wall.
+    auto largest_step = [&](const image::Frame& frame) {
+        double largest = 0.0;
+        for (int y = kSize / 3; y + 1 < kSize; ++y) {
+            for (int x = 0; x + 1 < kSize; ++x) {
+                const glm::vec4 p = frame.at(x, y) - direct.at(x, y), right = frame.at(x + 1, y) - direct.at(x + 1, y),
+                                below = frame.at(x, y + 1) - direct.at(x, y + 1);
+                if (frame.at(x, y).a == 0.0f) continue;
+                if (frame.at(x + 1, y).a != 0.0f) largest = std::max(largest, std::abs(static_cast<double>(right.g) - p.g));
+                if (frame.at(x, y + 1).a != 0.0f) largest = std::max(largest, std::abs(static_cast<double>(below.g) - p.g));
+            }
+        }
+        return largest;
+    };
+    const double fine_step = largest_step(fine.frame), coarse_step = largest_step(coarse.frame);
+    const double rel_mse = image::compare(coarse.frame, fine.frame).rel_mse;
+    std::printf("upsampled vs per-pixel: relMSE %.6f, largest neighbour step %.5f vs %.5f, fragments %g vs %g\n",
+                rel_mse, coarse_step, fine_step, stat(coarse, "multires_fragments"), stat(fine, "multires_fragments"));
+    // Measured: 0.00182 against 0.00182 (the gradient's own step); 16-pixel steps would be ~16x.
+    EXPECT_LE(coarse_step, 1.25 * fine_step);
+    EXPECT_LE(rel_mse, 2e-3);
+}
+
+// Raising tau gathers fewer VPLs per fragment, and the error against the full traversal grows
+// (never by more than measurement noise from one tau to the next).
+TEST(Isr, TauTradesVplsForError) {
+    const scene::Scene scene = scene::make_cornell_box();
+    const auto full = render_isr(scene, "medium", {{"tau", 0}, {"max_depth", 11}});
+    double previous_vpls = stat(full, "vpls_per_fragment_mean"), previous_error = 0.0;
+    for (const double tau : {0.001, 0.01, 0.1, 1.0}) {
+        const auto result = render_isr(scene, "medium", {{"tau", tau}, {"max_depth", 11}});
+        const double error = image::compare(result.frame, full.frame).rel_mse;
+        std::printf("tau %g: %.0f VPLs per fragment, relMSE %.6f against tau 0\n", tau,
+                    stat(result, "vpls_per_fragment_mean"), error);
+        EXPECT_LT(stat(result, "vpls_per_fragment_mean"), previous_vpls) << tau;
+        EXPECT_GE(error, 0.9 * previous_error) << tau;
+        previous_vpls = stat(result, "vpls_per_fragment_mean");
+        previous_error = error;
+    }
+    EXPECT_GT(previous_error, 0.0);
+}
+
+// The reflective shadow maps and the VPL tree stay while only the camera moves; a light move
+// redraws and rebuilds them once.
+TEST(Isr, VplTreeKeptWhileOnlyTheCameraMoves) {
+    scene::Scene scene = scene::make_cornell_box();
+    auto resources = shared_renderer().upload(scene);
+    RenderRequest request = isr_request("low");
+    shared_renderer().render(*resources, request);
+    scene::Camera moved = scene.cameras[0];
+    moved.position += glm::vec3(0.05f, 0.0f, 0.0f);
+    request.camera = moved;
+    const auto camera_moved = shared_renderer().render(*resources, request);
+    EXPECT_EQ(stat(camera_moved, "vpl_tree_builds"), 1.0);
+    EXPECT_EQ(stat(camera_moved, "rsm_draws"), 1.0);
+    scene.lights[0].position += glm::vec3(0.02f, 0.0f, 0.0f);
+    const auto light_moved = shared_renderer().render(*resources, request);
+    EXPECT_EQ(stat(light_moved, "vpl_tree_builds"), 2.0);
+    EXPECT_EQ(stat(light_moved, "rsm_draws"), 2.0);
 }
 
 }  // namespace

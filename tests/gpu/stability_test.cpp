@@ -151,7 +151,7 @@ TEST_P(Stability, UniformScaleInvariance) {
     }
 }
 
-INSTANTIATE_TEST_SUITE_P(Methods, Stability, ::testing::Values("direct", "vct"),
+INSTANTIATE_TEST_SUITE_P(Methods, Stability, ::testing::Values("direct", "vct", "isr"),
                          [](const ::testing::TestParamInfo<std::string>& info) { return info.param; });
 
 }  // namespace
