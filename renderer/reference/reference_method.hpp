@@ -12,7 +12,7 @@ struct ReferenceRequest {
     PathTracerSettings settings;
     int spp = 64;
 };
-// From knobs resolved by the registry (spp, bounces, seed, ao, ao_lambda).
+// From knobs resolved by the registry (spp, bounces, seed, ao, ao_lambda, indirect_visibility).
 ReferenceRequest request_from_knobs(const methods::KnobValues& knobs);
 
 }  // namespace bounce::reference
