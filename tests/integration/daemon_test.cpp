@@ -244,6 +244,40 @@ TEST(Daemon, ReferenceRendersOnTheCpuWithoutBlockingGpuFrames) {
     }, ErrorCode::bad_request);
 }
 
+// isr through the protocol: its frame adds one bounce to the direct light, its counts come back in
+// method_stats, and knob combinations it or the reference refuse are bad requests.
+TEST(Daemon, IsrRendersWithItsStatsAndRefusesBadKnobs) {
+    DaemonProcess daemon;
+    Client client(daemon.endpoint());
+    const json body = {{"scene", "cornell"}, {"method", "isr"}, {"preset", "draft"},
+                       {"width", 64}, {"height", 64}, {"format", "exr"}};
+    const auto reply = client.request(MessageType::render, body);
+    const json& stats = reply.body["method_stats"];
+    EXPECT_GT(stats["vpls_per_fragment_mean"].get<double>(), 0.0);
+    EXPECT_GE(stats["vpls_per_fragment_max"].get<double>(), stats["vpls_per_fragment_mean"].get<double>());
+    EXPECT_GT(stats["multires_fragments"].get<double>(), 0.0);
+    EXPECT_EQ(stats["rsm_views"].get<double>(), 6.0);  // the Cornell box's point light: a cube
+    const auto isr = image::decode_image(reply.attachment);
+    const auto direct = render(client, {{"scene", "cornell"}, {"width", 64}, {"height", 64}, {"format", "exr"}});
+    double isr_sum = 0.0, direct_sum = 0.0;
+    for (std::size_t i = 0; i < isr.pixels.size(); ++i) {
+        if (i % 4 == 3) continue;
+        isr_sum += isr.pixels[i];
+        direct_sum += direct.pixels[i];
+    }
+    // One bounce in a closed white box adds 40-60% to the direct light (reference: 0.67 vs 0.45).
+    EXPECT_GT(isr_sum, 1.2 * direct_sum);
+    EXPECT_LT(isr_sum, 2.0 * direct_sum);
+    expect_error([&] {
+        client.request(MessageType::render, {{"scene", "cornell"}, {"method", "isr"}, {"knobs", {{"mode", 3}}}});
+    }, ErrorCode::bad_request);
+    expect_error([&] {
+        client.request(MessageType::render, {{"scene", "cornell"}, {"method", "reference"},
+                                             {"knobs", {{"indirect_visibility", 0}, {"bounces", 2}}}});
+    }, ErrorCode::bad_request);
+    EXPECT_EQ(render(client, body).width, 64) << "serving continues";
+}
+
 TEST(Daemon, BadRequestsGetTheRightErrorAndServingContinues) {
     DaemonProcess daemon;
     const auto baseline = cornell_frame(daemon.endpoint());
