@@ -12,6 +12,16 @@ Renderer& shared_renderer() {
     return *renderer;
 }
 
+RenderRequest method_request(const std::string& method, const std::string& preset, int size,
+                             methods::KnobValues knobs) {
+    RenderRequest request;
+    request.method = method;
+    request.preset = preset;
+    request.knobs = std::move(knobs);
+    request.width = request.height = size;
+    return request;
+}
+
 RenderResult render_scene(const scene::Scene& scene, const RenderRequest& request) {
     auto resources = shared_renderer().upload(scene);
     return shared_renderer().render(*resources, request);

@@ -11,6 +11,10 @@ namespace bounce::test {
 
 Renderer& shared_renderer();
 
+// A square frame of `method` at `preset` with `knobs` on top.
+RenderRequest method_request(const std::string& method, const std::string& preset, int size,
+                             methods::KnobValues knobs = {});
+
 // Renders `scene` once with fresh resources.
 RenderResult render_scene(const scene::Scene& scene, const RenderRequest& request);
 

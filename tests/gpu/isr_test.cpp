@@ -18,10 +18,10 @@ namespace {
 
 constexpr int kSize = 64;
 
-image::Frame reference_frame(const scene::Scene& scene, bool indirect_visibility, int spp) {
+image::Frame reference_frame(const scene::Scene& scene, bool indirect_visibility, int spp, int bounces = 1) {
     reference::PathTracer tracer(scene);
     reference::PathTracerSettings settings;
-    settings.max_bounces = 1;
+    settings.max_bounces = bounces;
     settings.pixel_jitter = false;  // raster methods shade pixel centres
     settings.indirect_visibility = indirect_visibility;
     return tracer.render(scene.cameras[0], kSize, kSize, spp, settings);
@@ -35,12 +35,7 @@ const image::Frame& cornell_reference(bool indirect_visibility) {
 }
 
 RenderRequest isr_request(const std::string& preset, methods::KnobValues knobs = {}) {
-    RenderRequest request;
-    request.method = "isr";
-    request.preset = preset;
-    request.knobs = std::move(knobs);
-    request.width = request.height = kSize;
-    return request;
+    return method_request("isr", preset, kSize, std::move(knobs));
 }
 
 RenderResult render_isr(const scene::Scene& scene, const std::string& preset, methods::KnobValues knobs = {}) {
@@ -52,12 +47,7 @@ const methods::KnobValues kFullGather = {{"levels", 1}, {"mode", 2}, {"tau", 0},
 
 // `direct` with isr's shadow maps: subtracted from an isr frame, it leaves the indirect light.
 image::Frame direct_frame(const scene::Scene& scene) {
-    RenderRequest request;
-    request.method = "direct";
-    request.preset = "high";
-    request.knobs = {{"shadow_map_size", 2048}};
-    request.width = request.height = kSize;
-    return render_scene(scene, request).frame;
+    return render_scene(scene, method_request("direct", "high", kSize, {{"shadow_map_size", 2048}})).frame;
 }
 
 image::Frame difference(image::Frame a, const image::Frame& b) {
@@ -65,6 +55,13 @@ image::Frame difference(image::Frame a, const image::Frame& b) {
         if (i % 4 != 3) a.rgba[i] -= b.rgba[i];
     }
     return a;
+}
+
+// An isr frame's indirect light (minus `direct`) against the unoccluded reference's (one bounce
+// minus none).
+image::ErrorMetrics indirect_error(const scene::Scene& scene, const image::Frame& frame) {
+    return image::compare(difference(frame, direct_frame(scene)),
+                          difference(reference_frame(scene, false, 1024), reference_frame(scene, true, 64, 0)));
 }
 
 double stat(const RenderResult& result, const char* name) { return result.stats.method_statistics.at(name); }
@@ -165,14 +162,7 @@ TEST(Isr, EveryLightTypeMatchesTheUnoccludedReference) {
     for (const auto type : {scene::LightType::spot, scene::LightType::point, scene::LightType::directional}) {
         const scene::Scene scene = wall_and_floor(light_of_type(type));
         const auto result = render_isr(scene, "low", kFullGather);
-        reference::PathTracer tracer(scene);
-        reference::PathTracerSettings settings;
-        settings.max_bounces = 0;
-        settings.pixel_jitter = false;
-        const image::Frame truth_direct = tracer.render(scene.cameras[0], kSize, kSize, 64, settings);
-        const image::ErrorMetrics error =
-            image::compare(difference(result.frame, direct_frame(scene)),
-                           difference(reference_frame(scene, false, 1024), truth_direct));
+        const image::ErrorMetrics error = indirect_error(scene, result.frame);
         std::printf("light type %d: indirect relMSE %.5f mean %.5f vs %.5f, %g views (%g culled)\n",
                     static_cast<int>(type), error.rel_mse, error.mean_test, error.mean_reference,
                     stat(result, "rsm_views"), stat(result, "rsm_views_culled"));
@@ -190,14 +180,7 @@ TEST(Isr, LightViewsThatCannotSeeTheSceneAreNotDrawn) {
     const auto result = render_isr(scene, "low", kFullGather);
     EXPECT_EQ(stat(result, "rsm_views"), 5.0);
     EXPECT_EQ(stat(result, "rsm_views_culled"), 1.0);
-    reference::PathTracer tracer(scene);
-    reference::PathTracerSettings settings;
-    settings.max_bounces = 0;
-    settings.pixel_jitter = false;
-    const image::ErrorMetrics error =
-        image::compare(difference(result.frame, direct_frame(scene)),
-                       difference(reference_frame(scene, false, 1024),
-                                  tracer.render(scene.cameras[0], kSize, kSize, 64, settings)));
+    const image::ErrorMetrics error = indirect_error(scene, result.frame);
     std::printf("point light above the scene: indirect relMSE %.5f mean %.5f vs %.5f\n", error.rel_mse,
                 error.mean_test, error.mean_reference);
     EXPECT_LE(error.rel_mse, 0.004);

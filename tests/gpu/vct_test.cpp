@@ -28,12 +28,7 @@ image::Frame reference_frame(const scene::Scene& scene, int bounces, bool ambien
 }
 
 RenderRequest vct_request(const std::string& preset, methods::KnobValues knobs = {}) {
-    RenderRequest request;
-    request.method = "vct";
-    request.preset = preset;
-    request.knobs = std::move(knobs);
-    request.width = request.height = kSize;
-    return request;
+    return method_request("vct", preset, kSize, std::move(knobs));
 }
 
 RenderResult render_vct(const scene::Scene& scene, const std::string& preset, methods::KnobValues knobs = {}) {
