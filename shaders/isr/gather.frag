@@ -39,9 +39,26 @@ uint pack_cell(int level, ivec2 cell) { return uint(level) << 24 | uint(cell.y) 
 void main() {
     ivec2 texel;
     int level = atlas_level(ivec2(gl_FragCoord.xy), texel);
-    ivec2 pixel = level == 0 ? texel : min(texel * (1 << level) + (1 << (level - 1)), u_level_size[0] - 1);
-    vec3 p = texelFetch(u_gbuffer_position, pixel, 0).xyz;
-    vec3 n = texelFetch(u_gbuffer_normal, pixel, 0).xyz;
+    // The patch's centre: its pixel, or the mean of the 2x2 pixels around the centre of a coarser
+    // patch (all on one continuous surface, or the patch would not gather).
+    vec3 p = vec3(0.0), n = vec3(0.0);
+    if (level == 0) {
+        p = texelFetch(u_gbuffer_position, texel, 0).xyz;
+        n = texelFetch(u_gbuffer_normal, texel, 0).xyz;
+    } else {
+        ivec2 centre = texel * (1 << level) + (1 << (level - 1));
+        float count = 0.0;
+        for (int k = 0; k < 4; ++k) {
+            ivec2 pixel = centre - ivec2(k & 1, k >> 1);
+            vec4 position = texelFetch(u_gbuffer_position, min(pixel, u_level_size[0] - 1), 0);
+            if (position.w == 0.0) continue;
+            p += position.xyz;
+            n += texelFetch(u_gbuffer_normal, min(pixel, u_level_size[0] - 1), 0).xyz;
+            count += 1.0;
+        }
+        p /= max(count, 1.0);
+        n = safe_normalize(n, vec3(0.0, 0.0, 1.0));
+    }
     vec3 irradiance = vec3(0.0);
     float gathered = 0.0;
 #ifdef VPL_CACHE
