@@ -19,12 +19,10 @@ namespace {
 constexpr int kSize = 64;
 
 image::Frame reference_frame(const scene::Scene& scene, bool indirect_visibility, int spp, int bounces = 1) {
-    reference::PathTracer tracer(scene);
     reference::PathTracerSettings settings;
     settings.max_bounces = bounces;
-    settings.pixel_jitter = false;  // raster methods shade pixel centres
     settings.indirect_visibility = indirect_visibility;
-    return tracer.render(scene.cameras[0], kSize, kSize, spp, settings);
+    return pixel_centre_reference(scene, kSize, spp, settings);
 }
 
 // The Cornell box's two references, traced once for the whole test program.

@@ -19,12 +19,10 @@ constexpr int kSize = 64;
 
 
 image::Frame reference_frame(const scene::Scene& scene, int bounces, bool ambient_occlusion, int spp) {
-    reference::PathTracer tracer(scene);
     reference::PathTracerSettings settings;
     settings.max_bounces = bounces;
-    settings.pixel_jitter = false;  // raster methods shade pixel centres
     settings.ambient_occlusion = ambient_occlusion;
-    return tracer.render(scene.cameras[0], kSize, kSize, spp, settings);
+    return pixel_centre_reference(scene, kSize, spp, settings);
 }
 
 RenderRequest vct_request(const std::string& preset, methods::KnobValues knobs = {}) {
