@@ -1,6 +1,6 @@
 #version 450 core
 // Counts, over every texel that gathered, the VPLs it gathered (alpha - 1 after the batches): their
-// sum and the largest, for the frame's statistics.
+// sum and the largest, and how many texels gathered at all, for the frame's statistics.
 layout(local_size_x = 8, local_size_y = 8) in;
 #include "isr/multires.glsl"
 
@@ -18,4 +18,5 @@ void main() {
     uint previous = atomicAdd(counters[ISR_COUNTER_VPLS_LOW], gathered);
     if (previous + gathered < previous) atomicAdd(counters[ISR_COUNTER_VPLS_HIGH], 1u);
     atomicMax(counters[ISR_COUNTER_VPLS_MAX], gathered);
+    atomicAdd(counters[ISR_COUNTER_GATHERED], 1u);
 }

@@ -24,6 +24,7 @@
 #define ISR_COUNTER_VPLS_LOW 8         // VPLs gathered over every fragment, low and high words
 #define ISR_COUNTER_VPLS_HIGH 9
 #define ISR_COUNTER_VPLS_MAX 10        // most VPLs one fragment gathered
+#define ISR_COUNTER_GATHERED 11        // atlas texels the gather reached (the stencil's marks, if it works)
 #define ISR_COUNTERS 12
 
 #define ISR_MODE_NAIVE 0         // one point-sampled VPL per patch of the finest level (plain RSM)

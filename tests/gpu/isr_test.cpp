@@ -195,9 +195,12 @@ TEST(Isr, ZeroThresholdsGatherAtEveryPixel) {
     EXPECT_EQ(stat(multires, "multires_fragments"), stat(multires, "multires_fragments_level_0"));
     EXPECT_EQ(stat(multires, "multires_fragments"), stat(single, "multires_fragments"));
     EXPECT_LE(image::compare(multires.frame, single.frame).rel_mse, 1e-8);
-    // The default thresholds gather at far fewer fragments.
+    // The default thresholds gather at far fewer fragments, and the stenciled gather reaches exactly
+    // the fragments the refinement marked (none of the atlas's other texels).
     const auto coarse = render_isr(scene, "low");
     EXPECT_LT(stat(coarse, "multires_fragments"), 0.5 * stat(single, "multires_fragments"));
+    EXPECT_EQ(stat(coarse, "gathered_texels"), stat(coarse, "multires_fragments"));
+    EXPECT_EQ(stat(multires, "gathered_texels"), stat(multires, "multires_fragments"));
 }
 
 // Upsampling blends neighbouring patches through every level between them: a floor lit by a wall

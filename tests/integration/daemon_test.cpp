@@ -27,6 +27,15 @@ image::DecodedImage render(Client& client, json body) {
     return image::decode_image(reply.attachment);
 }
 
+// Sum of every pixel's red, green and blue.
+double rgb_sum(const image::DecodedImage& image) {
+    double sum = 0.0;
+    for (std::size_t i = 0; i < image.pixels.size(); ++i) {
+        if (i % 4 != 3) sum += image.pixels[i];
+    }
+    return sum;
+}
+
 // Asserts `action` fails with `code` (and `field` when given).
 template <typename Action>
 void expect_error(Action&& action, ErrorCode code, const std::string& field = "") {
@@ -206,12 +215,7 @@ TEST(Daemon, ReferenceRendersOnTheCpuWithoutBlockingGpuFrames) {
     const auto second = render(client, traced);
     EXPECT_TRUE(first.pixels == second.pixels) << "the same seed must give the same image";
     const auto direct = render(client, {{"scene", "cornell"}, {"width", 64}, {"height", 64}, {"format", "exr"}});
-    double traced_sum = 0.0, direct_sum = 0.0;
-    for (std::size_t i = 0; i < first.pixels.size(); ++i) {
-        if (i % 4 == 3) continue;
-        traced_sum += first.pixels[i];
-        direct_sum += direct.pixels[i];
-    }
+    const double traced_sum = rgb_sum(first), direct_sum = rgb_sum(direct);
     // Same lights and BRDF at zero bounces: the means agree within Monte Carlo noise (16 spp over
     // 4096 pixels: well under 0.5%) plus the difference between the reference's pixel-area average
     // and direct's pixel-centre shading of the ceiling's hot spot (0.7% measured at 96^2, 3.6% at
@@ -259,12 +263,7 @@ TEST(Daemon, IsrRendersWithItsStatsAndRefusesBadKnobs) {
     EXPECT_EQ(stats["rsm_views"].get<double>(), 6.0);  // the Cornell box's point light: a cube
     const auto isr = image::decode_image(reply.attachment);
     const auto direct = render(client, {{"scene", "cornell"}, {"width", 64}, {"height", 64}, {"format", "exr"}});
-    double isr_sum = 0.0, direct_sum = 0.0;
-    for (std::size_t i = 0; i < isr.pixels.size(); ++i) {
-        if (i % 4 == 3) continue;
-        isr_sum += isr.pixels[i];
-        direct_sum += direct.pixels[i];
-    }
+    const double isr_sum = rgb_sum(isr), direct_sum = rgb_sum(direct);
     // One bounce in a closed white box adds 40-60% to the direct light (reference: 0.67 vs 0.45).
     EXPECT_GT(isr_sum, 1.2 * direct_sum);
     EXPECT_LT(isr_sum, 2.0 * direct_sum);

@@ -84,21 +84,27 @@ TEST(ReferenceFurnace, ClosedBoxConvergesToItsAnalyticRadiance) {
     EXPECT_NEAR(mean_red(unlimited), le / (1.0 - rho), 0.02 * le / (1.0 - rho));
 }
 
-scene::Scene plane_with(const scene::Light& light, const scene::Material& material) {
-    scene::Scene scene;
-    scene.materials.push_back(material);
+// A single-sided quad p0 p1 p2 p3 (counter-clockwise seen from its front) as its own object.
+void add_quad(scene::Scene& scene, int material, const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2,
+              const glm::vec3& p3) {
     scene::Primitive p;
-    p.material = 0;
-    p.positions = {{-2, 0, -2}, {2, 0, -2}, {2, 0, 2}, {-2, 0, 2}};
-    p.normals.assign(4, glm::vec3(0, 1, 0));
+    p.material = material;
+    p.positions = {p0, p1, p2, p3};
+    p.normals.assign(4, glm::normalize(glm::cross(p1 - p0, p2 - p0)));
     p.tangents.assign(4, glm::vec4(1, 0, 0, 1));
-    p.indices = {0, 2, 1, 0, 3, 2};
+    p.indices = {0, 1, 2, 0, 2, 3};
     for (const auto& v : p.positions) p.bounds.extend(v);
     scene::Mesh mesh;
     mesh.bounds = p.bounds;
     mesh.primitives.push_back(p);
     scene.meshes.push_back(mesh);
-    scene.objects.push_back({"floor", 0});
+    scene.objects.push_back({"quad " + std::to_string(scene.objects.size()), static_cast<int>(scene.meshes.size()) - 1});
+}
+
+scene::Scene plane_with(const scene::Light& light, const scene::Material& material) {
+    scene::Scene scene;
+    scene.materials.push_back(material);
+    add_quad(scene, 0, {-2, 0, -2}, {-2, 0, 2}, {2, 0, 2}, {2, 0, -2});  // the floor, facing up
     scene.lights.push_back(light);
     scene.cameras.push_back(scene::Camera::look_at({0, 2, 0}, {0, 0, 0}, {0, 0, -1}, 1.2f));
     return scene;
@@ -259,22 +265,6 @@ TEST(ReferenceSampling, ErrorFallsAsOneOverSpp) {
     EXPECT_LT(at_16 / at_64, 6.0) << at_16 << " " << at_64;
 }
 
-// A single-sided quad p0 p1 p2 p3 (counter-clockwise seen from its front) as its own object.
-void add_quad(scene::Scene& scene, int material, const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2,
-              const glm::vec3& p3) {
-    scene::Primitive p;
-    p.material = material;
-    p.positions = {p0, p1, p2, p3};
-    p.normals.assign(4, glm::normalize(glm::cross(p1 - p0, p2 - p0)));
-    p.tangents.assign(4, glm::vec4(1, 0, 0, 1));
-    p.indices = {0, 1, 2, 0, 2, 3};
-    for (const auto& v : p.positions) p.bounds.extend(v);
-    scene::Mesh mesh;
-    mesh.bounds = p.bounds;
-    mesh.primitives.push_back(p);
-    scene.meshes.push_back(mesh);
-    scene.objects.push_back({"quad " + std::to_string(scene.objects.size()), static_cast<int>(scene.meshes.size()) - 1});
-}
 
 // A 1 m receiver on y = 0 facing up, under a 1 m reflector on y = 1 facing down. A spot at
 // y = 0.5 aimed up lights the reflector only (the receiver and anything below the spot lie outside

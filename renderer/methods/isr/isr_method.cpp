@@ -95,6 +95,7 @@ public:
             {"vpl_finest_patch_texels", static_cast<double>(1 << finest_level_)},
             {"multires_levels", static_cast<double>(multires_.levels())},
             {"multires_fragments", static_cast<double>(fragments_)},
+            {"gathered_texels", static_cast<double>(gathered_texels_)},
             {"vpls_per_fragment_mean", fragments_ > 0 ? static_cast<double>(vpls_gathered_) / fragments_ : 0.0},
             {"vpls_per_fragment_max", static_cast<double>(vpls_max_)},
             {"resident_bytes", static_cast<double>(gbuffer_.bytes() + shadows_.bytes() + light_views_.bytes() +
@@ -165,6 +166,7 @@ private:
         vpls_gathered_ = (static_cast<std::uint64_t>(counters[ISR_COUNTER_VPLS_HIGH]) << 32) |
                          counters[ISR_COUNTER_VPLS_LOW];
         vpls_max_ = counters[ISR_COUNTER_VPLS_MAX];
+        gathered_texels_ = counters[ISR_COUNTER_GATHERED];
     }
 
     passes::GBufferPass gbuffer_;
@@ -180,7 +182,7 @@ private:
     int cache_mode_ = -1, cache_level_ = -1;
     std::uint32_t cached_vpls_ = 0;
     std::array<std::uint64_t, ISR_MAX_LEVELS> level_fragments_{};
-    std::uint64_t fragments_ = 0, vpls_gathered_ = 0, vpls_max_ = 0;
+    std::uint64_t fragments_ = 0, vpls_gathered_ = 0, vpls_max_ = 0, gathered_texels_ = 0;
 };
 
 }  // namespace
