@@ -1,16 +1,16 @@
 #include "renderer/reference/path_tracer.hpp"
 
 #include "renderer/base/error.hpp"
+#include "renderer/reference/ray_scene.hpp"
 #include "renderer/scene/shading.hpp"
 
-#include <embree3/rtcore.h>
 #include <glm/gtc/matrix_inverse.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
-#include <atomic>
+#include <optional>
 #include <cmath>
 #include <limits>
 
@@ -97,77 +97,22 @@ void check_settings(const PathTracerSettings& settings) {
 
 struct PathTracer::Impl {
     const scene::Scene& scene;
-    RTCDevice device = nullptr;
-    std::vector<RTCScene> mesh_scenes;
-    std::vector<RTCGeometry> instances;  // per object; null for objects without a mesh
-    RTCScene top = nullptr;
+    RayScene rays;
     std::vector<glm::mat4> normal_matrices;
     std::vector<Emitter> emitters;
     std::vector<float> emitter_cdf;  // by power
     std::vector<std::vector<int>> emitter_base;  // [object][primitive] -> first emitter index or -1
     float scene_radius = 1.0f;
     tbb::task_arena arena;
-    mutable std::atomic<std::uint64_t> rays{0};
 
-    explicit Impl(const scene::Scene& s) : scene(s) {
-        device = rtcNewDevice(nullptr);
-        if (!device) BOUNCE_FAIL("Embree: rtcNewDevice failed (error {})", static_cast<int>(rtcGetDeviceError(nullptr)));
-        for (const scene::Mesh& mesh : scene.meshes) {
-            RTCScene mesh_scene = rtcNewScene(device);
-            for (std::size_t p = 0; p < mesh.primitives.size(); ++p) {
-                const scene::Primitive& primitive = mesh.primitives[p];
-                if (primitive.triangle_count() == 0) continue;
-                RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
-                auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(
-                    geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), primitive.positions.size()));
-                for (std::size_t v = 0; v < primitive.positions.size(); ++v) {
-                    vertices[3 * v] = primitive.positions[v].x;
-                    vertices[3 * v + 1] = primitive.positions[v].y;
-                    vertices[3 * v + 2] = primitive.positions[v].z;
-                }
-                auto* indices = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
-                    geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), primitive.triangle_count()));
-                std::copy(primitive.indices.begin(), primitive.indices.end(), indices);
-                rtcCommitGeometry(geometry);
-                rtcAttachGeometryByID(mesh_scene, geometry, static_cast<unsigned>(p));
-                rtcReleaseGeometry(geometry);
-            }
-            rtcCommitScene(mesh_scene);
-            mesh_scenes.push_back(mesh_scene);
-        }
-        top = rtcNewScene(device);
-        for (std::size_t o = 0; o < scene.objects.size(); ++o) {
-            const scene::Object& object = scene.objects[o];
-            if (object.mesh < 0) {
-                instances.push_back(nullptr);
-                continue;
-            }
-            RTCGeometry instance = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_INSTANCE);
-            rtcSetGeometryInstancedScene(instance, mesh_scenes[object.mesh]);
-            rtcAttachGeometryByID(top, instance, static_cast<unsigned>(o));
-            instances.push_back(instance);
-        }
-        update_transforms();
-    }
-
-    ~Impl() {
-        for (RTCGeometry instance : instances)
-            if (instance) rtcReleaseGeometry(instance);
-        if (top) rtcReleaseScene(top);
-        for (RTCScene mesh_scene : mesh_scenes) rtcReleaseScene(mesh_scene);
-        if (device) rtcReleaseDevice(device);
-    }
+    explicit Impl(const scene::Scene& s) : scene(s), rays(s) { update_transforms(); }
 
     void update_transforms() {
+        rays.update_transforms();
         normal_matrices.assign(scene.objects.size(), glm::mat4(1.0f));
         for (std::size_t o = 0; o < scene.objects.size(); ++o) {
-            if (!instances[o]) continue;
-            const glm::mat4& transform = scene.objects[o].transform;
-            rtcSetGeometryTransform(instances[o], 0, RTC_FORMAT_FLOAT4X4_COLUMN_MAJOR, &transform[0][0]);
-            rtcCommitGeometry(instances[o]);
-            normal_matrices[o] = glm::inverseTranspose(transform);
+            normal_matrices[o] = glm::inverseTranspose(scene.objects[o].transform);
         }
-        rtcCommitScene(top);
         const scene::Aabb bounds = scene.world_bounds();
         scene_radius = bounds.empty() ? 1.0f : std::max(0.5f * glm::length(bounds.extent()), 1e-12f);
         collect_emitters();
@@ -220,32 +165,17 @@ struct PathTracer::Impl {
 
     // The first surface along the ray beyond `tnear`.
     bool intersect(const glm::vec3& origin, const glm::vec3& direction, SurfaceHit& hit, float tnear = 0.0f) const {
-        RTCIntersectContext context;
-        rtcInitIntersectContext(&context);
-        RTCRayHit ray_hit{};
-        ray_hit.ray.org_x = origin.x;
-        ray_hit.ray.org_y = origin.y;
-        ray_hit.ray.org_z = origin.z;
-        ray_hit.ray.dir_x = direction.x;
-        ray_hit.ray.dir_y = direction.y;
-        ray_hit.ray.dir_z = direction.z;
-        ray_hit.ray.tnear = tnear;
-        ray_hit.ray.tfar = kInfinity;
-        ray_hit.ray.mask = 0xFFFFFFFFu;
-        ray_hit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-        ray_hit.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-        rtcIntersect1(top, &context, &ray_hit);
-        rays.fetch_add(1, std::memory_order_relaxed);
-        if (ray_hit.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
-        hit.object = ray_hit.hit.instID[0];
-        hit.primitive = ray_hit.hit.geomID;
-        hit.triangle = ray_hit.hit.primID;
-        hit.distance = ray_hit.ray.tfar;
+        const std::optional<RayHit> ray_hit = rays.intersect(origin, direction, tnear, kInfinity);
+        if (!ray_hit) return false;
+        hit.object = ray_hit->object;
+        hit.primitive = ray_hit->primitive;
+        hit.triangle = ray_hit->triangle;
+        hit.distance = ray_hit->distance;
         const scene::Object& object = scene.objects[hit.object];
         const scene::Primitive& primitive = scene.meshes[object.mesh].primitives[hit.primitive];
         const std::uint32_t i0 = primitive.indices[3 * hit.triangle], i1 = primitive.indices[3 * hit.triangle + 1],
                             i2 = primitive.indices[3 * hit.triangle + 2];
-        const float u = ray_hit.hit.u, v = ray_hit.hit.v, w = 1.0f - u - v;
+        const float u = ray_hit->u, v = ray_hit->v, w = 1.0f - u - v;
         const glm::vec3 p0(object.transform * glm::vec4(primitive.positions[i0], 1.0f));
         const glm::vec3 p1(object.transform * glm::vec4(primitive.positions[i1], 1.0f));
         const glm::vec3 p2(object.transform * glm::vec4(primitive.positions[i2], 1.0f));
@@ -297,21 +227,7 @@ struct PathTracer::Impl {
     }
 
     bool occluded(const glm::vec3& origin, const glm::vec3& direction, float distance) const {
-        RTCIntersectContext context;
-        rtcInitIntersectContext(&context);
-        RTCRay ray{};
-        ray.org_x = origin.x;
-        ray.org_y = origin.y;
-        ray.org_z = origin.z;
-        ray.dir_x = direction.x;
-        ray.dir_y = direction.y;
-        ray.dir_z = direction.z;
-        ray.tnear = 0.0f;
-        ray.tfar = distance;
-        ray.mask = 0xFFFFFFFFu;
-        rtcOccluded1(top, &context, &ray);
-        rays.fetch_add(1, std::memory_order_relaxed);
-        return ray.tfar == -kInfinity;
+        return rays.occluded(origin, direction, 0.0f, distance);
     }
 
     glm::vec3 offset(const SurfaceHit& hit, const glm::vec3& towards) const {
@@ -516,7 +432,7 @@ PathTracer::~PathTracer() = default;
 
 void PathTracer::update_transforms() { impl_->update_transforms(); }
 
-std::uint64_t PathTracer::rays_traced() const { return impl_->rays.load(); }
+std::uint64_t PathTracer::rays_traced() const { return impl_->rays.rays_traced(); }
 
 void PathTracer::render(Accumulator& accumulator, const scene::Camera& camera, int count,
                         const PathTracerSettings& settings) const {

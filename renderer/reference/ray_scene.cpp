@@ -1,0 +1,137 @@
+#include "renderer/reference/ray_scene.hpp"
+
+#include "renderer/base/error.hpp"
+
+#include <embree3/rtcore.h>
+
+#include <algorithm>
+#include <atomic>
+#include <limits>
+#include <vector>
+
+namespace bounce::reference {
+
+struct RayScene::Impl {
+    const scene::Scene& scene;
+    RTCDevice device = nullptr;
+    std::vector<RTCScene> mesh_scenes;  // per mesh; null for meshes no held object uses
+    std::vector<RTCGeometry> instances;  // per object; null for objects not held
+    RTCScene top = nullptr;
+    mutable std::atomic<std::uint64_t> rays{0};
+
+    Impl(const scene::Scene& s, const std::function<bool(std::size_t)>& include) : scene(s) {
+        device = rtcNewDevice(nullptr);
+        if (!device) BOUNCE_FAIL("Embree: rtcNewDevice failed (error {})", static_cast<int>(rtcGetDeviceError(nullptr)));
+        std::vector<bool> held(scene.objects.size(), false), mesh_used(scene.meshes.size(), false);
+        for (std::size_t o = 0; o < scene.objects.size(); ++o) {
+            held[o] = scene.objects[o].mesh >= 0 && (!include || include(o));
+            if (held[o]) mesh_used[scene.objects[o].mesh] = true;
+        }
+        mesh_scenes.assign(scene.meshes.size(), nullptr);
+        for (std::size_t m = 0; m < scene.meshes.size(); ++m) {
+            if (!mesh_used[m]) continue;
+            RTCScene mesh_scene = rtcNewScene(device);
+            const scene::Mesh& mesh = scene.meshes[m];
+            for (std::size_t p = 0; p < mesh.primitives.size(); ++p) {
+                const scene::Primitive& primitive = mesh.primitives[p];
+                if (primitive.triangle_count() == 0) continue;
+                RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+                auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(
+                    geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), primitive.positions.size()));
+                for (std::size_t v = 0; v < primitive.positions.size(); ++v) {
+                    vertices[3 * v] = primitive.positions[v].x;
+                    vertices[3 * v + 1] = primitive.positions[v].y;
+                    vertices[3 * v + 2] = primitive.positions[v].z;
+                }
+                auto* indices = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
+                    geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), primitive.triangle_count()));
+                std::copy(primitive.indices.begin(), primitive.indices.end(), indices);
+                rtcCommitGeometry(geometry);
+                rtcAttachGeometryByID(mesh_scene, geometry, static_cast<unsigned>(p));
+                rtcReleaseGeometry(geometry);
+            }
+            rtcCommitScene(mesh_scene);
+            mesh_scenes[m] = mesh_scene;
+        }
+        top = rtcNewScene(device);
+        instances.assign(scene.objects.size(), nullptr);
+        for (std::size_t o = 0; o < scene.objects.size(); ++o) {
+            if (!held[o]) continue;
+            RTCGeometry instance = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_INSTANCE);
+            rtcSetGeometryInstancedScene(instance, mesh_scenes[scene.objects[o].mesh]);
+            rtcAttachGeometryByID(top, instance, static_cast<unsigned>(o));
+            instances[o] = instance;
+        }
+        update_transforms();
+    }
+
+    ~Impl() {
+        for (RTCGeometry instance : instances)
+            if (instance) rtcReleaseGeometry(instance);
+        if (top) rtcReleaseScene(top);
+        for (RTCScene mesh_scene : mesh_scenes)
+            if (mesh_scene) rtcReleaseScene(mesh_scene);
+        if (device) rtcReleaseDevice(device);
+    }
+
+    void update_transforms() {
+        for (std::size_t o = 0; o < scene.objects.size(); ++o) {
+            if (!instances[o]) continue;
+            const glm::mat4& transform = scene.objects[o].transform;
+            rtcSetGeometryTransform(instances[o], 0, RTC_FORMAT_FLOAT4X4_COLUMN_MAJOR, &transform[0][0]);
+            rtcCommitGeometry(instances[o]);
+        }
+        rtcCommitScene(top);
+    }
+};
+
+RayScene::RayScene(const scene::Scene& scene, const std::function<bool(std::size_t)>& include)
+    : impl_(std::make_unique<Impl>(scene, include)) {}
+RayScene::~RayScene() = default;
+
+void RayScene::update_transforms() { impl_->update_transforms(); }
+
+std::optional<RayHit> RayScene::intersect(const glm::vec3& origin, const glm::vec3& direction, float tnear,
+                                          float tfar) const {
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    RTCRayHit ray_hit{};
+    ray_hit.ray.org_x = origin.x;
+    ray_hit.ray.org_y = origin.y;
+    ray_hit.ray.org_z = origin.z;
+    ray_hit.ray.dir_x = direction.x;
+    ray_hit.ray.dir_y = direction.y;
+    ray_hit.ray.dir_z = direction.z;
+    ray_hit.ray.tnear = tnear;
+    ray_hit.ray.tfar = tfar;
+    ray_hit.ray.mask = 0xFFFFFFFFu;
+    ray_hit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    ray_hit.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(impl_->top, &context, &ray_hit);
+    impl_->rays.fetch_add(1, std::memory_order_relaxed);
+    if (ray_hit.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
+    return RayHit{ray_hit.hit.instID[0], ray_hit.hit.geomID, ray_hit.hit.primID, ray_hit.ray.tfar, ray_hit.hit.u,
+                  ray_hit.hit.v};
+}
+
+bool RayScene::occluded(const glm::vec3& origin, const glm::vec3& direction, float tnear, float tfar) const {
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    RTCRay ray{};
+    ray.org_x = origin.x;
+    ray.org_y = origin.y;
+    ray.org_z = origin.z;
+    ray.dir_x = direction.x;
+    ray.dir_y = direction.y;
+    ray.dir_z = direction.z;
+    ray.tnear = tnear;
+    ray.tfar = tfar;
+    ray.mask = 0xFFFFFFFFu;
+    rtcOccluded1(impl_->top, &context, &ray);
+    impl_->rays.fetch_add(1, std::memory_order_relaxed);
+    return ray.tfar == -std::numeric_limits<float>::infinity();
+}
+
+std::uint64_t RayScene::rays_traced() const { return impl_->rays.load(std::memory_order_relaxed); }
+
+}  // namespace bounce::reference
