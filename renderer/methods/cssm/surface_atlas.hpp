@@ -1,0 +1,68 @@
+// The surface atlas of `cssm` (§3.2.3 of ../shared/papers/cssm-ritschel-2008.md): the surfaces of
+// a set of rigid objects cut into charts and packed into one texel grid, each texel a small patch
+// with position, normal, area and material. Texels are the senders and receivers of the radiosity
+// solution and the points where depth cube maps are baked.
+//
+// Charts come from the mesh's second UV set when it is a valid parametrization (every coordinate
+// inside [0,1], no two triangles covering the same texel), otherwise from our own segmentation:
+// edge-connected triangles of one primitive whose normals stay within a cone of the chart's first
+// triangle, projected onto that triangle's plane (so no chart folds over itself), packed by shelves.
+#pragma once
+
+#include "renderer/scene/scene.hpp"
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace bounce::methods::cssm {
+
+struct AtlasTexel {
+    glm::vec3 position{0.0f};  // object (mesh) space
+    glm::vec3 normal{0.0f, 0.0f, 1.0f};  // object space, unit
+    float area = 0.0f;  // world units at build time (rigid motions keep it)
+    std::uint32_t object = 0;  // index into Scene::objects
+    std::uint32_t chart = 0;
+    int material = -1;
+    glm::vec2 uv0{0.0f};  // for textured materials
+    std::int32_t x = 0, y = 0;  // where it sits in the atlas
+};
+
+struct AtlasChart {
+    std::uint32_t object = 0;
+    glm::ivec2 min{0}, max{0};  // texel bounds in the atlas, max exclusive
+    glm::vec3 centroid{0.0f};   // object space, area-weighted
+};
+
+struct AtlasSettings {
+    float texel_size = 0.01f;  // texel edge, in the objects' world units at their current scale
+    float chart_cone_degrees = 30.0f;  // automatic charts: largest normal deviation from the seed
+    bool use_uv1 = true;  // take the glTF's second UV set when it is valid
+};
+
+struct SurfaceAtlas {
+    int width = 0, height = 0;
+    std::vector<AtlasTexel> texels;
+    std::vector<AtlasChart> charts;
+    std::vector<std::int32_t> texel_at;  // width * height: texel index or -1
+    std::vector<std::uint32_t> objects;  // the objects it covers
+    std::vector<std::string> uv1_objects;  // objects whose charts came from their second UV set
+    float surface_area = 0.0f;  // of the covered triangles, world units
+
+    std::int32_t at(int x, int y) const {
+        return x < 0 || y < 0 || x >= width || y >= height ? -1 : texel_at[static_cast<std::size_t>(y) * width + x];
+    }
+};
+
+// Builds the atlas of `objects` (indices into scene.objects) at their current transforms' scale.
+// Throws InputError when texel_size is not positive or the atlas would exceed `max_texels`.
+SurfaceAtlas build_surface_atlas(const scene::Scene& scene, const std::vector<std::uint32_t>& objects,
+                                 const AtlasSettings& settings, std::size_t max_texels = 1u << 22);
+
+// The texel edge that gives about `texels_per_side`^2 texels over `area`.
+float texel_size_for(float area, float texels_per_side);
+
+// The world-space surface area of `objects`.
+float surface_area(const scene::Scene& scene, const std::vector<std::uint32_t>& objects);
+
+}  // namespace bounce::methods::cssm

@@ -1,0 +1,211 @@
+// The `cssm` precomputation on the CPU: surface atlas, coherent traversals, the dual-depth
+// compression of depth sequences, and cube-map visibility against exact ray queries.
+#include "renderer/base/error.hpp"
+#include "renderer/methods/cssm/atlas_traversal.hpp"
+#include "renderer/methods/cssm/surface_shadow_maps.hpp"
+#include "renderer/reference/ray_scene.hpp"
+#include "renderer/scene/builtin.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <numeric>
+#include <random>
+
+namespace bounce::methods::cssm {
+namespace {
+
+std::vector<std::uint32_t> all_objects(const scene::Scene& scene) {
+    std::vector<std::uint32_t> objects(scene.objects.size());
+    std::iota(objects.begin(), objects.end(), 0u);
+    return objects;
+}
+
+SurfaceAtlas cornell_atlas(const scene::Scene& scene, float texels_per_side) {
+    const auto objects = all_objects(scene);
+    AtlasSettings settings;
+    settings.texel_size = texel_size_for(surface_area(scene, objects), texels_per_side);
+    return build_surface_atlas(scene, objects, settings);
+}
+
+TEST(CssmAtlas, CoversTheCornellBoxWithItsTrueAreaAndNormals) {
+    const scene::Scene scene = scene::make_cornell_box();
+    const SurfaceAtlas atlas = cornell_atlas(scene, 32.0f);
+    // 5 walls + 2 x 5 block faces, all planar quads: one chart each.
+    EXPECT_EQ(atlas.charts.size(), 15u);
+    EXPECT_TRUE(atlas.uv1_objects.empty());
+    // About 32^2 texels (chart borders round partial texels away or in).
+    EXPECT_GT(atlas.texels.size(), 0.8 * 32 * 32);
+    EXPECT_LT(atlas.texels.size(), 1.3 * 32 * 32);
+    double area = 0.0;
+    for (const AtlasTexel& t : atlas.texels) area += t.area;
+    EXPECT_NEAR(area, atlas.surface_area, 1e-4 * atlas.surface_area);
+    // Each texel is where the atlas says, and a floor texel faces up.
+    std::size_t floor_texels = 0;
+    for (std::size_t i = 0; i < atlas.texels.size(); ++i) {
+        const AtlasTexel& t = atlas.texels[i];
+        ASSERT_EQ(atlas.at(t.x, t.y), static_cast<std::int32_t>(i));
+        EXPECT_NEAR(glm::length(t.normal), 1.0f, 1e-4f);
+        if (t.object == 0 && t.position.y < 1e-4f) {
+            ++floor_texels;
+            EXPECT_GT(t.normal.y, 0.999f);
+        }
+    }
+    EXPECT_GT(floor_texels, 0u);
+}
+
+scene::Scene quad_with_uv1(const std::vector<glm::vec2>& uv1) {
+    scene::Scene scene;
+    scene::Mesh mesh;
+    scene::Primitive p;
+    p.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+    p.normals.assign(4, {0, 0, 1});
+    p.tangents.assign(4, {1, 0, 0, 1});
+    p.uv1 = uv1;
+    p.indices = {0, 1, 2, 0, 2, 3};
+    for (const auto& q : p.positions) p.bounds.extend(q);
+    mesh.bounds = p.bounds;
+    mesh.primitives.push_back(p);
+    scene.meshes.push_back(mesh);
+    scene::Object object;
+    object.name = "quad";
+    object.mesh = 0;
+    scene.objects.push_back(object);
+    return scene;
+}
+
+TEST(CssmAtlas, UsesAValidSecondUvSetAndRejectsAnOverlappingOne) {
+    AtlasSettings settings;
+    settings.texel_size = 1.0f / 16.0f;
+    const scene::Scene valid = quad_with_uv1({{0, 0}, {0.5f, 0}, {0.5f, 0.5f}, {0, 0.5f}});
+    const SurfaceAtlas atlas = build_surface_atlas(valid, {0}, settings);
+    ASSERT_EQ(atlas.uv1_objects, std::vector<std::string>{"quad"});
+    // The UV square is a quarter of the set: 32^2 texels of which the quad covers 16^2.
+    EXPECT_NEAR(static_cast<double>(atlas.texels.size()), 256.0, 40.0);
+    double area = 0.0;
+    for (const AtlasTexel& t : atlas.texels) area += t.area;
+    EXPECT_NEAR(area, 1.0, 1e-4);
+
+    // Both triangles mapped onto the same UV triangle: overlap, so the atlas makes its own charts.
+    const scene::Scene folded = quad_with_uv1({{0, 0}, {1, 0}, {1, 1}, {1, 0}});
+    const SurfaceAtlas fallback = build_surface_atlas(folded, {0}, settings);
+    EXPECT_TRUE(fallback.uv1_objects.empty());
+    EXPECT_EQ(fallback.charts.size(), 1u);
+    EXPECT_NEAR(static_cast<double>(fallback.texels.size()), 256.0, 40.0);
+
+    settings.texel_size = 0.0f;
+    EXPECT_THROW(build_surface_atlas(valid, {0}, settings), InputError);
+}
+
+TEST(CssmTraversal, EveryStrategyVisitsEachTexelOnceAndChartStrategiesStepToNeighbours) {
+    const scene::Scene scene = scene::make_cornell_box();
+    const SurfaceAtlas atlas = cornell_atlas(scene, 32.0f);
+    const float texel = texel_size_for(atlas.surface_area, 32.0f);
+    for (Traversal traversal : {Traversal::greedy, Traversal::zigzag, Traversal::spiral}) {
+        SCOPED_TRACE(std::string(traversal_name(traversal)));
+        std::vector<std::uint32_t> order = traverse_atlas(scene, atlas, traversal);
+        ASSERT_EQ(order.size(), atlas.texels.size());
+        std::vector<std::uint32_t> sorted = order;
+        std::sort(sorted.begin(), sorted.end());
+        for (std::uint32_t i = 0; i < sorted.size(); ++i) ASSERT_EQ(sorted[i], i);
+        // Steps within a chart are to a neighbouring texel: (nearly) every step is short in 3D.
+        std::size_t short_steps = 0;
+        for (std::size_t i = 1; i < order.size(); ++i) {
+            const glm::vec3 a = glm::vec3(scene.objects[atlas.texels[order[i - 1]].object].transform *
+                                          glm::vec4(atlas.texels[order[i - 1]].position, 1.0f));
+            const glm::vec3 b = glm::vec3(scene.objects[atlas.texels[order[i]].object].transform *
+                                          glm::vec4(atlas.texels[order[i]].position, 1.0f));
+            short_steps += glm::length(a - b) < 1.6f * texel ? 1 : 0;
+        }
+        EXPECT_GT(static_cast<double>(short_steps) / static_cast<double>(order.size() - 1), 0.9);
+    }
+}
+
+TEST(CssmCompression, EveryDecompressedDepthLiesInItsMapsIntervalWithTheFewestRuns) {
+    std::mt19937 random(7);
+    const std::uint32_t pixels = 64, maps = 300;
+    std::vector<DepthInterval> intervals(static_cast<std::size_t>(pixels) * maps);
+    for (std::uint32_t p = 0; p < pixels; ++p) {
+        float depth = 0.5f;
+        for (std::uint32_t m = 0; m < maps; ++m) {
+            // A slowly drifting first hit with a second hit a little behind it, sometimes "don't care".
+            depth = std::clamp(depth + std::uniform_real_distribution<float>(-0.004f, 0.004f)(random), 0.05f, 0.9f);
+            intervals[static_cast<std::size_t>(m) * pixels + p] =
+                (random() % 10 == 0) ? kDontCare : admissible_interval(depth, depth + 0.01f);
+        }
+    }
+    DepthSequenceCompressor compressor(pixels);
+    compressor.append(std::span<const DepthInterval>(intervals.data(), 100u * pixels), 100);
+    compressor.append(std::span<const DepthInterval>(intervals.data() + 100u * pixels, 200u * pixels), 200);
+    const CompressedDepthMaps compressed = compressor.finish();
+    ASSERT_EQ(compressed.maps, maps);
+    for (std::uint32_t p = 0; p < pixels; ++p) {
+        std::size_t fewest = 1;
+        std::uint16_t lo = 0, hi = kDepthMax;
+        for (std::uint32_t m = 0; m < maps; ++m) {
+            const DepthInterval interval = intervals[static_cast<std::size_t>(m) * pixels + p];
+            const std::uint16_t stored = compressed.depth(m, p);
+            ASSERT_GE(stored, interval.lo) << "pixel " << p << " map " << m;
+            ASSERT_LE(stored, interval.hi) << "pixel " << p << " map " << m;
+            if (std::max(lo, interval.lo) > std::min(hi, interval.hi)) {
+                ++fewest;
+                lo = interval.lo;
+                hi = interval.hi;
+            } else {
+                lo = std::max(lo, interval.lo);
+                hi = std::min(hi, interval.hi);
+            }
+        }
+        EXPECT_EQ(compressed.pixel_runs[p + 1] - compressed.pixel_runs[p], fewest);
+    }
+    EXPECT_LT(compressed.compressed_bytes(), compressed.uncompressed_bytes());
+    // A hit too thin to separate in 16 bits stores the first hit; no hit stores the far plane.
+    EXPECT_EQ(admissible_interval(0.5f, 0.5f).lo, admissible_interval(0.5f, 0.5f).hi);
+    EXPECT_EQ(admissible_interval(1.0f, 1.0f).lo, kDepthMax);
+}
+
+TEST(CssmVisibility, CubeMapsAgreeWithRayQueriesOnRandomCornellPairs) {
+    const scene::Scene scene = scene::make_cornell_box();
+    const SurfaceAtlas atlas = cornell_atlas(scene, 24.0f);
+    const reference::RayScene rays(scene);
+    const float far = glm::length(scene.world_bounds().extent());
+    const CubeMapSettings settings{32, 0.25f * texel_size_for(atlas.surface_area, 24.0f), far};
+    std::uint32_t reported = 0;
+    const SurfaceShadowMaps maps = bake_surface_shadow_maps(scene, atlas, traverse_atlas(scene, atlas, Traversal::spiral),
+                                                            settings, rays, [&](std::uint32_t done, std::uint32_t total) {
+                                                                EXPECT_LE(done, total);
+                                                                reported = done;
+                                                                return true;
+                                                            });
+    EXPECT_EQ(reported, atlas.texels.size());
+    EXPECT_EQ(maps.depth.maps, atlas.texels.size());
+    EXPECT_GT(static_cast<double>(maps.depth.uncompressed_bytes()) / maps.depth.compressed_bytes(), 2.0);
+
+    std::mt19937 random(3);
+    std::uniform_int_distribution<std::uint32_t> pick(0, static_cast<std::uint32_t>(atlas.texels.size() - 1));
+    int pairs = 0, disagree = 0, occluded = 0;
+    while (pairs < 4000) {
+        const std::uint32_t sender = pick(random), receiver = pick(random);
+        const glm::vec3 from = maps.origins[sender], to = maps.origins[receiver];
+        const glm::vec3 d = to - from;
+        const float distance = glm::length(d);
+        if (distance < 0.05f) continue;
+        const glm::vec3 ns = atlas.texels[sender].normal, nr = atlas.texels[receiver].normal;
+        if (glm::dot(ns, d) <= 0.1f * distance || glm::dot(nr, -d) <= 0.1f * distance) continue;  // facing each other
+        ++pairs;
+        const bool blocked = rays.occluded(from, d / distance, 1e-4f, distance * (1.0f - 1e-4f));
+        occluded += blocked ? 1 : 0;
+        const bool cube_blocked = cssm_visibility(maps, sender, to, 1) < 0.5f;
+        disagree += blocked != cube_blocked ? 1 : 0;
+    }
+    EXPECT_GT(occluded, 200);  // the blocks do hide part of the room
+    EXPECT_LT(static_cast<double>(disagree) / pairs, 0.03) << disagree << " of " << pairs;
+
+    int calls = 0;
+    EXPECT_THROW(bake_surface_shadow_maps(scene, atlas, traverse_atlas(scene, atlas, Traversal::zigzag), settings, rays,
+                                          [&](std::uint32_t, std::uint32_t) { return ++calls < 2; }),
+                 BakeCancelled);
+}
+
+}  // namespace
+}  // namespace bounce::methods::cssm
