@@ -1,6 +1,7 @@
 #include "renderer/methods/registry.hpp"
 
 #include "renderer/base/error.hpp"
+#include "renderer/methods/cssm/cssm_method.hpp"
 #include "renderer/methods/direct/direct_method.hpp"
 #include "renderer/methods/isr/isr_method.hpp"
 #include "renderer/methods/vct/vct_method.hpp"
@@ -29,6 +30,7 @@ const MethodRegistry& MethodRegistry::builtin() {
         r.add(direct::method_info());
         r.add(vct::method_info());
         r.add(isr::method_info());
+        r.add(cssm::method_info());
         r.add(reference::method_info());
         return r;
     }();

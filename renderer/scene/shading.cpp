@@ -64,6 +64,11 @@ glm::vec3 evaluate_brdf(const SurfaceMaterial& m, const glm::vec3& n, const glm:
     return glm::mix(dielectric, metal, m.metallic);
 }
 
+glm::vec3 diffuse_albedo(const SurfaceMaterial& m) {
+    const float mean_fresnel = m.specular * (kDielectricF0 + (1.0f - kDielectricF0) / 21.0f);
+    return (1.0f - mean_fresnel) * (1.0f - mean_fresnel) * (1.0f - m.metallic) * m.base_color;
+}
+
 void orthonormal_basis(const glm::vec3& n, glm::vec3& t, glm::vec3& b) {
     // Duff et al. 2017, "Building an Orthonormal Basis, Revisited".
     const float sign = std::copysign(1.0f, n.z);

@@ -31,6 +31,10 @@ float smith_visibility(float n_dot_l, float n_dot_v, float alpha);
 glm::vec3 evaluate_brdf(const SurfaceMaterial& material, const glm::vec3& n, const glm::vec3& v,
                         const glm::vec3& l);
 
+// The diffuse lobe's hemispherical albedo with Fresnel's mean over the hemisphere on the way in and out:
+// what a diffuse-only transport (radiosity) reflects. Twin of diffuse_albedo in brdf.glsl.
+glm::vec3 diffuse_albedo(const SurfaceMaterial& material);
+
 // Importance sampling of f(l, v) cos: a mixture of GGX normal-distribution sampling (the specular
 // lobe) and cosine-weighted hemisphere sampling (the diffuse lobe).
 struct BrdfSample {

@@ -24,7 +24,7 @@ TEST(MethodRegistry, PresetsResolveAndOverridesApply) {
 
 TEST(MethodRegistry, FailsLoudlyNamingTheFault) {
     const auto& registry = MethodRegistry::builtin();
-    EXPECT_NE(message_of([&] { registry.find("photon"); }).find("unknown method 'photon' (known: direct, vct, isr, reference)"),
+    EXPECT_NE(message_of([&] { registry.find("photon"); }).find("unknown method 'photon' (known: direct, vct, isr, cssm, reference)"),
               std::string::npos);
     EXPECT_NE(message_of([&] { registry.resolve("direct", "insane", {}); }).find("unknown preset 'insane'"),
               std::string::npos);

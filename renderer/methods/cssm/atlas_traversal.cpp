@@ -148,6 +148,9 @@ std::vector<std::uint32_t> traverse_atlas(const scene::Scene& scene, const Surfa
     for (const AtlasTexel& t : atlas.texels) chart_empty[t.chart] = 0;
     for (std::size_t c = 0; c < atlas.charts.size(); ++c)
         centroids[c] = world_position(scene, atlas.charts[c].object, atlas.charts[c].centroid);
+    scene::Aabb bounds;
+    for (const glm::vec3& p : positions) bounds.extend(p);
+    const float grid = 4096.0f / std::max(glm::length(bounds.extent()), 1e-30f);
     glm::vec3 last = positions.empty() ? glm::vec3(0.0f) : positions[0];
     std::int64_t chart = atlas.texels.empty() ? -1 : static_cast<std::int64_t>(atlas.texels[0].chart);
     while (chart >= 0) {
@@ -163,9 +166,11 @@ std::vector<std::uint32_t> traverse_atlas(const scene::Scene& scene, const Surfa
         float best = std::numeric_limits<float>::max();
         for (std::size_t c = 0; c < atlas.charts.size(); ++c) {
             if (chart_done[c] || chart_empty[c]) continue;
-            const glm::vec3 d = centroids[c] - last;
-            if (glm::dot(d, d) < best) {
-                best = glm::dot(d, d);
+            // Distances on a grid of 1/4096 of the atlas's extent, ties to the lower index: the same
+            // chain at any scale (symmetric scenes have equidistant charts).
+            const float d = std::floor(glm::length(centroids[c] - last) * grid);
+            if (d < best) {
+                best = d;
                 chart = static_cast<std::int64_t>(c);
             }
         }

@@ -1,0 +1,20 @@
+#version 450 core
+// The end of a bounce: gathered irradiance becomes diffuse exitance (the next bounce's source), and
+// is added to the texels' total.
+layout(local_size_x = 64) in;
+#include "common/compute.glsl"
+#define CSSM_BRDF(l) 1.0
+#include "cssm/cssm_tree.glsl"
+
+layout(std430, binding = CSSM_BINDING_TEXEL_IN) buffer CssmTexelIn { vec4 texel_in[]; };     // irradiance in, exitance out
+layout(std430, binding = CSSM_BINDING_TEXEL_OUT) buffer CssmTexelOut { vec4 texel_total[]; };
+
+uniform uint u_texel_count;
+
+void main() {
+    uint t = thread_index();
+    if (t >= u_texel_count) return;
+    vec3 exitance = texels[t].albedo.rgb * INV_PI * texel_in[t].rgb;
+    texel_in[t] = vec4(exitance, 0.0);
+    texel_total[t] = vec4(texel_total[t].rgb + exitance, 0.0);
+}

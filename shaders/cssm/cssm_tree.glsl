@@ -1,0 +1,166 @@
+// The radiosity hierarchy, the CSSM visibility query and the stackless cut traversal that gathers
+// light at one receiver (§3.2.2, §4.3 of ../shared/papers/cssm-ritschel-2008.md). Used by the atlas
+// gather (receiver: a texel) and the final gather (receiver: a pixel).
+#include "cssm/cssm_layout.h"
+#include "common/math.glsl"
+
+struct CssmNode {
+    vec4 centre_radius;
+    vec4 normal_cone;  // xyz: mean normal, w: cosine of the cone holding every normal below
+    vec4 area;         // x: area
+    uvec4 links;       // child, skip, representative texel, leaf texel (CSSM_NONE for internal nodes)
+};
+
+struct CssmTexel {
+    vec4 position_area;  // world position (at bake time: the maps' frame), area
+    vec4 normal_map;     // world normal, w: the texel's map in the bake sequence
+    vec4 albedo;         // diffuse albedo
+    vec4 emission;       // emitted radiance
+};
+
+layout(std430, binding = CSSM_BINDING_NODES) readonly buffer CssmNodes { CssmNode nodes[]; };
+layout(std430, binding = CSSM_BINDING_NODE_RADIANCE) buffer CssmNodeRadiance { vec4 node_radiance[]; };
+layout(std430, binding = CSSM_BINDING_TEXELS) readonly buffer CssmTexels { CssmTexel texels[]; };
+layout(std430, binding = CSSM_BINDING_PIXEL_RUNS) readonly buffer CssmPixelRuns { uint pixel_runs[]; };
+layout(std430, binding = CSSM_BINDING_RUN_START) readonly buffer CssmRunStart { uint run_start[]; };
+layout(std430, binding = CSSM_BINDING_RUN_DEPTH) readonly buffer CssmRunDepth { uint run_depth[]; };
+layout(std430, binding = CSSM_BINDING_ROOTS) readonly buffer CssmRoots { uint roots[]; };
+layout(std430, binding = CSSM_BINDING_COUNTERS) buffer CssmCounters { uint counters[]; };
+
+uniform int u_face_size;      // cube-map face side, pixels
+uniform float u_far_plane;    // world units
+uniform float u_near_plane;   // world units
+uniform int u_pcf;            // filter width in pixels (odd)
+uniform float u_threshold;    // refine while the tone-mapped bound on received radiance exceeds it
+uniform uint u_first_root;    // this batch's subtrees: roots[u_first_root .. + u_root_count)
+uniform uint u_root_count;
+
+uint stored_depth(uint map, uint pixel) {
+    uint lo = pixel_runs[pixel];
+    uint hi = pixel_runs[pixel + 1u] - 1u;
+    while (lo < hi) {
+        uint mid = (lo + hi + 1u) >> 1u;
+        if (run_start[mid] <= map) lo = mid; else hi = mid - 1u;
+    }
+    uint word = run_depth[lo >> 1u];
+    return (lo & 1u) == 0u ? (word & 0xFFFFu) : (word >> 16u);
+}
+
+// The fraction of the PCF taps around `receiver`'s pixel in the sender texel's cube map that do not
+// occlude it. Twin of cssm_visibility in renderer/methods/cssm/surface_shadow_maps.cpp.
+float cssm_visibility(uint sender_texel, vec3 receiver) {
+    vec3 v = receiver - texels[sender_texel].position_area.xyz;
+    vec3 a = abs(v);
+    int axis = a.x >= a.y && a.x >= a.z ? 0 : (a.y >= a.z ? 1 : 2);
+    float major = max(a[axis], 1e-30);
+    int face = 2 * axis + (v[axis] < 0.0 ? 1 : 0);
+    vec2 uv = vec2(v[(axis + 1) % 3], v[(axis + 2) % 3]) / major;
+    ivec2 pixel = clamp(ivec2(floor((uv * 0.5 + 0.5) * float(u_face_size))), ivec2(0), ivec2(u_face_size - 1));
+    float depth = major / u_far_plane;
+    float limit = depth - (u_near_plane / u_far_plane + depth * 2.0 / float(u_face_size));
+    uint map = uint(texels[sender_texel].normal_map.w);
+    int radius = u_pcf / 2;
+    float lit = 0.0, taps = 0.0;
+    for (int dy = -radius; dy <= radius; ++dy) {
+        for (int dx = -radius; dx <= radius; ++dx) {
+            ivec2 q = clamp(pixel + ivec2(dx, dy), ivec2(0), ivec2(u_face_size - 1));
+            uint p = uint((face * u_face_size + q.y) * u_face_size + q.x);
+            lit += float(stored_depth(map, p)) / 65535.0 >= limit ? 1.0 : 0.0;
+            taps += 1.0;
+        }
+    }
+    return lit / taps;
+}
+
+float luminance(vec3 c) { return dot(c, vec3(0.2126, 0.7152, 0.0722)); }
+
+// A simple gamma tone map against the atlas's mean radiance (the root's): the oracle's threshold
+// then means the same at any light intensity or scene scale.
+float tone_mapped(float radiance) {
+    float white = max(luminance(node_radiance[0].rgb), 1e-30);
+    return pow(max(radiance / white, 0.0), 1.0 / 2.2);
+}
+
+struct Gathered {
+    vec3 irradiance;  // receiver-side: sum of E contributions (or BRDF-weighted radiance, see below)
+    uint gathered;
+    uint visited;
+};
+
+// Light a node sends to a receiver at p with normal n: the disk-to-point form factor times its
+// radiance, pi L A cos_s cos_r / (pi d^2 + A), weighted by the CSSM visibility.
+vec3 node_irradiance(uint node, vec3 p, vec3 n, out vec3 l) {
+    vec3 to_node = nodes[node].centre_radius.xyz - p;
+    float d2 = max(dot(to_node, to_node), 1e-30);
+    l = to_node * inversesqrt(d2);
+    float cos_r = dot(n, l);
+    float cos_s = dot(nodes[node].normal_cone.xyz, -l);
+    if (cos_r <= 0.0 || cos_s <= 0.0) return vec3(0.0);
+    float area = nodes[node].area.x;
+    float visibility = cssm_visibility(nodes[node].links.z, p);
+    return node_radiance[node].rgb * (PI * area * cos_s * cos_r / (PI * d2 + area)) * visibility;
+}
+
+// Upper bound of the irradiance a node can give the receiver (0 when it lies wholly behind either
+// side), from its bounding sphere and normal cone, as in lightcuts.
+float irradiance_bound(uint node, vec3 p, vec3 n) {
+    vec3 to_node = nodes[node].centre_radius.xyz - p;
+    float d = length(to_node);
+    float r = nodes[node].centre_radius.w;
+    if (d <= r * 1.0001) return 3.0e38;  // the receiver is inside: refine
+    vec3 l = to_node / d;
+    float widen = asin(min(r / d, 1.0));
+    float receiver_angle = acos(clamp(dot(n, l), -1.0, 1.0)) - widen;
+    float sender_angle = acos(clamp(dot(nodes[node].normal_cone.xyz, -l), -1.0, 1.0)) -
+                         acos(clamp(nodes[node].normal_cone.w, -1.0, 1.0)) - widen;
+    if (receiver_angle >= 0.5 * PI || sender_angle >= 0.5 * PI) return 0.0;
+    float cos_r = cos(max(receiver_angle, 0.0)), cos_s = cos(max(sender_angle, 0.0));
+    float d_min = d - r;
+    return luminance(node_radiance[node].rgb) * nodes[node].area.x * cos_r * cos_s / (d_min * d_min);
+}
+
+// Refine and gather in one stackless walk over this batch's subtrees (the paper's Fig. 10): a node
+// whose bound, times the receiver's largest BRDF value and tone-mapped, exceeds the threshold is
+// refined (child pointer); otherwise it is gathered and skipped (skip pointer). Leaves are always
+// gathered. `exclude` is the receiver's own texel (CSSM_NONE for pixels). The includer defines
+// CSSM_BRDF(l) as the receiver's BRDF towards l (a constant for texels).
+Gathered gather_cut(vec3 p, vec3 n, float brdf_max, uint exclude) {
+    Gathered result = Gathered(vec3(0.0), 0u, 0u);
+    for (uint r = 0u; r < u_root_count; ++r) {
+        uint root = roots[u_first_root + r];
+        uint end = nodes[root].links.y;
+        uint node = root;
+        while (node != end) {
+            result.visited += 1u;
+            uvec4 links = nodes[node].links;
+            bool leaf = links.x == CSSM_NONE;
+            if (leaf && links.w == exclude) {
+                node = links.y;
+                continue;
+            }
+            float bound = irradiance_bound(node, p, n);
+            if (bound == 0.0) {
+                node = links.y;
+                continue;
+            }
+            if (!leaf && tone_mapped(brdf_max * bound) > u_threshold) {
+                node = links.x;
+                continue;
+            }
+            vec3 l;
+            vec3 e = node_irradiance(node, p, n, l);
+            result.irradiance += e * CSSM_BRDF(l);
+            result.gathered += 1u;
+            node = links.y;
+        }
+    }
+    return result;
+}
+
+void count_gather(Gathered g) {
+    atomicAdd(counters[CSSM_COUNTER_RECEIVERS], 1u);
+    uint low = atomicAdd(counters[CSSM_COUNTER_NODES_LOW], g.gathered);
+    if (low + g.gathered < low) atomicAdd(counters[CSSM_COUNTER_NODES_HIGH], 1u);
+    low = atomicAdd(counters[CSSM_COUNTER_VISITED_LOW], g.visited);
+    if (low + g.visited < low) atomicAdd(counters[CSSM_COUNTER_VISITED_HIGH], 1u);
+}

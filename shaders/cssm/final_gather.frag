@@ -1,0 +1,36 @@
+#version 450 core
+// One batch of the final gather (§4.4): each pixel walks the cut through this batch's subtrees with
+// itself as the receiver, weighting every node by the pixel's full BRDF. Batches add up by blending.
+#include "common/shared_layout.h"
+#include "common/brdf.glsl"
+
+layout(binding = BOUNCE_UNIT_GBUFFER_POSITION) uniform sampler2D u_gbuffer_position;
+layout(binding = BOUNCE_UNIT_GBUFFER_NORMAL) uniform sampler2D u_gbuffer_normal;
+layout(binding = BOUNCE_UNIT_GBUFFER_ALBEDO) uniform sampler2D u_gbuffer_albedo;
+layout(binding = BOUNCE_UNIT_GBUFFER_EMISSIVE) uniform sampler2D u_gbuffer_emissive;
+
+uniform vec3 u_camera_position;
+
+SurfaceMaterial g_material;
+vec3 g_n, g_v;
+#define CSSM_BRDF(l) evaluate_brdf(g_material, g_n, g_v, l)
+#include "cssm/cssm_tree.glsl"
+
+out vec4 out_radiance;
+
+void main() {
+    ivec2 pixel = ivec2(gl_FragCoord.xy);
+    vec4 position = texelFetch(u_gbuffer_position, pixel, 0);
+    if (position.w == 0.0) discard;
+    vec4 normal_roughness = texelFetch(u_gbuffer_normal, pixel, 0);
+    vec4 albedo_metallic = texelFetch(u_gbuffer_albedo, pixel, 0);
+    float specular = texelFetch(u_gbuffer_emissive, pixel, 0).w;
+    g_material = SurfaceMaterial(albedo_metallic.rgb, albedo_metallic.w, normal_roughness.w, specular);
+    g_n = normal_roughness.xyz;
+    g_v = safe_normalize(u_camera_position - position.xyz, g_n);
+    vec3 diffuse = diffuse_albedo(g_material);
+    float brdf_max = max(diffuse.r, max(diffuse.g, diffuse.b)) * INV_PI;
+    Gathered g = gather_cut(position.xyz, g_n, brdf_max, CSSM_NONE);
+    count_gather(g);
+    out_radiance = vec4(finite_or_zero(g.irradiance), 0.0);
+}
