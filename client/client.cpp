@@ -91,12 +91,17 @@ protocol::Message Client::send_raw_and_read(std::span<const std::uint8_t> bytes)
     return read();
 }
 
-protocol::Message Client::request(protocol::MessageType type, nlohmann::json body, std::vector<std::uint8_t> attachment) {
+protocol::Message Client::request(protocol::MessageType type, nlohmann::json body, std::vector<std::uint8_t> attachment,
+                                  const std::function<void(const nlohmann::json&)>& on_progress) {
     const std::uint64_t id = next_id_++;
     send_raw(protocol::encode({static_cast<std::uint16_t>(type), id, std::move(body), std::move(attachment)}));
     for (;;) {
         protocol::Message reply = read();
         if (reply.request_id != id) continue;  // a late reply to an earlier, abandoned request
+        if (reply.type == static_cast<std::uint16_t>(protocol::MessageType::progress)) {
+            if (on_progress) on_progress(reply.body);
+            continue;
+        }
         if (reply.type == static_cast<std::uint16_t>(protocol::MessageType::error)) {
             const auto code = protocol::error_code_from_name(reply.body.value("code", "internal"))
                                   .value_or(protocol::ErrorCode::internal);

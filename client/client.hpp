@@ -9,6 +9,7 @@
 
 #include <chrono>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <span>
 #include <stdexcept>
@@ -47,9 +48,11 @@ public:
     const nlohmann::json& hello() const { return hello_; }
 
     // Sends a request and returns its reply (`ok`, `frame`, `hello` or `pong`); throws ServerError
-    // for an `error` reply and std::runtime_error when the connection fails.
+    // for an `error` reply and std::runtime_error when the connection fails. `progress` events of
+    // the request (a bake's) go to `on_progress` when given.
     protocol::Message request(protocol::MessageType type, nlohmann::json body = nlohmann::json::object(),
-                              std::vector<std::uint8_t> attachment = {});
+                              std::vector<std::uint8_t> attachment = {},
+                              const std::function<void(const nlohmann::json&)>& on_progress = {});
     // Sends raw bytes (tests use this to send broken frames) and reads one reply.
     protocol::Message send_raw_and_read(std::span<const std::uint8_t> bytes);
     void send_raw(std::span<const std::uint8_t> bytes);

@@ -20,6 +20,7 @@ using nlohmann::json;
 constexpr const char* kUsage = R"(usage: bounce [--connect HOST:PORT] [--token-file F] COMMAND ...
   render  --scene S [--method M] [--preset P] [--set KNOB=VALUE ...] [--size WxH]
           [--exposure E] [--tone none|reinhard|aces] [--camera NAME] -o OUT.(png|jpg|exr)
+  bake    --scene S [--method cssm] [--preset P] [--set KNOB=VALUE ...]   (progress on stderr)
   load    PATH --name S
   upload  FILE.glb --name S
   move    --scene S --object O [--translate X,Y,Z] [--rotate-deg RX,RY,RZ] [--scale K]
@@ -239,6 +240,14 @@ int run(const std::vector<std::string>& words) {
         if (auto camera = args.get("--camera")) body["camera"] = *camera;
         const auto reply = client.request(MessageType::render, body);
         write_file(out, reply.attachment);
+        std::cout << reply.body.dump() << "\n";
+    } else if (command == "bake") {
+        json body = render_body(args);
+        if (!args.get("--method")) body["method"] = "cssm";
+        const auto reply = client.request(MessageType::bake, body, {}, [](const json& progress) {
+            std::cerr << "bake: " << progress.value("stage", "") << " "
+                      << static_cast<int>(100.0 * progress.value("fraction", 0.0)) << "%\n";
+        });
         std::cout << reply.body.dump() << "\n";
     } else if (command == "load" || command == "upload") {
         if (args.positional.size() != 1) throw UsageError(command + " takes one file");

@@ -95,12 +95,33 @@ void Renderer::make_display_image(image::Frame& frame, const image::DisplayTrans
     timers_.resolve();
 }
 
-RenderResult Renderer::render(SceneResources& resources, const RenderRequest& request) {
-    const auto start = Clock::now();
-    if (request.width < 1 || request.height < 1 || request.width > kMaxDimension || request.height > kMaxDimension) {
+namespace {
+
+void check_size(const RenderRequest& request) {
+    if (request.width < 1 || request.height < 1 || request.width > Renderer::kMaxDimension ||
+        request.height > Renderer::kMaxDimension) {
         throw InputError(fmt::format("frame size {}x{} is outside 1..{} per side", request.width, request.height,
-                                     kMaxDimension));
+                                     Renderer::kMaxDimension));
     }
+}
+
+}  // namespace
+
+void Renderer::fill_stats(FrameStats& stats, const RenderRequest& request, const methods::KnobValues& knobs,
+                          const methods::Method& method, const SceneResources& resources) {
+    stats.method = request.method;
+    stats.preset = request.preset;
+    stats.knobs = knobs;
+    stats.passes = timers_.resolve();
+    for (const auto& pass : stats.passes) stats.gpu_ms += pass.gpu_ms;
+    stats.resident = resources.resident();
+    stats.method_statistics = method.statistics();
+    for (const auto& structure : stats.resident) stats.resident_bytes += structure.bytes;
+}
+
+template <typename Run>
+void Renderer::with_frame(SceneResources& resources, const RenderRequest& request, const methods::Precompute& precompute,
+                          Run&& run) {
     const auto& registry = methods::MethodRegistry::builtin();
     const methods::KnobValues knobs = registry.resolve(request.method, request.preset, request.knobs);
     auto& method = resources.methods[request.method];
@@ -116,31 +137,52 @@ RenderResult Renderer::render(SceneResources& resources, const RenderRequest& re
     const methods::FrameContext frame{
         {scene, resources.gpu_scene, shaders_, state_, timers_, output_framebuffer_, request.width, request.height,
          camera, view, projection, projection * view},
-        knobs};
+        knobs,
+        precompute};
+    run(*method, frame, knobs);
+}
 
-    timers_.begin_frame();
-    method->render(frame);
-    const gpu::Texture* display = nullptr;
-    if (request.make_display_image) display = &tonemap_.run(shaders_, state_, timers_, output_, request.display);
-
-    RenderResult result;
-    const auto readback_start = Clock::now();
-    result.frame.width = request.width;
-    result.frame.height = request.height;
-    result.frame.rgba = read_texture<float>(output_, GL_FLOAT);
-    if (display) result.frame.display_rgba8 = read_texture<std::uint8_t>(*display, GL_UNSIGNED_BYTE);
-    result.stats.readback_ms = ms_since(readback_start);
-
-    FrameStats& stats = result.stats;
-    stats.method = request.method;
-    stats.preset = request.preset;
-    stats.knobs = knobs;
-    stats.passes = timers_.resolve();
-    for (const auto& pass : stats.passes) stats.gpu_ms += pass.gpu_ms;
-    stats.resident = resources.resident();
-    stats.method_statistics = method->statistics();
-    for (const auto& structure : stats.resident) stats.resident_bytes += structure.bytes;
+FrameStats Renderer::prepare(SceneResources& resources, const RenderRequest& request,
+                             const std::function<bool(double, const std::string&)>& progress) {
+    const auto start = Clock::now();
+    check_size(request);
+    if (methods::MethodRegistry::builtin().find(request.method).device != methods::MethodDevice::gpu) {
+        throw InputError(fmt::format("method '{}' has nothing to bake", request.method));
+    }
+    methods::Precompute precompute = precompute_;
+    precompute.progress = progress;
+    FrameStats stats;
+    with_frame(resources, request, precompute, [&](methods::Method& method, const methods::FrameContext& frame,
+                                                   const methods::KnobValues& knobs) {
+        timers_.begin_frame();
+        method.prepare(frame);
+        fill_stats(stats, request, knobs, method, resources);
+    });
     stats.render_ms = ms_since(start);
+    return stats;
+}
+
+RenderResult Renderer::render(SceneResources& resources, const RenderRequest& request) {
+    const auto start = Clock::now();
+    check_size(request);
+    RenderResult result;
+    with_frame(resources, request, precompute_, [&](methods::Method& method, const methods::FrameContext& frame,
+                                                    const methods::KnobValues& knobs) {
+        timers_.begin_frame();
+        method.render(frame);
+        const gpu::Texture* display = nullptr;
+        if (request.make_display_image) display = &tonemap_.run(shaders_, state_, timers_, output_, request.display);
+
+        const auto readback_start = Clock::now();
+        result.frame.width = request.width;
+        result.frame.height = request.height;
+        result.frame.rgba = read_texture<float>(output_, GL_FLOAT);
+        if (display) result.frame.display_rgba8 = read_texture<std::uint8_t>(*display, GL_UNSIGNED_BYTE);
+        result.stats.readback_ms = ms_since(readback_start);
+
+        fill_stats(result.stats, request, knobs, method, resources);
+    });
+    result.stats.render_ms = ms_since(start);
     return result;
 }
 

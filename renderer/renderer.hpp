@@ -9,6 +9,8 @@
 #include "renderer/methods/registry.hpp"
 #include "renderer/passes/tonemap_pass.hpp"
 
+#include <filesystem>
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
@@ -72,6 +74,15 @@ public:
     // Throws InputError for bad requests (unknown method, preset or knob, size out of range).
     RenderResult render(SceneResources& resources, const RenderRequest& request);
 
+    // Builds the method's precomputed structures for the request's knobs (Method::prepare) and
+    // returns the stats a frame would carry, without drawing one. `progress` may cancel (the
+    // method then throws).
+    FrameStats prepare(SceneResources& resources, const RenderRequest& request,
+                       const std::function<bool(double, const std::string&)>& progress);
+
+    // Where methods persist baked structures across restarts (none by default).
+    void set_cache_dir(std::optional<std::filesystem::path> dir) { precompute_.cache_dir = std::move(dir); }
+
     // Tone-maps a linear frame made elsewhere (the CPU reference) into frame.display_rgba8 with the
     // same GPU pass every GPU frame goes through.
     void make_display_image(image::Frame& frame, const image::DisplayTransform& transform);
@@ -80,11 +91,18 @@ public:
 
 private:
     std::unique_ptr<gpu::EglContext> context_;  // first member: destroyed last
+    methods::Precompute precompute_;
     gpu::ShaderCache shaders_;
     gpu::StateCache state_;
     gpu::GpuTimers timers_;
     passes::TonemapPass tonemap_;
     void ensure_output(int width, int height);
+    void fill_stats(FrameStats& stats, const RenderRequest& request, const methods::KnobValues& knobs,
+                    const methods::Method& method, const SceneResources& resources);
+    // Resolves the request's knobs, creates its method if needed, and calls run(method, frame, knobs).
+    template <typename Run>
+    void with_frame(SceneResources& resources, const RenderRequest& request, const methods::Precompute& precompute,
+                    Run&& run);
     gpu::Texture output_;
     gpu::Framebuffer output_framebuffer_;
 };

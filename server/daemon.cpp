@@ -90,7 +90,16 @@ Daemon::Daemon(DaemonConfig config)
     }
     render_ = std::make_unique<RenderService>(gpu::DeviceChoice::resolve(config_.device), config_.queue_capacity);
     // The built-in scene, and one tiny frame so every shader is compiled before we report ready.
-    render_->run_and_wait([](Renderer& renderer, SceneRegistry& registry) {
+    if (config_.cache_dir) {
+        std::error_code error;
+        std::filesystem::create_directories(*config_.cache_dir, error);
+        if (error || !std::filesystem::is_directory(*config_.cache_dir)) {
+            throw InputError(fmt::format("--cache-dir {} is not a directory that can be created ({})",
+                                         config_.cache_dir->string(), error.message()));
+        }
+    }
+    render_->run_and_wait([cache_dir = config_.cache_dir](Renderer& renderer, SceneRegistry& registry) {
+        renderer.set_cache_dir(cache_dir);
         SceneEntry& entry = registry.put("cornell", scene::make_cornell_box(), "builtin");
         RenderRequest warmup;
         warmup.width = warmup.height = 8;

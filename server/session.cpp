@@ -152,8 +152,7 @@ void Session::dispatch(protocol::Message message) {
         return;
     }
     if (static_cast<MessageType>(message.type) == MessageType::stream_start ||
-        static_cast<MessageType>(message.type) == MessageType::stream_stop ||
-        static_cast<MessageType>(message.type) == MessageType::bake) {
+        static_cast<MessageType>(message.type) == MessageType::stream_stop) {
         fail(id, ErrorCode::unsupported, fmt::format("'{}' is not available in this daemon yet", type));
         return;
     }
@@ -263,6 +262,7 @@ void Session::execute(const protocol::Message& message, Clock::time_point receiv
                 deliver_frame(id, order, result, entry.version, received, started, Clock::now());
                 return;
             }
+            case MessageType::bake: reply = bake(id, body, registry, renderer, cancelled); break;
             default:
                 throw RequestError(ErrorCode::unsupported, "not a request the render thread runs");
         }
@@ -276,6 +276,43 @@ void Session::execute(const protocol::Message& message, Clock::time_point receiv
         fail(id, failure.code, failure.message, failure.field);
         asio::post(socket_.get_executor(), [self = shared_from_this(), id] { self->finish(id); });
     }
+}
+
+// Runs on the render thread: builds a method's precomputed structures for a preset and knobs,
+// sending `progress` events (at most five a second, and the last) until the `ok` with its stats.
+// A `cancel` of this request stops it between steps.
+json Session::bake(std::uint64_t id, const json& body, SceneRegistry& registry, Renderer& renderer,
+                   const std::shared_ptr<std::atomic<bool>>& cancelled) {
+    const RenderOrder order = parse_render(body, daemon_.config().max_pixels);
+    SceneEntry& entry = registry.get(order.scene);
+    auto last_sent = Clock::now() - std::chrono::seconds(1);
+    const auto started = Clock::now();
+    FrameStats stats;
+    try {
+        stats = renderer.prepare(*entry.resources, order.request, [&](double fraction, const std::string& stage) {
+            if (cancelled->load()) return false;
+            const auto now = Clock::now();
+            if (now - last_sent >= std::chrono::milliseconds(200) || fraction >= 1.0) {
+                send(protocol::make_message(MessageType::progress, id, {{"fraction", fraction}, {"stage", stage}}));
+                last_sent = now;
+            }
+            return true;
+        });
+    } catch (const Cancelled& stop) {
+        throw RequestError(ErrorCode::cancelled, stop.what());
+    }
+    daemon_.metrics().set_resident_bytes(order.scene, stats.resident_bytes);
+    json resident = json::array();
+    for (const auto& structure : stats.resident)
+        resident.push_back({{"structure", structure.name}, {"bytes", structure.bytes}, {"reason", structure.reason}});
+    return {{"scene", order.scene},
+            {"method", stats.method},
+            {"preset", stats.preset},
+            {"knobs", stats.knobs},
+            {"bake_ms", ms_between(started, Clock::now())},
+            {"resident", resident},
+            {"resident_bytes", stats.resident_bytes},
+            {"method_stats", stats.method_statistics}};
 }
 
 // Runs on the render thread: snapshots the scene, so the trace on the CPU pool never races with

@@ -48,6 +48,8 @@ private:
     void submit(protocol::Message message);
     void execute(const protocol::Message& message, Clock::time_point received, Clock::time_point deadline,
                  const std::shared_ptr<std::atomic<bool>>& cancelled, SceneRegistry& registry, Renderer& renderer);
+    nlohmann::json bake(std::uint64_t id, const nlohmann::json& body, SceneRegistry& registry, Renderer& renderer,
+                        const std::shared_ptr<std::atomic<bool>>& cancelled);
     void render_on_cpu(const protocol::Message& message, const RenderOrder& order, const SceneEntry& entry,
                        Clock::time_point received, const std::shared_ptr<std::atomic<bool>>& cancelled);
     void deliver_frame(std::uint64_t id, const RenderOrder& order, std::shared_ptr<RenderResult> result,

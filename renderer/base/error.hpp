@@ -23,6 +23,12 @@ public:
     using Error::Error;
 };
 
+// Thrown when long work stops because its caller asked it to (a progress callback returned false).
+class Cancelled : public Error {
+public:
+    using Error::Error;
+};
+
 namespace detail {
 [[noreturn]] void throw_error(const std::string& message, const std::source_location& where);
 }

@@ -8,7 +8,10 @@
 
 #include "renderer/passes/pass_context.hpp"
 
+#include <filesystem>
+#include <functional>
 #include <map>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -25,11 +28,19 @@ struct ResidentStructure {
     std::string reason;
 };
 
+// What long precomputations (bakes) may use: a directory where they persist across restarts, and
+// a progress report (fraction done, stage) that cancels the work when it returns false.
+struct Precompute {
+    std::optional<std::filesystem::path> cache_dir;
+    std::function<bool(double fraction, const std::string& stage)> progress;
+};
+
 // Everything a method needs to render one frame: the pass context plus the resolved knobs. The
 // method draws linear HDR radiance into `output` (RGBA32F, width x height, alpha = coverage),
 // clearing it first.
 struct FrameContext : passes::PassContext {
     const KnobValues& knobs;
+    const Precompute& precompute;
 
     // A knob's value (validated by the registry, so present for every knob the method declares).
     double knob(std::string_view name) const;
@@ -41,6 +52,10 @@ public:
     virtual ~Method() = default;
     virtual std::string_view name() const = 0;
     virtual void render(const FrameContext& frame) = 0;
+    // Builds the precomputed structures these knobs need without drawing a frame (the `bake`
+    // request), reporting progress through frame.precompute. Nothing by default: render() builds
+    // what it needs lazily.
+    virtual void prepare(const FrameContext& frame) { (void)frame; }
     // The structures held right now, with their bytes and the reason each exists.
     virtual std::vector<ResidentStructure> resident() const = 0;
     // Counts that describe the method's state after the last frame (structure sizes, how often each

@@ -70,6 +70,14 @@ int DaemonProcess::terminate_and_wait() {
     return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
 }
 
+void DaemonProcess::kill_hard() {
+    if (pid_ <= 0) return;
+    kill(pid_, SIGKILL);
+    int status = 0;
+    waitpid(pid_, &status, 0);
+    pid_ = -1;
+}
+
 DaemonProcess::~DaemonProcess() {
     terminate_and_wait();
     std::error_code ignored;

@@ -19,6 +19,8 @@ public:
     client::Endpoint endpoint() const { return {"127.0.0.1", port_}; }
     // Sends SIGTERM and returns the exit status (the process's exit code, or 128 + signal).
     int terminate_and_wait();
+    // SIGKILL: the daemon gets no chance to clean up (a crash, or a machine going down).
+    void kill_hard();
     bool running() const;
     const std::filesystem::path& directory() const { return directory_; }
 

@@ -4,7 +4,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
+#include <filesystem>
+#include <unistd.h>
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -275,6 +278,101 @@ TEST(Daemon, IsrRendersWithItsStatsAndRefusesBadKnobs) {
                                              {"knobs", {{"indirect_visibility", 0}, {"bounces", 2}}}});
     }, ErrorCode::bad_request);
     EXPECT_EQ(render(client, body).width, 64) << "serving continues";
+}
+
+// A directory for --cache-dir that outlives the daemons of one test.
+struct CacheDir {
+    CacheDir() : path(std::filesystem::temp_directory_path() / ("bounce-cache-" + std::to_string(::getpid()) + "-" +
+                                                                 std::to_string(counter++))) {
+        std::filesystem::create_directories(path);
+    }
+    ~CacheDir() {
+        std::error_code ignored;
+        std::filesystem::remove_all(path, ignored);
+    }
+    std::vector<std::filesystem::path> files() const {
+        std::vector<std::filesystem::path> found;
+        for (const auto& entry : std::filesystem::directory_iterator(path)) found.push_back(entry.path().filename());
+        return found;
+    }
+    std::filesystem::path path;
+    static inline int counter = 0;
+};
+
+TEST(Daemon, CssmBakeReportsProgressAndARestartedDaemonReusesItsCache) {
+    CacheDir cache;
+    const json bake = {{"scene", "cornell"}, {"method", "cssm"}, {"preset", "low"}};
+    {
+        DaemonProcess daemon({"--cache-dir", cache.path.string()});
+        Client client(daemon.endpoint());
+        std::vector<double> fractions;
+        const auto reply = client.request(MessageType::bake, bake, {}, [&](const json& progress) {
+            fractions.push_back(progress.at("fraction").get<double>());
+            EXPECT_EQ(progress.at("stage").get<std::string>(), "depth cube maps");
+        });
+        ASSERT_FALSE(fractions.empty());
+        EXPECT_TRUE(std::is_sorted(fractions.begin(), fractions.end()));
+        EXPECT_DOUBLE_EQ(fractions.back(), 1.0);
+        const json& stats = reply.body.at("method_stats");
+        EXPECT_EQ(stats.at("bakes").get<double>(), 1.0);
+        EXPECT_EQ(stats.at("bakes_loaded").get<double>(), 0.0);
+        EXPECT_GT(stats.at("cube_maps").get<double>(), 100.0);
+        EXPECT_LT(stats.at("compressed_bytes").get<double>(), stats.at("uncompressed_bytes").get<double>());
+        ASSERT_EQ(cache.files().size(), 1u);  // the bake, and no temporary file left over
+        // A render with the same knobs uses the bake already resident.
+        const auto frame = client.request(MessageType::render, {{"scene", "cornell"}, {"method", "cssm"}, {"preset", "low"},
+                                                                {"width", 32}, {"height", 32}, {"format", "exr"}});
+        EXPECT_EQ(frame.body.at("method_stats").at("bakes").get<double>(), 1.0);
+        expect_error([&] { client.request(MessageType::bake, {{"scene", "cornell"}, {"method", "reference"}}); },
+                     ErrorCode::bad_request);
+    }
+    DaemonProcess restarted({"--cache-dir", cache.path.string()});
+    Client client(restarted.endpoint());
+    const auto frame = client.request(MessageType::render, {{"scene", "cornell"}, {"method", "cssm"}, {"preset", "low"},
+                                                            {"width", 32}, {"height", 32}, {"format", "exr"}});
+    const json& stats = frame.body.at("method_stats");
+    EXPECT_EQ(stats.at("bakes").get<double>(), 0.0) << "the restarted daemon baked again";
+    EXPECT_EQ(stats.at("bakes_loaded").get<double>(), 1.0);
+}
+
+TEST(Daemon, ABakeKilledMidwayLeavesTheCacheUsable) {
+    CacheDir cache;
+    {
+        DaemonProcess daemon({"--cache-dir", cache.path.string()});
+        Client client(daemon.endpoint());
+        // Ask for a long bake, and kill the daemon as soon as it reports progress.
+        client.send_raw(protocol::encode({static_cast<std::uint16_t>(MessageType::bake), 7,
+                                          {{"scene", "cornell"}, {"method", "cssm"}, {"preset", "ultra"}, {"knobs", {{"face_size", 64}}}},
+                                          {}}));
+        const auto event = client.read();
+        ASSERT_EQ(event.type, static_cast<std::uint16_t>(MessageType::progress));
+        EXPECT_LT(event.body.at("fraction").get<double>(), 1.0);
+        daemon.kill_hard();
+    }
+    // Bakes are written only once complete (to a temporary name, renamed into place): nothing here.
+    EXPECT_TRUE(cache.files().empty());
+    DaemonProcess restarted({"--cache-dir", cache.path.string()});
+    Client client(restarted.endpoint());
+    const json bake = {{"scene", "cornell"}, {"method", "cssm"}, {"preset", "draft"}};
+    EXPECT_EQ(client.request(MessageType::bake, bake).body.at("method_stats").at("bakes").get<double>(), 1.0);
+    // A cancelled bake answers `cancelled` and the daemon keeps serving.
+    client.send_raw(protocol::encode({static_cast<std::uint16_t>(MessageType::bake), 100,
+                                      {{"scene", "cornell"}, {"method", "cssm"}, {"preset", "ultra"}, {"knobs", {{"face_size", 64}}}},
+                                      {}}));
+    ASSERT_EQ(client.read().type, static_cast<std::uint16_t>(MessageType::progress));
+    client.send_raw(protocol::encode({static_cast<std::uint16_t>(MessageType::cancel), 101, {{"id", 100}}, {}}));
+    bool cancelled = false;
+    for (int i = 0; i < 1000 && !cancelled; ++i) {
+        const auto message = client.read();
+        if (message.request_id == 100 && message.type == static_cast<std::uint16_t>(MessageType::error)) {
+            EXPECT_EQ(message.body.at("code").get<std::string>(), "cancelled");
+            cancelled = true;
+        }
+    }
+    EXPECT_TRUE(cancelled);
+    const json stats = client.request(MessageType::bake, bake).body.at("method_stats");
+    EXPECT_EQ(stats.at("bakes").get<double>(), 1.0) << "the draft bake was lost";
+    EXPECT_EQ(stats.at("bakes_loaded").get<double>(), 0.0) << "the draft bake should have stayed resident";
 }
 
 TEST(Daemon, BadRequestsGetTheRightErrorAndServingContinues) {

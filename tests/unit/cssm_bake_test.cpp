@@ -2,6 +2,7 @@
 // compression of depth sequences, and cube-map visibility against exact ray queries.
 #include "renderer/base/error.hpp"
 #include "renderer/methods/cssm/atlas_traversal.hpp"
+#include "renderer/methods/cssm/bake_cache.hpp"
 #include "renderer/methods/cssm/surface_shadow_maps.hpp"
 #include "renderer/reference/ray_scene.hpp"
 #include "renderer/scene/builtin.hpp"
@@ -10,7 +11,10 @@
 
 #include <algorithm>
 #include <numeric>
+#include <filesystem>
+#include <fstream>
 #include <random>
+#include <unistd.h>
 
 namespace bounce::methods::cssm {
 namespace {
@@ -204,7 +208,54 @@ TEST(CssmVisibility, CubeMapsAgreeWithRayQueriesOnRandomCornellPairs) {
     int calls = 0;
     EXPECT_THROW(bake_surface_shadow_maps(scene, atlas, traverse_atlas(scene, atlas, Traversal::zigzag), settings, rays,
                                           [&](std::uint32_t, std::uint32_t) { return ++calls < 2; }),
-                 BakeCancelled);
+                 Cancelled);
+}
+
+}  // namespace
+}  // namespace bounce::methods::cssm
+
+namespace bounce::methods::cssm {
+namespace {
+
+TEST(CssmBakeCache, RoundTripsAndRejectsDamagedOrForeignFiles) {
+    const scene::Scene scene = scene::make_cornell_box();
+    const BakeParameters parameters{10.0f, 8, Traversal::spiral};
+    const CssmBake bake = bake_scene(scene, parameters);
+    const auto dir = std::filesystem::temp_directory_path() / ("bounce-cssm-cache-test-" + std::to_string(::getpid()));
+    std::filesystem::remove_all(dir);
+    const std::string key = bake_key(scene, parameters);
+    EXPECT_FALSE(load_cached_bake(dir, key, scene).has_value());
+    store_cached_bake(dir, key, bake);
+    const auto loaded = load_cached_bake(dir, key, scene);
+    ASSERT_TRUE(loaded.has_value());
+    EXPECT_EQ(loaded->atlas.texels.size(), bake.atlas.texels.size());
+    EXPECT_EQ(loaded->maps.depth.run_depth, bake.maps.depth.run_depth);
+    EXPECT_EQ(loaded->maps.order, bake.maps.order);
+    EXPECT_EQ(loaded->tree.nodes.size(), bake.tree.nodes.size());
+
+    // Another geometry or other parameters: another key.
+    scene::Scene moved = scene;
+    moved.objects[1].transform[3].x += 0.01f;
+    EXPECT_NE(bake_key(moved, parameters), key);
+    EXPECT_NE(bake_key(scene, BakeParameters{10.0f, 8, Traversal::zigzag}), key);
+
+    // A truncated file, and one with a flipped byte, are ignored rather than trusted.
+    const auto path = bake_path(dir, key);
+    const auto size = std::filesystem::file_size(path);
+    std::filesystem::resize_file(path, size - 5);
+    EXPECT_FALSE(load_cached_bake(dir, key, scene).has_value());
+    store_cached_bake(dir, key, bake);
+    {
+        std::fstream file(path, std::ios::in | std::ios::out | std::ios::binary);
+        file.seekp(static_cast<std::streamoff>(size / 2));
+        char byte = 0;
+        file.read(&byte, 1);
+        file.seekp(static_cast<std::streamoff>(size / 2));
+        byte = static_cast<char>(byte ^ 0x40);
+        file.write(&byte, 1);
+    }
+    EXPECT_FALSE(load_cached_bake(dir, key, scene).has_value());
+    std::filesystem::remove_all(dir);
 }
 
 }  // namespace

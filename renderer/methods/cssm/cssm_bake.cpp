@@ -11,7 +11,6 @@ namespace bounce::methods::cssm {
 CssmBake bake_scene(const scene::Scene& scene, const BakeParameters& parameters, const BakeProgress& progress) {
     CssmBake bake;
     bake.parameters = parameters;
-    bake.geometry = passes::geometry_fingerprint(scene);
     std::vector<std::uint32_t> objects;
     for (std::uint32_t o = 0; o < scene.objects.size(); ++o)
         if (scene.objects[o].mesh >= 0) objects.push_back(o);
@@ -31,23 +30,27 @@ CssmBake bake_scene(const scene::Scene& scene, const BakeParameters& parameters,
     bake.maps = bake_surface_shadow_maps(scene, bake.atlas, traverse_atlas(scene, bake.atlas, parameters.traversal), cube,
                                          rays, progress);
 
+    complete_bake(scene, bake);
+    return bake;
+}
+
+void complete_bake(const scene::Scene& scene, CssmBake& bake) {
+    bake.geometry = passes::geometry_fingerprint(scene);
     const std::size_t texels = bake.atlas.texels.size();
-    std::vector<glm::vec3>& normals = bake.normals;
-    normals.resize(texels);
     std::vector<float> areas(texels);
+    bake.normals.resize(texels);
     bake.albedo.resize(texels);
     bake.emission.resize(texels);
     for (std::size_t t = 0; t < texels; ++t) {
         const AtlasTexel& texel = bake.atlas.texels[t];
         const glm::mat4& transform = scene.objects[texel.object].transform;
-        normals[t] = glm::normalize(glm::transpose(glm::inverse(glm::mat3(transform))) * texel.normal);
+        bake.normals[t] = glm::normalize(glm::transpose(glm::inverse(glm::mat3(transform))) * texel.normal);
         areas[t] = texel.area;
         const scene::Material& material = scene.material(texel.material);
         bake.albedo[t] = scene::diffuse_albedo(scene::SurfaceMaterial::from(material));
         bake.emission[t] = material.emissive;
     }
-    bake.tree = build_radiosity_tree(bake.maps.origins, normals, areas);
-    return bake;
+    bake.tree = build_radiosity_tree(bake.maps.origins, bake.normals, areas);
 }
 
 }  // namespace bounce::methods::cssm

@@ -35,4 +35,8 @@ struct CssmBake {
 // bake_surface_shadow_maps (it may cancel).
 CssmBake bake_scene(const scene::Scene& scene, const BakeParameters& parameters, const BakeProgress& progress = {});
 
+// Fills what is derived from the atlas and the scene rather than stored (normals, materials, the
+// tree): after baking, or after loading a bake from disk.
+void complete_bake(const scene::Scene& scene, CssmBake& bake);
+
 }  // namespace bounce::methods::cssm

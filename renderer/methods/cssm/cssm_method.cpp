@@ -1,7 +1,7 @@
 #include "renderer/methods/cssm/cssm_method.hpp"
 
 #include "renderer/base/log.hpp"
-#include "renderer/methods/cssm/cssm_bake.hpp"
+#include "renderer/methods/cssm/bake_cache.hpp"
 #include "renderer/passes/direct_light_pass.hpp"
 #include "renderer/passes/gbuffer_pass.hpp"
 #include "renderer/passes/light_geometry.hpp"
@@ -101,6 +101,7 @@ public:
 
     std::map<std::string, double> statistics() const override {
         std::map<std::string, double> stats = {{"bakes", static_cast<double>(bakes_)},
+                                               {"bakes_loaded", static_cast<double>(bakes_loaded_)},
                                                {"atlas_solutions", static_cast<double>(atlas_solutions_)}};
         if (!bake_) return stats;
         const auto& maps = bake_->maps;
@@ -136,18 +137,49 @@ private:
         return depth.compressed_bytes() > 0 ? static_cast<double>(depth.uncompressed_bytes()) / depth.compressed_bytes() : 0.0;
     }
 
+    void prepare(const FrameContext& frame) override { ensure_bake(frame); }
+
+    // The bake these knobs need: kept, loaded from the cache directory, or baked (and stored there).
     void ensure_bake(const FrameContext& frame) {
         const BakeParameters parameters{static_cast<float>(frame.knob("atlas_resolution")), frame.knob_int("face_size"),
                                         static_cast<Traversal>(frame.knob_int("traversal"))};
         const std::uint64_t geometry = passes::geometry_fingerprint(frame.scene);
         if (bake_ && bake_->parameters == parameters && bake_->geometry == geometry) return;
         gpu::GpuTimers::Scope timing(frame.timers, "cssm_bake");
-        bake_ = std::make_unique<CssmBake>(bake_scene(frame.scene, parameters));
+        const Precompute& precompute = frame.precompute;
+        const std::string key = bake_key(frame.scene, parameters);
+        if (precompute.cache_dir) {
+            if (auto cached = load_cached_bake(*precompute.cache_dir, key, frame.scene)) {
+                bake_ = std::make_unique<CssmBake>(std::move(*cached));
+                ++bakes_loaded_;
+                ++bake_generation_;
+                log::info("cssm", "loaded bake {} ({} cube maps, {} bytes)", key, bake_->maps.depth.maps,
+                          bake_->maps.depth.compressed_bytes());
+                if (precompute.progress) precompute.progress(1.0, "loaded from cache");
+                upload();
+                return;
+            }
+        }
+        BakeProgress progress;
+        if (precompute.progress) {
+            progress = [&](std::uint32_t done, std::uint32_t total) {
+                return precompute.progress(total > 0 ? static_cast<double>(done) / total : 1.0, "depth cube maps");
+            };
+        }
+        // Replaces the resident bake only once complete: a cancelled bake loses nothing.
+        bake_ = std::make_unique<CssmBake>(bake_scene(frame.scene, parameters, progress));
         ++bakes_;
         ++bake_generation_;
         log::info("cssm", "baked {} cube maps of 6x{}^2 over {} atlas texels in {:.2f} s ({} -> {} bytes, {:.1f}:1)",
                   bake_->maps.depth.maps, parameters.face_size, bake_->atlas.texels.size(), bake_->maps.bake_seconds,
                   bake_->maps.depth.uncompressed_bytes(), bake_->maps.depth.compressed_bytes(), compression_ratio());
+        if (precompute.cache_dir) {
+            try {
+                store_cached_bake(*precompute.cache_dir, key, *bake_);
+            } catch (const std::exception& error) {
+                log::warn("cssm", "bake not cached: {}", error.what());
+            }
+        }
         upload();
     }
 
@@ -350,7 +382,7 @@ private:
     std::unique_ptr<CssmBake> bake_;
     std::uint64_t bake_generation_ = 0;
     std::uint64_t lighting_ = 0;
-    std::size_t bakes_ = 0, atlas_solutions_ = 0;
+    std::size_t bakes_ = 0, bakes_loaded_ = 0, atlas_solutions_ = 0;
     gpu::Buffer texels_, nodes_, node_radiance_, pixel_runs_, run_start_, run_depth_, level_nodes_, roots_, counters_;
     gpu::Buffer direct_, bounce_, total_, irradiance_;
     std::size_t atlas_bytes_ = 0, cssm_bytes_ = 0, tree_bytes_ = 0;

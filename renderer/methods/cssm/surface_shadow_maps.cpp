@@ -106,7 +106,9 @@ SurfaceShadowMaps bake_surface_shadow_maps(const scene::Scene& scene, const Surf
             }
         });
         compressor.append(std::span<const DepthInterval>(intervals.data(), static_cast<std::size_t>(count) * pixels), count);
-        if (progress && !progress(first + count, total)) throw BakeCancelled();
+        if (progress && !progress(first + count, total)) {
+            throw Cancelled(fmt::format("bake cancelled after {} of {} cube maps", first + count, total));
+        }
     }
     maps.depth = compressor.finish();
     maps.bake_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();

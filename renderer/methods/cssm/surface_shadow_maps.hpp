@@ -13,7 +13,6 @@
 #include "renderer/methods/cssm/surface_atlas.hpp"
 
 #include <functional>
-#include <stdexcept>
 
 namespace bounce::reference {
 class RayScene;
@@ -48,12 +47,8 @@ struct SurfaceShadowMaps {
     double bake_seconds = 0.0;
 };
 
-// Reports maps baked so far and the total; returning false cancels the bake (BakeCancelled).
+// Reports maps baked so far and the total; returning false cancels the bake (bounce::Cancelled).
 using BakeProgress = std::function<bool(std::uint32_t done, std::uint32_t total)>;
-
-struct BakeCancelled : std::runtime_error {
-    BakeCancelled() : std::runtime_error("bake cancelled") {}
-};
 
 // Bakes a cube map at every texel of `atlas`, visited in `order`, against the geometry `rays`
 // holds (first and second hits by ray casting through each pixel centre).
