@@ -2,6 +2,7 @@
 
 #include "protocol/protocol.hpp"
 #include "renderer/image/codec.hpp"
+#include "renderer/scene/builtin.hpp"
 #include "renderer/scene/gltf_import.hpp"
 #include "server/request_error.hpp"
 
@@ -107,8 +108,29 @@ json load_scene(SceneRegistry& registry, const SceneRoot& root, const json& body
     } else if (!attachment.empty()) {
         loaded = scene::import_glb_memory(attachment, name);
         source = "upload";
+    } else if (const auto builtin = protocol::get_optional_string(body, "builtin")) {
+        try {
+            loaded = scene::make_builtin_scene(*builtin);
+        } catch (const InputError& error) {
+            throw protocol::FieldError("builtin", error.what());
+        }
+        source = "builtin";
     } else {
-        throw protocol::FieldError("path", "scene.load needs a 'path' or a .glb attachment");
+        throw protocol::FieldError("path", "scene.load needs a 'path', a 'builtin' scene or a .glb attachment");
+    }
+    // Objects declared movable: methods with precomputed structures prepare them for motion now.
+    if (body.contains("dynamic")) {
+        const json& dynamic = body["dynamic"];
+        if (!dynamic.is_array()) throw protocol::FieldError("dynamic", "field 'dynamic' must be an array of object names");
+        for (const json& entry : dynamic) {
+            if (!entry.is_string()) throw protocol::FieldError("dynamic", "field 'dynamic' must be an array of object names");
+            const auto index = loaded.find_object(entry.get<std::string>());
+            if (!index) {
+                throw RequestError(ErrorCode::not_found,
+                                   fmt::format("scene has no object '{}' to declare dynamic", entry.get<std::string>()), "dynamic");
+            }
+            loaded.objects[*index].dynamic = true;
+        }
     }
     const auto warnings = loaded.warnings;
     SceneEntry& entry = registry.put(name, std::move(loaded), source);

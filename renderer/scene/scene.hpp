@@ -110,6 +110,9 @@ struct Object {
     int mesh = -1;
     glm::mat4 initial_transform{1.0f};  // as loaded
     glm::mat4 transform{1.0f};          // current world transform
+    // Declared movable when the scene was loaded: methods that precompute (cssm) prepare it for
+    // motion up front instead of when it first moves.
+    bool dynamic = false;
 
     Aabb world_bounds(const Mesh& mesh_data) const { return mesh_data.bounds.transformed(transform); }
 };

@@ -13,6 +13,12 @@
 #define CSSM_BINDING_ROOTS 8         // uint[]: roots of the subtrees the gathers are batched by
 #define CSSM_BINDING_LEVEL_NODES 9   // uint[]: internal nodes grouped by depth, deepest first
 #define CSSM_BINDING_COUNTERS 10     // uint[CSSM_COUNTERS]
+#define CSSM_BINDING_GROUPS 11       // CssmGroup[]: bake groups (the static objects, each moving object)
+#define CSSM_BINDING_CSMS 12         // CssmCsm[]: coherent shadow maps of the moving groups
+#define CSSM_BINDING_CSM_DIRECTIONS 13  // vec4[]: each CSM's map directions
+#define CSSM_BINDING_CSM_NEAREST 14  // uint[]: each CSM's direction table (6 x CSM_TABLE_FACE^2)
+
+#define CSSM_TABLE_FACE 16
 
 #define CSSM_NONE 0xFFFFFFFFu
 

@@ -12,10 +12,23 @@ struct CssmNode {
 };
 
 struct CssmTexel {
-    vec4 position_area;  // world position (at bake time: the maps' frame), area
-    vec4 normal_map;     // world normal, w: the texel's map in the bake sequence
-    vec4 albedo;         // diffuse albedo
+    vec4 position_area;  // world position (where its object is now), area
+    vec4 normal_map;     // world normal, w: the texel's map in its group's bake sequence
+    vec4 albedo;         // diffuse albedo, w: its group
     vec4 emission;       // emitted radiance
+};
+
+struct CssmGroup {
+    mat4 world_to_frame;  // into the frame the group was baked in
+    uvec4 info;           // x: its cube maps' first pixel-run entry, y: its CSM (CSSM_NONE: static)
+    vec4 planes;          // x: near, y: far
+};
+
+struct CssmCsm {
+    vec4 centre_radius;  // object space
+    uvec4 info;          // x: first direction, y: first table entry, z: first pixel-run entry, w: face size
+    uint group;
+    uint pad0, pad1, pad2;
 };
 
 layout(std430, binding = CSSM_BINDING_NODES) readonly buffer CssmNodes { CssmNode nodes[]; };
@@ -26,18 +39,23 @@ layout(std430, binding = CSSM_BINDING_RUN_START) readonly buffer CssmRunStart { 
 layout(std430, binding = CSSM_BINDING_RUN_DEPTH) readonly buffer CssmRunDepth { uint run_depth[]; };
 layout(std430, binding = CSSM_BINDING_ROOTS) readonly buffer CssmRoots { uint roots[]; };
 layout(std430, binding = CSSM_BINDING_COUNTERS) buffer CssmCounters { uint counters[]; };
+layout(std430, binding = CSSM_BINDING_GROUPS) readonly buffer CssmGroups { CssmGroup groups[]; };
+layout(std430, binding = CSSM_BINDING_CSMS) readonly buffer CssmCsms { CssmCsm csms[]; };
+layout(std430, binding = CSSM_BINDING_CSM_DIRECTIONS) readonly buffer CssmCsmDirections { vec4 csm_directions[]; };
+layout(std430, binding = CSSM_BINDING_CSM_NEAREST) readonly buffer CssmCsmNearest { uint csm_nearest[]; };
 
 uniform int u_face_size;      // cube-map face side, pixels
-uniform float u_far_plane;    // world units
-uniform float u_near_plane;   // world units
+uniform uint u_csm_count;     // moving groups
+uniform float u_texel_size;   // atlas texel edge, world units
 uniform int u_pcf;            // filter width in pixels (odd)
 uniform float u_threshold;    // refine while the tone-mapped bound on received radiance exceeds it
 uniform uint u_first_root;    // this batch's subtrees: roots[u_first_root .. + u_root_count)
 uniform uint u_root_count;
 
-uint stored_depth(uint map, uint pixel) {
-    uint lo = pixel_runs[pixel];
-    uint hi = pixel_runs[pixel + 1u] - 1u;
+// `first_run` is where the sequence's pixel-run table starts.
+uint stored_depth(uint first_run, uint map, uint pixel) {
+    uint lo = pixel_runs[first_run + pixel];
+    uint hi = pixel_runs[first_run + pixel + 1u] - 1u;
     while (lo < hi) {
         uint mid = (lo + hi + 1u) >> 1u;
         if (run_start[mid] <= map) lo = mid; else hi = mid - 1u;
@@ -46,18 +64,22 @@ uint stored_depth(uint map, uint pixel) {
     return (lo & 1u) == 0u ? (word & 0xFFFFu) : (word >> 16u);
 }
 
-// The fraction of the PCF taps around `receiver`'s pixel in the sender texel's cube map that do not
-// occlude it. Twin of cssm_visibility in renderer/methods/cssm/surface_shadow_maps.cpp.
+uint texel_group(uint texel) { return uint(texels[texel].albedo.w); }
+
+// The fraction of the PCF taps around `receiver`'s pixel in the sender texel's cube map (which holds
+// the sender's group alone) that do not occlude it. Twin of cssm_visibility in
+// renderer/methods/cssm/surface_shadow_maps.cpp.
 float cssm_visibility(uint sender_texel, vec3 receiver) {
-    vec3 v = receiver - texels[sender_texel].position_area.xyz;
+    CssmGroup group = groups[texel_group(sender_texel)];
+    vec3 v = mat3(group.world_to_frame) * (receiver - texels[sender_texel].position_area.xyz);
     vec3 a = abs(v);
     int axis = a.x >= a.y && a.x >= a.z ? 0 : (a.y >= a.z ? 1 : 2);
     float major = max(a[axis], 1e-30);
     int face = 2 * axis + (v[axis] < 0.0 ? 1 : 0);
     vec2 uv = vec2(v[(axis + 1) % 3], v[(axis + 2) % 3]) / major;
     ivec2 pixel = clamp(ivec2(floor((uv * 0.5 + 0.5) * float(u_face_size))), ivec2(0), ivec2(u_face_size - 1));
-    float depth = major / u_far_plane;
-    float limit = depth - (u_near_plane / u_far_plane + depth * 2.0 / float(u_face_size));
+    float depth = major / group.planes.y;
+    float limit = depth - (group.planes.x / group.planes.y + depth * 2.0 / float(u_face_size));
     uint map = uint(texels[sender_texel].normal_map.w);
     int radius = u_pcf / 2;
     float lit = 0.0, taps = 0.0;
@@ -65,11 +87,89 @@ float cssm_visibility(uint sender_texel, vec3 receiver) {
         for (int dx = -radius; dx <= radius; ++dx) {
             ivec2 q = clamp(pixel + ivec2(dx, dy), ivec2(0), ivec2(u_face_size - 1));
             uint p = uint((face * u_face_size + q.y) * u_face_size + q.x);
-            lit += float(stored_depth(map, p)) / 65535.0 >= limit ? 1.0 : 0.0;
+            uint stored = stored_depth(group.info.x, map, p);
+            // 65535: nothing within the far plane, however far the receiver is.
+            lit += stored == 65535u || float(stored) / 65535.0 >= limit ? 1.0 : 0.0;
             taps += 1.0;
         }
     }
     return lit / taps;
+}
+
+void csm_basis(vec3 d, out vec3 u, out vec3 w) {
+    vec3 helper = abs(d.y) < 0.99 ? vec3(0.0, 1.0, 0.0) : vec3(1.0, 0.0, 0.0);
+    u = normalize(cross(helper, d));
+    w = cross(d, u);
+}
+
+// Whether the segment from `from` to `to` (world) passes through the moving object of CSM `c`:
+// twin of csm_blocks in renderer/methods/cssm/coherent_shadow_maps.cpp.
+bool csm_blocks(uint c, vec3 from_world, vec3 to_world) {
+    CssmCsm csm = csms[c];
+    mat4 to_object = groups[csm.group].world_to_frame;
+    vec3 from = (to_object * vec4(from_world, 1.0)).xyz;
+    vec3 to = (to_object * vec4(to_world, 1.0)).xyz;
+    vec3 segment = to - from;
+    vec3 a = abs(segment);
+    int axis = a.x >= a.y && a.x >= a.z ? 0 : (a.y >= a.z ? 1 : 2);
+    float major = a[axis];
+    if (!(major > 0.0)) return false;
+    int face = 2 * axis + (segment[axis] < 0.0 ? 1 : 0);
+    vec2 uv = vec2(segment[(axis + 1) % 3], segment[(axis + 2) % 3]) / major;
+    ivec2 cell = clamp(ivec2(floor((uv * 0.5 + 0.5) * float(CSSM_TABLE_FACE))), ivec2(0), ivec2(CSSM_TABLE_FACE - 1));
+    uint k = csm_nearest[csm.info.y + uint((face * CSSM_TABLE_FACE + cell.y) * CSSM_TABLE_FACE + cell.x)];
+    vec3 d = csm_directions[csm.info.x + k].xyz;
+    vec3 u, w;
+    csm_basis(d, u, w);
+    vec3 centre = csm.centre_radius.xyz;
+    float radius = csm.centre_radius.w;
+    vec3 offset = to - centre;
+    vec2 lateral = vec2(dot(offset, u), dot(offset, w)) / radius;
+    if (abs(lateral.x) >= 1.0 || abs(lateral.y) >= 1.0) return false;
+    int face_size = int(csm.info.w);
+    ivec2 pixel = clamp(ivec2(floor((lateral * 0.5 + 0.5) * float(face_size))), ivec2(0), ivec2(face_size - 1));
+    uint stored = stored_depth(csm.info.z, k, uint(pixel.y * face_size + pixel.x));
+    if (stored == 65535u) return false;
+    float depth_stored = float(stored) / 65535.0;
+    float span = 2.0 * radius;
+    float bias = 2.0 / float(face_size);
+    float depth_from = (dot(from - centre, d) + radius) / span;
+    float depth_to = (dot(offset, d) + radius) / span;
+    return depth_stored > depth_from + bias && depth_stored < depth_to - bias;
+}
+
+// The texel under a receiver that has none (a pixel): descend the hierarchy towards the nearest
+// sphere; accept the leaf if it lies within two texels on a surface facing the same way.
+uint texel_near(vec3 p, vec3 n) {
+    uint node = 0u;
+    for (int depth = 0; depth < 64 && nodes[node].links.x != CSSM_NONE; ++depth) {
+        uint left = nodes[node].links.x;
+        uint right = nodes[left].links.y;
+        vec3 dl = p - nodes[left].centre_radius.xyz, dr = p - nodes[right].centre_radius.xyz;
+        float gap_left = length(dl) - nodes[left].centre_radius.w, gap_right = length(dr) - nodes[right].centre_radius.w;
+        node = gap_left <= gap_right ? left : right;
+    }
+    uint texel = nodes[node].links.w;
+    vec3 offset = texels[texel].position_area.xyz - p;
+    bool near = dot(offset, offset) < 4.0 * u_texel_size * u_texel_size && dot(texels[texel].normal_map.xyz, n) > 0.5;
+    return near ? texel : CSSM_NONE;
+}
+
+// Visibility between a sender texel and a receiver (§3.3): the sender's group by its cube map; the
+// receiver's group, when another, by the receiver's cube map; every other moving object by its CSM.
+float visibility(uint sender_texel, vec3 receiver, uint receiver_texel) {
+    float v = cssm_visibility(sender_texel, receiver);
+    if (v == 0.0 || u_csm_count == 0u) return v;
+    uint sender_group = texel_group(sender_texel);
+    vec3 sender = texels[sender_texel].position_area.xyz;
+    uint receiver_group = receiver_texel == CSSM_NONE ? CSSM_NONE : texel_group(receiver_texel);
+    if (receiver_texel != CSSM_NONE && receiver_group != sender_group) v *= cssm_visibility(receiver_texel, sender);
+    for (uint c = 0u; c < u_csm_count && v > 0.0; ++c) {
+        uint group = csms[c].group;
+        if (group == sender_group || group == receiver_group) continue;
+        if (csm_blocks(c, sender, receiver)) v = 0.0;
+    }
+    return v;
 }
 
 float luminance(vec3 c) { return dot(c, vec3(0.2126, 0.7152, 0.0722)); }
@@ -89,7 +189,7 @@ struct Gathered {
 
 // Light a node sends to a receiver at p with normal n: the disk-to-point form factor times its
 // radiance, pi L A cos_s cos_r / (pi d^2 + A), weighted by the CSSM visibility.
-vec3 node_irradiance(uint node, vec3 p, vec3 n, out vec3 l) {
+vec3 node_irradiance(uint node, vec3 p, vec3 n, uint receiver_texel, out vec3 l) {
     vec3 to_node = nodes[node].centre_radius.xyz - p;
     float d2 = max(dot(to_node, to_node), 1e-30);
     l = to_node * inversesqrt(d2);
@@ -97,8 +197,8 @@ vec3 node_irradiance(uint node, vec3 p, vec3 n, out vec3 l) {
     float cos_s = dot(nodes[node].normal_cone.xyz, -l);
     if (cos_r <= 0.0 || cos_s <= 0.0) return vec3(0.0);
     float area = nodes[node].area.x;
-    float visibility = cssm_visibility(nodes[node].links.z, p);
-    return node_radiance[node].rgb * (PI * area * cos_s * cos_r / (PI * d2 + area)) * visibility;
+    float v = visibility(nodes[node].links.z, p, receiver_texel);
+    return node_radiance[node].rgb * (PI * area * cos_s * cos_r / (PI * d2 + area)) * v;
 }
 
 // Upper bound of the irradiance a node can give the receiver (0 when it lies wholly behind either
@@ -122,8 +222,9 @@ float irradiance_bound(uint node, vec3 p, vec3 n) {
 // Refine and gather in one stackless walk over this batch's subtrees (the paper's Fig. 10): a node
 // whose bound, times the receiver's largest BRDF value and tone-mapped, exceeds the threshold is
 // refined (child pointer); otherwise it is gathered and skipped (skip pointer). Leaves are always
-// gathered. `exclude` is the receiver's own texel (CSSM_NONE for pixels). The includer defines
-// CSSM_BRDF(l) as the receiver's BRDF towards l (a constant for texels).
+// gathered. `exclude` is the receiver's own texel (for pixels, the texel under them, or
+// CSSM_NONE). The includer defines CSSM_BRDF(l) as the receiver's BRDF towards l (a constant for
+// texels).
 Gathered gather_cut(vec3 p, vec3 n, float brdf_max, uint exclude) {
     Gathered result = Gathered(vec3(0.0), 0u, 0u);
     for (uint r = 0u; r < u_root_count; ++r) {
@@ -148,7 +249,7 @@ Gathered gather_cut(vec3 p, vec3 n, float brdf_max, uint exclude) {
                 continue;
             }
             vec3 l;
-            vec3 e = node_irradiance(node, p, n, l);
+            vec3 e = node_irradiance(node, p, n, exclude, l);
             result.irradiance += e * CSSM_BRDF(l);
             result.gathered += 1u;
             node = links.y;

@@ -30,7 +30,9 @@ void main() {
     g_v = safe_normalize(u_camera_position - position.xyz, g_n);
     vec3 diffuse = diffuse_albedo(g_material);
     float brdf_max = max(diffuse.r, max(diffuse.g, diffuse.b)) * INV_PI;
-    Gathered g = gather_cut(position.xyz, g_n, brdf_max, CSSM_NONE);
+    // With moving objects, the texel under the pixel tests its own group's occluders from its side.
+    uint under = u_csm_count > 0u ? texel_near(position.xyz, g_n) : CSSM_NONE;
+    Gathered g = gather_cut(position.xyz, g_n, brdf_max, under);
     count_gather(g);
     out_radiance = vec4(finite_or_zero(g.irradiance), 0.0);
 }

@@ -3,10 +3,12 @@
 #include "renderer/base/error.hpp"
 #include "renderer/methods/cssm/atlas_traversal.hpp"
 #include "renderer/methods/cssm/bake_cache.hpp"
+#include "renderer/methods/cssm/hull_overlap.hpp"
 #include "renderer/methods/cssm/surface_shadow_maps.hpp"
 #include "renderer/reference/ray_scene.hpp"
 #include "renderer/scene/builtin.hpp"
 
+#include <glm/gtc/matrix_transform.hpp>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -217,34 +219,48 @@ TEST(CssmVisibility, CubeMapsAgreeWithRayQueriesOnRandomCornellPairs) {
 namespace bounce::methods::cssm {
 namespace {
 
-TEST(CssmBakeCache, RoundTripsAndRejectsDamagedOrForeignFiles) {
-    const scene::Scene scene = scene::make_cornell_box();
-    const BakeParameters parameters{10.0f, 8, Traversal::spiral};
-    const CssmBake bake = bake_scene(scene, parameters);
+TEST(CssmBakeCache, GroupsRoundTripAMovedObjectKeepsItsBakeAndDamagedFilesAreRebaked) {
+    scene::Scene scene = scene::make_cornell_box();
+    const BakeParameters parameters{10.0f, 8, Traversal::spiral, 32};
     const auto dir = std::filesystem::temp_directory_path() / ("bounce-cssm-cache-test-" + std::to_string(::getpid()));
     std::filesystem::remove_all(dir);
-    const std::string key = bake_key(scene, parameters);
-    EXPECT_FALSE(load_cached_bake(dir, key, scene).has_value());
-    store_cached_bake(dir, key, bake);
-    const auto loaded = load_cached_bake(dir, key, scene);
-    ASSERT_TRUE(loaded.has_value());
-    EXPECT_EQ(loaded->atlas.texels.size(), bake.atlas.texels.size());
-    EXPECT_EQ(loaded->maps.depth.run_depth, bake.maps.depth.run_depth);
-    EXPECT_EQ(loaded->maps.order, bake.maps.order);
-    EXPECT_EQ(loaded->tree.nodes.size(), bake.tree.nodes.size());
+    const BakeOptions options{dir, {}};
+    const std::vector<std::uint32_t> moving{2};  // the tall block
+    const CssmBake first = bake_scene(scene, parameters, moving, options);
+    ASSERT_EQ(first.groups.size(), 2u);
+    EXPECT_FALSE(first.groups[0].moving);
+    EXPECT_TRUE(first.groups[1].moving);
+    EXPECT_TRUE(first.groups[1].csm.has_value());
+    EXPECT_FALSE(first.groups[0].loaded || first.groups[1].loaded);
+    EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir), std::filesystem::directory_iterator{}), 2);
 
-    // Another geometry or other parameters: another key.
-    scene::Scene moved = scene;
-    moved.objects[1].transform[3].x += 0.01f;
-    EXPECT_NE(bake_key(moved, parameters), key);
-    EXPECT_NE(bake_key(scene, BakeParameters{10.0f, 8, Traversal::zigzag}), key);
+    // Moving the block changes neither key: both groups come from the cache, the static group's
+    // texels stay where they were and the block's follow it.
+    scene.objects[2].transform = glm::translate(glm::mat4(1.0f), glm::vec3(-0.1f, 0.0f, 0.05f)) * scene.objects[2].transform;
+    const CssmBake second = bake_scene(scene, parameters, moving, options);
+    ASSERT_EQ(second.groups.size(), 2u);
+    EXPECT_TRUE(second.groups[0].loaded && second.groups[1].loaded);
+    EXPECT_EQ(second.groups[0].maps.depth.run_depth, first.groups[0].maps.depth.run_depth);
+    EXPECT_EQ(second.groups[1].csm->depth.run_start, first.groups[1].csm->depth.run_start);
+    const std::uint32_t block_texel = second.group_first_texel[1];
+    EXPECT_NEAR(second.positions[block_texel].x, first.positions[block_texel].x - 0.1f, 1e-5f);
+    EXPECT_EQ(second.positions[0], first.positions[0]);
 
-    // A truncated file, and one with a flipped byte, are ignored rather than trusted.
-    const auto path = bake_path(dir, key);
+    // Another static layout, or other parameters: other keys.
+    EXPECT_EQ(group_key(scene, {0, 1}, false, parameters, first.texel_size), first.groups[0].key);
+    scene::Scene shifted = scene;
+    shifted.objects[1].transform[3].x += 0.01f;
+    EXPECT_NE(group_key(shifted, {0, 1}, false, parameters, first.texel_size), first.groups[0].key);
+    EXPECT_NE(group_key(scene, {2}, true, BakeParameters{10.0f, 8, Traversal::zigzag, 32}, first.texel_size), first.groups[1].key);
+
+    // A truncated file, and one with a flipped byte, are ignored and that group baked again.
+    const auto path = bake_path(dir, first.groups[0].key);
     const auto size = std::filesystem::file_size(path);
     std::filesystem::resize_file(path, size - 5);
-    EXPECT_FALSE(load_cached_bake(dir, key, scene).has_value());
-    store_cached_bake(dir, key, bake);
+    EXPECT_FALSE(load_cached_group(dir, first.groups[0].key).has_value());
+    const CssmBake third = bake_scene(scene, parameters, moving, options);
+    EXPECT_FALSE(third.groups[0].loaded);
+    EXPECT_TRUE(third.groups[1].loaded);
     {
         std::fstream file(path, std::ios::in | std::ios::out | std::ios::binary);
         file.seekp(static_cast<std::streamoff>(size / 2));
@@ -254,8 +270,65 @@ TEST(CssmBakeCache, RoundTripsAndRejectsDamagedOrForeignFiles) {
         byte = static_cast<char>(byte ^ 0x40);
         file.write(&byte, 1);
     }
-    EXPECT_FALSE(load_cached_bake(dir, key, scene).has_value());
+    EXPECT_FALSE(load_cached_group(dir, first.groups[0].key).has_value());
     std::filesystem::remove_all(dir);
+}
+
+TEST(CssmMovingObjects, CoherentShadowMapsAgreeWithRayQueriesForSegmentsPastTheBlock) {
+    const scene::Scene cornell = scene::make_cornell_box();
+    // The tall block alone, in its own space, as a moving group bakes it.
+    scene::Scene alone;
+    alone.materials = cornell.materials;
+    alone.meshes.push_back(cornell.meshes[cornell.objects[2].mesh]);
+    scene::Object block = cornell.objects[2];
+    block.mesh = 0;
+    block.transform = glm::mat4(1.0f);
+    alone.objects.push_back(block);
+    const reference::RayScene rays(alone);
+    const scene::Aabb bounds = alone.meshes[0].bounds;
+    const float radius = 0.5f * glm::length(bounds.extent()) * 1.01f;
+    const CoherentShadowMaps csm = bake_coherent_shadow_maps(rays, bounds.center(), radius, 512, 32);
+    EXPECT_EQ(csm.depth.maps, 512u);
+    EXPECT_LT(csm.depth.compressed_bytes(), csm.depth.uncompressed_bytes());
+
+    // Segments between points on a sphere around the block, outside its hull.
+    std::mt19937 random(5);
+    std::normal_distribution<float> normal;
+    auto on_sphere = [&] {
+        const glm::vec3 d = glm::normalize(glm::vec3(normal(random), normal(random), normal(random)));
+        return bounds.center() + d * (1.2f * radius);
+    };
+    int blocked = 0, disagree = 0;
+    const int segments = 3000;
+    for (int i = 0; i < segments; ++i) {
+        const glm::vec3 a = on_sphere(), b = on_sphere();
+        const float length = glm::length(b - a);
+        const bool truth = rays.occluded(a, (b - a) / length, 0.0f, length);
+        blocked += truth ? 1 : 0;
+        disagree += truth != csm_blocks(csm, a, b) ? 1 : 0;
+    }
+    EXPECT_GT(blocked, segments / 5);
+    // Directions are quantized to the nearest of 512 maps (about 9 degrees apart): segments that
+    // graze the block's silhouette may be answered wrongly.
+    EXPECT_LT(static_cast<double>(disagree) / segments, 0.06) << disagree << " of " << segments;
+}
+
+TEST(CssmMovingObjects, HullOverlapIsFoundWhenABlockIsPushedIntoAnotherButNotWhenItRestsOnTheFloor) {
+    scene::Scene scene = scene::make_cornell_box();
+    EXPECT_TRUE(find_hull_overlaps(scene, {1, 2}).empty()) << "blocks standing on the floor, apart";
+    // Push the short block into the tall one.
+    const glm::vec3 tall = scene.objects[2].world_bounds(scene.meshes[scene.objects[2].mesh]).center();
+    const glm::vec3 short_block = scene.objects[1].world_bounds(scene.meshes[scene.objects[1].mesh]).center();
+    scene.objects[1].transform = glm::translate(glm::mat4(1.0f), glm::vec3(tall.x - short_block.x, 0.0f, tall.z - short_block.z)) *
+                                 scene.objects[1].transform;
+    const auto overlaps = find_hull_overlaps(scene, {2});
+    ASSERT_EQ(overlaps.size(), 1u);
+    EXPECT_EQ(overlaps[0].moving, 2u);
+    EXPECT_EQ(overlaps[0].other, 1u);
+    // A tetrahedron and a point set far away; and one touching it at a vertex, shrunk apart.
+    const std::vector<glm::vec3> tetra{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    EXPECT_FALSE(convex_hulls_intersect(tetra, {{2, 2, 2}, {3, 2, 2}, {2, 3, 2}}));
+    EXPECT_TRUE(convex_hulls_intersect(tetra, {{0.1f, 0.1f, 0.1f}, {3, 2, 2}, {2, 3, 2}}));
 }
 
 }  // namespace

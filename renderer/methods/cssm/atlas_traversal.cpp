@@ -68,6 +68,8 @@ void spiral_chart(const SurfaceAtlas& atlas, std::uint32_t chart, std::vector<st
     }
 }
 
+}  // namespace
+
 // Nearest unvisited texel by a uniform grid over world positions, searched in growing shells.
 std::vector<std::uint32_t> greedy_walk(const std::vector<glm::vec3>& positions) {
     std::vector<std::uint32_t> order;
@@ -122,8 +124,6 @@ std::vector<std::uint32_t> greedy_walk(const std::vector<glm::vec3>& positions) 
     }
     return order;
 }
-
-}  // namespace
 
 std::string_view traversal_name(Traversal traversal) {
     switch (traversal) {

@@ -27,4 +27,7 @@ std::string_view traversal_name(Traversal traversal);
 // space at the objects' current transforms.
 std::vector<std::uint32_t> traverse_atlas(const scene::Scene& scene, const SurfaceAtlas& atlas, Traversal traversal);
 
+// The greedy walk alone: from the first point to the nearest unvisited one, each point once.
+std::vector<std::uint32_t> greedy_walk(const std::vector<glm::vec3>& positions);
+
 }  // namespace bounce::methods::cssm

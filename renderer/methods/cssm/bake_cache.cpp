@@ -15,7 +15,7 @@
 namespace bounce::methods::cssm {
 namespace {
 
-constexpr char kMagic[8] = {'B', 'N', 'C', 'S', 'S', 'M', '0', '1'};
+constexpr char kMagic[8] = {'B', 'N', 'C', 'S', 'S', 'M', '0', '2'};
 
 struct Fnv {
     std::uint64_t hash = 1469598103934665603ull;
@@ -82,12 +82,37 @@ private:
     std::size_t offset_ = 0;
 };
 
-std::vector<char> serialize(const CssmBake& bake) {
+void write_depth(Writer& w, const CompressedDepthMaps& depth) {
+    w.value(depth.maps);
+    w.value(depth.pixels);
+    w.array(depth.pixel_runs);
+    w.array(depth.run_start);
+    w.array(depth.run_depth);
+}
+
+CompressedDepthMaps read_depth(Reader& r) {
+    CompressedDepthMaps depth;
+    depth.maps = r.value<std::uint32_t>();
+    depth.pixels = r.value<std::uint32_t>();
+    depth.pixel_runs = r.array<std::uint32_t>();
+    depth.run_start = r.array<std::uint32_t>();
+    depth.run_depth = r.array<std::uint16_t>();
+    // What the GPU indexes must be in range.
+    if (depth.pixel_runs.size() != static_cast<std::size_t>(depth.pixels) + 1 || depth.run_start.size() != depth.run_depth.size() ||
+        (depth.pixels > 0 && depth.pixel_runs.back() != depth.run_start.size())) {
+        throw Error("inconsistent run tables");
+    }
+    for (std::uint32_t p = 0; p < depth.pixels; ++p)
+        if (depth.pixel_runs[p] >= depth.pixel_runs[p + 1]) throw Error("a pixel without runs");
+    for (std::uint32_t start : depth.run_start)
+        if (start >= depth.maps) throw Error("a run past the last map");
+    return depth;
+}
+
+std::vector<char> serialize(const BakeGroup& group) {
     Writer w;
-    w.value(bake.parameters.atlas_resolution);
-    w.value(bake.parameters.face_size);
-    w.value(static_cast<int>(bake.parameters.traversal));
-    const SurfaceAtlas& atlas = bake.atlas;
+    w.text(group.key);
+    const SurfaceAtlas& atlas = group.atlas;
     w.value(atlas.width);
     w.value(atlas.height);
     w.value(atlas.surface_area);
@@ -97,27 +122,32 @@ std::vector<char> serialize(const CssmBake& bake) {
     w.array(atlas.objects);
     w.value(static_cast<std::uint64_t>(atlas.uv1_objects.size()));
     for (const std::string& name : atlas.uv1_objects) w.text(name);
-    const SurfaceShadowMaps& maps = bake.maps;
+    const SurfaceShadowMaps& maps = group.maps;
     w.value(maps.settings);
     w.array(maps.order);
     w.array(maps.map_of_texel);
     w.array(maps.origins);
     w.value(maps.bake_seconds);
-    w.value(maps.depth.maps);
-    w.value(maps.depth.pixels);
-    w.array(maps.depth.pixel_runs);
-    w.array(maps.depth.run_start);
-    w.array(maps.depth.run_depth);
+    write_depth(w, maps.depth);
+    w.value(static_cast<std::uint8_t>(group.csm ? 1 : 0));
+    if (group.csm) {
+        w.value(group.csm->face_size);
+        w.value(group.csm->centre);
+        w.value(group.csm->radius);
+        w.array(group.csm->directions);
+        w.array(group.csm->nearest_map);
+        w.value(group.csm->bake_seconds);
+        write_depth(w, group.csm->depth);
+    }
     return std::move(w.bytes);
 }
 
-CssmBake deserialize(const std::vector<char>& payload) {
+BakeGroup deserialize(const std::vector<char>& payload, const std::string& key) {
     Reader r(payload);
-    CssmBake bake;
-    bake.parameters.atlas_resolution = r.value<float>();
-    bake.parameters.face_size = r.value<int>();
-    bake.parameters.traversal = static_cast<Traversal>(r.value<int>());
-    SurfaceAtlas& atlas = bake.atlas;
+    BakeGroup group;
+    group.key = r.text();
+    if (group.key != key) throw Error("written for another key");
+    SurfaceAtlas& atlas = group.atlas;
     atlas.width = r.value<int>();
     atlas.height = r.value<int>();
     atlas.surface_area = r.value<float>();
@@ -127,47 +157,57 @@ CssmBake deserialize(const std::vector<char>& payload) {
     atlas.objects = r.array<std::uint32_t>();
     const auto names = r.value<std::uint64_t>();
     for (std::uint64_t i = 0; i < names && i < 1u << 20; ++i) atlas.uv1_objects.push_back(r.text());
-    SurfaceShadowMaps& maps = bake.maps;
+    SurfaceShadowMaps& maps = group.maps;
     maps.settings = r.value<CubeMapSettings>();
     maps.order = r.array<std::uint32_t>();
     maps.map_of_texel = r.array<std::uint32_t>();
     maps.origins = r.array<glm::vec3>();
     maps.bake_seconds = r.value<double>();
-    maps.depth.maps = r.value<std::uint32_t>();
-    maps.depth.pixels = r.value<std::uint32_t>();
-    maps.depth.pixel_runs = r.array<std::uint32_t>();
-    maps.depth.run_start = r.array<std::uint32_t>();
-    maps.depth.run_depth = r.array<std::uint16_t>();
+    maps.depth = read_depth(r);
+    if (r.value<std::uint8_t>() != 0) {
+        CoherentShadowMaps csm;
+        csm.face_size = r.value<int>();
+        csm.centre = r.value<glm::vec3>();
+        csm.radius = r.value<float>();
+        csm.directions = r.array<glm::vec4>();
+        csm.nearest_map = r.array<std::uint32_t>();
+        csm.bake_seconds = r.value<double>();
+        csm.depth = read_depth(r);
+        if (csm.depth.maps != csm.directions.size() || csm.depth.pixels != static_cast<std::uint32_t>(csm.face_size * csm.face_size) ||
+            csm.nearest_map.size() != 6u * kCsmTableFace * kCsmTableFace) {
+            throw Error("inconsistent coherent shadow maps");
+        }
+        for (std::uint32_t k : csm.nearest_map)
+            if (k >= csm.directions.size()) throw Error("a direction past the last map");
+        group.csm = std::move(csm);
+    }
     if (!r.at_end()) throw Error("trailing bytes");
-    // Structural checks: what the GPU indexes must be in range.
     const std::size_t texels = atlas.texels.size();
     if (maps.order.size() != texels || maps.map_of_texel.size() != texels || maps.origins.size() != texels ||
-        maps.depth.maps != texels || maps.depth.pixel_runs.size() != static_cast<std::size_t>(maps.depth.pixels) + 1 ||
-        maps.depth.run_start.size() != maps.depth.run_depth.size() ||
-        (maps.depth.pixels > 0 && maps.depth.pixel_runs.back() != maps.depth.run_start.size()) ||
-        maps.depth.pixels != static_cast<std::uint32_t>(6 * maps.settings.face_size * maps.settings.face_size)) {
+        maps.depth.maps != texels || maps.depth.pixels != static_cast<std::uint32_t>(6 * maps.settings.face_size * maps.settings.face_size)) {
         throw Error("inconsistent sizes");
     }
     for (std::uint32_t m : maps.map_of_texel)
         if (m >= texels) throw Error("map index out of range");
-    for (std::uint32_t p = 0; p < maps.depth.pixels; ++p)
-        if (maps.depth.pixel_runs[p] >= maps.depth.pixel_runs[p + 1]) throw Error("a pixel without runs");
-    return bake;
+    return group;
 }
 
 }  // namespace
 
-std::string bake_key(const scene::Scene& scene, const BakeParameters& parameters) {
+std::string group_key(const scene::Scene& scene, const std::vector<std::uint32_t>& objects, bool moving,
+                      const BakeParameters& parameters, float texel_size) {
     Fnv fnv;
     fnv.add(kMagic, sizeof(kMagic));
-    fnv.add(&parameters.atlas_resolution, sizeof(float));
     fnv.add(&parameters.face_size, sizeof(int));
     const int traversal = static_cast<int>(parameters.traversal);
     fnv.add(&traversal, sizeof(int));
-    for (const scene::Object& object : scene.objects) {
-        fnv.add(&object.mesh, sizeof(int));
-        fnv.add(&object.transform, sizeof(glm::mat4));
-        if (object.mesh < 0) continue;
+    fnv.add(&texel_size, sizeof(float));
+    const std::uint8_t kind = moving ? 1 : 0;
+    fnv.add(&kind, 1);
+    if (moving) fnv.add(&parameters.csm_directions, sizeof(int));
+    for (std::uint32_t o : objects) {
+        const scene::Object& object = scene.objects[o];
+        if (!moving) fnv.add(&object.transform, sizeof(glm::mat4));  // a moving group is baked in its own space
         for (const scene::Primitive& primitive : scene.meshes[object.mesh].primitives) {
             fnv.add(primitive.positions);
             fnv.add(primitive.normals);
@@ -184,8 +224,7 @@ std::filesystem::path bake_path(const std::filesystem::path& dir, const std::str
     return dir / fmt::format("cssm-{}.bake", key);
 }
 
-std::optional<CssmBake> load_cached_bake(const std::filesystem::path& dir, const std::string& key,
-                                         const scene::Scene& scene) {
+std::optional<BakeGroup> load_cached_group(const std::filesystem::path& dir, const std::string& key) {
     const std::filesystem::path path = bake_path(dir, key);
     std::ifstream file(path, std::ios::binary);
     if (!file) return std::nullopt;
@@ -204,23 +243,21 @@ std::optional<CssmBake> load_cached_bake(const std::filesystem::path& dir, const
         Fnv fnv;
         fnv.add(payload.data(), payload.size());
         if (fnv.hash != checksum) throw Error("checksum does not match");
-        CssmBake bake = deserialize(payload);
-        complete_bake(scene, bake);
-        return bake;
+        return deserialize(payload, key);
     } catch (const std::exception& error) {
         log::warn("cssm", "ignoring cached bake {}: {}", path.string(), error.what());
         return std::nullopt;
     }
 }
 
-void store_cached_bake(const std::filesystem::path& dir, const std::string& key, const CssmBake& bake) {
+void store_cached_group(const std::filesystem::path& dir, const BakeGroup& group) {
     static std::atomic<std::uint64_t> counter{0};
     std::error_code ignored;
     std::filesystem::create_directories(dir, ignored);
-    const std::vector<char> payload = serialize(bake);
+    const std::vector<char> payload = serialize(group);
     Fnv fnv;
     fnv.add(payload.data(), payload.size());
-    const std::filesystem::path final_path = bake_path(dir, key);
+    const std::filesystem::path final_path = bake_path(dir, group.key);
     const std::filesystem::path temporary =
         dir / fmt::format(".{}.tmp-{}-{}", final_path.filename().string(), ::getpid(), counter.fetch_add(1));
     std::FILE* file = std::fopen(temporary.c_str(), "wb");

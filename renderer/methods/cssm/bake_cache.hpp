@@ -1,8 +1,9 @@
-// `cssm` bakes on disk (--cache-dir): one file per bake, named by a content key of everything the
-// bake depends on (each object's geometry and transform, the bake parameters, the format), so a
-// restarted daemon reuses it and a changed scene never reads a stale one. Files are written to a
-// temporary name, synced and renamed into place: a bake killed midway leaves no file behind, only
-// complete ones. A file that fails its length or checksum is ignored (and rebaked), never trusted.
+// `cssm` bakes on disk (--cache-dir): one file per bake group, named by a content key of everything
+// the group depends on (its objects' geometry, the static group's transforms, the bake parameters,
+// the format), so a restarted daemon reuses it and a changed scene never reads a stale one. Files
+// are written to a temporary name, synced and renamed into place: a bake killed midway leaves no
+// file behind, only complete ones. A file that fails its length, checksum or structure checks is
+// ignored (and rebaked), never trusted.
 #pragma once
 
 #include "renderer/methods/cssm/cssm_bake.hpp"
@@ -13,14 +14,14 @@
 
 namespace bounce::methods::cssm {
 
-std::string bake_key(const scene::Scene& scene, const BakeParameters& parameters);
+// The key of a group of `objects`: a moving group's does not depend on where it stands.
+std::string group_key(const scene::Scene& scene, const std::vector<std::uint32_t>& objects, bool moving,
+                      const BakeParameters& parameters, float texel_size);
 std::filesystem::path bake_path(const std::filesystem::path& dir, const std::string& key);
 
-// The cached bake for `key`, completed for `scene` (albedo, tree); nullopt when there is none or it
-// is damaged (logged).
-std::optional<CssmBake> load_cached_bake(const std::filesystem::path& dir, const std::string& key,
-                                         const scene::Scene& scene);
+// The cached group for `key`; nullopt when there is none or it is damaged (logged).
+std::optional<BakeGroup> load_cached_group(const std::filesystem::path& dir, const std::string& key);
 // Writes atomically; throws Error naming the path when the directory cannot be written.
-void store_cached_bake(const std::filesystem::path& dir, const std::string& key, const CssmBake& bake);
+void store_cached_group(const std::filesystem::path& dir, const BakeGroup& group);
 
 }  // namespace bounce::methods::cssm

@@ -1,56 +1,194 @@
 #include "renderer/methods/cssm/cssm_bake.hpp"
 
-#include "renderer/passes/light_geometry.hpp"
+#include "renderer/base/error.hpp"
+#include "renderer/base/log.hpp"
+#include "renderer/methods/cssm/bake_cache.hpp"
 #include "renderer/reference/ray_scene.hpp"
 #include "renderer/scene/shading.hpp"
 
-#include <numeric>
+#include <algorithm>
 
 namespace bounce::methods::cssm {
+namespace {
 
-CssmBake bake_scene(const scene::Scene& scene, const BakeParameters& parameters, const BakeProgress& progress) {
+// A scene holding only `object`, at the identity: what a moving group is baked from.
+scene::Scene object_alone(const scene::Scene& scene, std::uint32_t object) {
+    scene::Scene alone;
+    alone.materials = scene.materials;
+    alone.meshes.push_back(scene.meshes[scene.objects[object].mesh]);
+    scene::Object copy = scene.objects[object];
+    copy.mesh = 0;
+    copy.transform = copy.initial_transform = glm::mat4(1.0f);
+    alone.objects.push_back(copy);
+    return alone;
+}
+
+struct Progress {
+    const BakeOptions& options;
+    std::uint64_t done = 0, total = 1;
+    BakeProgress for_stage(const std::string& stage) {
+        if (!options.progress) return {};
+        return [this, stage, base = done](std::uint32_t finished, std::uint32_t) {
+            return options.progress(static_cast<double>(base + finished) / static_cast<double>(total), stage);
+        };
+    }
+};
+
+void bake_group(const scene::Scene& scene, BakeGroup& group, const BakeParameters& parameters, float texel_size,
+                Progress& progress) {
+    AtlasSettings atlas_settings;
+    atlas_settings.texel_size = texel_size;
+    const std::string& first_name = scene.objects[group.objects.front()].name;
+    if (group.moving) {
+        const std::uint32_t object = group.objects.front();
+        const scene::Scene alone = object_alone(scene, object);
+        group.atlas = build_surface_atlas(alone, {0}, atlas_settings);
+        const scene::Aabb bounds = alone.meshes[0].bounds;
+        const float radius = std::max(0.5f * glm::length(bounds.extent()) * 1.01f, 1e-30f);
+        // The maps hold this object alone, so they need reach no farther than its diameter; a
+        // receiver beyond still compares against what lies between.
+        const CubeMapSettings cube{parameters.face_size, 0.25f * texel_size, 2.0f * radius};
+        const reference::RayScene rays(alone);
+        group.maps = bake_surface_shadow_maps(alone, group.atlas, traverse_atlas(alone, group.atlas, parameters.traversal), cube,
+                                              rays, progress.for_stage("depth cube maps (" + first_name + ")"));
+        progress.done += group.atlas.texels.size();
+        group.csm = bake_coherent_shadow_maps(rays, bounds.center(), radius, parameters.csm_directions, parameters.face_size);
+        progress.done += static_cast<std::uint64_t>(parameters.csm_directions);
+        if (progress.options.progress &&
+            !progress.options.progress(static_cast<double>(progress.done) / static_cast<double>(progress.total),
+                                       "coherent shadow maps (" + first_name + ")")) {
+            throw Cancelled("bake cancelled");
+        }
+        for (AtlasTexel& texel : group.atlas.texels) texel.object = object;
+        for (AtlasChart& chart : group.atlas.charts) chart.object = object;
+        group.atlas.objects = {object};
+        return;
+    }
+    group.atlas = build_surface_atlas(scene, group.objects, atlas_settings);
+    scene::Aabb bounds;
+    for (std::uint32_t o : group.objects) bounds.extend(scene.objects[o].world_bounds(scene.meshes[scene.objects[o].mesh]));
+    CubeMapSettings cube{parameters.face_size, 0.25f * texel_size, std::max(1.01f * glm::length(bounds.extent()), 1e-30f)};
+    const std::vector<std::uint32_t>& members = group.objects;
+    const reference::RayScene rays(scene, [&](std::size_t o) {
+        return std::binary_search(members.begin(), members.end(), static_cast<std::uint32_t>(o));
+    });
+    group.maps = bake_surface_shadow_maps(scene, group.atlas, traverse_atlas(scene, group.atlas, parameters.traversal), cube,
+                                          rays, progress.for_stage("depth cube maps"));
+    progress.done += group.atlas.texels.size();
+}
+
+}  // namespace
+
+std::size_t CssmBake::uncompressed_bytes() const {
+    std::size_t bytes = 0;
+    for (const BakeGroup& group : groups) bytes += group.maps.depth.uncompressed_bytes() + (group.csm ? group.csm->depth.uncompressed_bytes() : 0);
+    return bytes;
+}
+
+std::size_t CssmBake::compressed_bytes() const {
+    std::size_t bytes = 0;
+    for (const BakeGroup& group : groups) bytes += group.maps.depth.compressed_bytes() + (group.csm ? group.csm->depth.compressed_bytes() : 0);
+    return bytes;
+}
+
+std::uint32_t CssmBake::cube_maps() const {
+    std::uint32_t maps = 0;
+    for (const BakeGroup& group : groups) maps += group.maps.depth.maps;
+    return maps;
+}
+
+glm::mat4 world_to_group(const scene::Scene& scene, const BakeGroup& group) {
+    return group.moving ? glm::inverse(scene.objects[group.objects.front()].transform) : glm::mat4(1.0f);
+}
+
+CssmBake bake_scene(const scene::Scene& scene, const BakeParameters& parameters, const std::vector<std::uint32_t>& moving,
+                    const BakeOptions& options) {
     CssmBake bake;
     bake.parameters = parameters;
-    std::vector<std::uint32_t> objects;
-    for (std::uint32_t o = 0; o < scene.objects.size(); ++o)
-        if (scene.objects[o].mesh >= 0) objects.push_back(o);
-    AtlasSettings atlas_settings;
-    const float area = surface_area(scene, objects);
-    atlas_settings.texel_size = texel_size_for(area, parameters.atlas_resolution);
-    bake.atlas = build_surface_atlas(scene, objects, atlas_settings);
-
-    const scene::Aabb bounds = scene.world_bounds();
-    CubeMapSettings cube;
-    cube.face_size = parameters.face_size;
-    cube.far_plane = std::max(1.01f * glm::length(bounds.extent()), 1e-30f);
-    // Close enough that a texel still sees a surface meeting its own at a right angle half a
-    // texel away; far enough that its own plane stays out of the maps.
-    cube.near_plane = 0.25f * atlas_settings.texel_size;
-    const reference::RayScene rays(scene);
-    bake.maps = bake_surface_shadow_maps(scene, bake.atlas, traverse_atlas(scene, bake.atlas, parameters.traversal), cube,
-                                         rays, progress);
-
-    complete_bake(scene, bake);
+    bake.moving = moving;
+    std::vector<std::uint32_t> all, fixed;
+    for (std::uint32_t o = 0; o < scene.objects.size(); ++o) {
+        if (scene.objects[o].mesh < 0) continue;
+        all.push_back(o);
+        if (!std::binary_search(moving.begin(), moving.end(), o)) fixed.push_back(o);
+    }
+    // One texel size for every group, from the whole scene: moving an object in or out of the static
+    // group changes no density.
+    bake.texel_size = texel_size_for(surface_area(scene, all), parameters.atlas_resolution);
+    if (!fixed.empty()) {
+        BakeGroup group;
+        group.objects = fixed;
+        bake.groups.push_back(std::move(group));
+    }
+    for (std::uint32_t o : moving) {
+        if (scene.objects[o].mesh < 0) continue;
+        BakeGroup group;
+        group.objects = {o};
+        group.moving = true;
+        bake.groups.push_back(std::move(group));
+    }
+    Progress progress{options};
+    progress.total = 0;
+    for (BakeGroup& group : bake.groups) {
+        group.key = group_key(scene, group.objects, group.moving, parameters, bake.texel_size);
+        if (options.cache_dir) {
+            if (auto cached = load_cached_group(*options.cache_dir, group.key)) {
+                cached->objects = group.objects;
+                cached->moving = group.moving;
+                cached->loaded = true;
+                group = std::move(*cached);
+                continue;
+            }
+        }
+        // Work estimate: one unit per cube map or CSM map.
+        progress.total += static_cast<std::uint64_t>(surface_area(scene, group.objects) / (bake.texel_size * bake.texel_size)) +
+                          (group.moving ? static_cast<std::uint64_t>(parameters.csm_directions) : 0u);
+    }
+    progress.total = std::max<std::uint64_t>(progress.total, 1);
+    for (BakeGroup& group : bake.groups) {
+        if (group.loaded) continue;
+        bake_group(scene, group, parameters, bake.texel_size, progress);
+        if (options.cache_dir) {
+            try {
+                store_cached_group(*options.cache_dir, group);
+            } catch (const std::exception& error) {
+                log::warn("cssm", "bake not cached: {}", error.what());
+            }
+        }
+    }
+    if (options.progress) options.progress(1.0, "done");
+    bake.baked_transforms.resize(scene.objects.size());
+    for (std::size_t o = 0; o < scene.objects.size(); ++o) bake.baked_transforms[o] = scene.objects[o].transform;
+    place_texels(scene, bake);
     return bake;
 }
 
-void complete_bake(const scene::Scene& scene, CssmBake& bake) {
-    bake.geometry = passes::geometry_fingerprint(scene);
-    const std::size_t texels = bake.atlas.texels.size();
-    std::vector<float> areas(texels);
-    bake.normals.resize(texels);
-    bake.albedo.resize(texels);
-    bake.emission.resize(texels);
-    for (std::size_t t = 0; t < texels; ++t) {
-        const AtlasTexel& texel = bake.atlas.texels[t];
-        const glm::mat4& transform = scene.objects[texel.object].transform;
-        bake.normals[t] = glm::normalize(glm::transpose(glm::inverse(glm::mat3(transform))) * texel.normal);
-        areas[t] = texel.area;
-        const scene::Material& material = scene.material(texel.material);
-        bake.albedo[t] = scene::diffuse_albedo(scene::SurfaceMaterial::from(material));
-        bake.emission[t] = material.emissive;
+void place_texels(const scene::Scene& scene, CssmBake& bake) {
+    bake.positions.clear();
+    bake.normals.clear();
+    bake.albedo.clear();
+    bake.emission.clear();
+    bake.areas.clear();
+    bake.texel_group.clear();
+    bake.group_first_texel.clear();
+    for (std::uint32_t g = 0; g < bake.groups.size(); ++g) {
+        const BakeGroup& group = bake.groups[g];
+        bake.group_first_texel.push_back(static_cast<std::uint32_t>(bake.positions.size()));
+        const glm::mat4 to_world = glm::inverse(world_to_group(scene, group));
+        for (std::size_t t = 0; t < group.atlas.texels.size(); ++t) {
+            const AtlasTexel& texel = group.atlas.texels[t];
+            const glm::mat4& transform = scene.objects[texel.object].transform;
+            bake.positions.push_back(glm::vec3(to_world * glm::vec4(group.maps.origins[t], 1.0f)));
+            bake.normals.push_back(glm::normalize(glm::transpose(glm::inverse(glm::mat3(transform))) * texel.normal));
+            bake.areas.push_back(texel.area);
+            const scene::Material& material = scene.material(texel.material);
+            bake.albedo.push_back(scene::diffuse_albedo(scene::SurfaceMaterial::from(material)));
+            bake.emission.push_back(material.emissive);
+            bake.texel_group.push_back(g);
+        }
     }
-    bake.tree = build_radiosity_tree(bake.maps.origins, bake.normals, areas);
+    bake.group_first_texel.push_back(static_cast<std::uint32_t>(bake.positions.size()));
+    bake.tree = build_radiosity_tree(bake.positions, bake.normals, bake.areas);
 }
 
 }  // namespace bounce::methods::cssm

@@ -2,6 +2,7 @@
 
 #include "renderer/base/log.hpp"
 #include "renderer/methods/cssm/bake_cache.hpp"
+#include "renderer/methods/cssm/hull_overlap.hpp"
 #include "renderer/passes/direct_light_pass.hpp"
 #include "renderer/passes/gbuffer_pass.hpp"
 #include "renderer/passes/light_geometry.hpp"
@@ -36,6 +37,16 @@ struct GpuTexel {
     glm::vec4 albedo;
     glm::vec4 emission;
 };
+struct GpuGroup {
+    glm::mat4 world_to_frame;
+    glm::uvec4 info;
+    glm::vec4 planes;
+};
+struct GpuCsm {
+    glm::vec4 centre_radius;
+    glm::uvec4 info;
+    glm::uvec4 group;
+};
 
 void dispatch_1d(std::size_t items) {
     const auto groups = static_cast<GLuint>(std::max<std::size_t>(1, (items + 63) / 64));
@@ -58,7 +69,7 @@ public:
         if (frame.scene.world_bounds().empty()) return;
 
         ensure_bake(frame);
-        if (!bake_ || bake_->atlas.texels.empty()) return;
+        if (!bake_ || bake_->texel_count() == 0) return;
         const int bounces = frame.knob_int("bounces");
         const float threshold = static_cast<float>(frame.knob("threshold"));
         const int pcf = frame.knob_int("pcf");
@@ -84,16 +95,23 @@ public:
             {"gbuffer", gbuffer_.bytes(), "surface attributes at the frame size"},
             {"shadow_maps", shadows_.bytes(), fmt::format("direct light: {} lights with power", shadows_.map_count())}};
         if (!bake_) return structures;
-        const auto& maps = bake_->maps;
+        std::string objects;
+        for (const BakeGroup& group : bake_->groups) {
+            objects += fmt::format("{}{} ({}: {} texels, {} cube maps{})", objects.empty() ? "" : "; ",
+                                   group.moving ? frame_scene_->objects[group.objects.front()].name : "static objects",
+                                   group.loaded ? "from the cache" : "baked", group.atlas.texels.size(), group.maps.depth.maps,
+                                   group.csm ? fmt::format(", a CSM of {} directions", group.csm->directions.size()) : "");
+        }
         structures.push_back({"surface_atlas", atlas_bytes_,
-                              fmt::format("{} texels ({}x{}, {} charts) over {} objects: senders, receivers and cube-map "
-                                          "origins; radiance of each bounce",
-                                          bake_->atlas.texels.size(), bake_->atlas.width, bake_->atlas.height,
-                                          bake_->atlas.charts.size(), bake_->atlas.objects.size())});
+                              fmt::format("{} texels over {} groups: senders, receivers and cube-map origins; radiance of "
+                                          "each bounce",
+                                          bake_->texel_count(), bake_->groups.size())});
         structures.push_back({"coherent_surface_shadow_maps", cssm_bytes_,
-                              fmt::format("{} depth cube maps of 6x{}^2 in {} order: {} bytes raw, {} compressed ({:.1f}:1)",
-                                          maps.depth.maps, maps.settings.face_size, traversal_name(bake_->parameters.traversal),
-                                          maps.depth.uncompressed_bytes(), maps.depth.compressed_bytes(), compression_ratio())});
+                              fmt::format("{} depth cube maps of 6x{}^2 in {} order, CSMs for moving objects: {} bytes raw, "
+                                          "{} compressed ({:.1f}:1). {}",
+                                          bake_->cube_maps(), bake_->parameters.face_size,
+                                          traversal_name(bake_->parameters.traversal), bake_->uncompressed_bytes(),
+                                          bake_->compressed_bytes(), compression_ratio(), objects)});
         structures.push_back({"radiosity_tree", tree_bytes_,
                               fmt::format("median-cut hierarchy of {} nodes, depth {}", bake_->tree.nodes.size(), bake_->tree.depth)});
         return structures;
@@ -104,21 +122,31 @@ public:
                                                {"bakes_loaded", static_cast<double>(bakes_loaded_)},
                                                {"atlas_solutions", static_cast<double>(atlas_solutions_)}};
         if (!bake_) return stats;
-        const auto& maps = bake_->maps;
         auto mean = [](const std::array<std::uint64_t, 3>& c, int which) {
             return c[0] > 0 ? static_cast<double>(c[which]) / static_cast<double>(c[0]) : 0.0;
         };
-        stats.insert({{"atlas_texels", static_cast<double>(bake_->atlas.texels.size())},
-                      {"atlas_width", static_cast<double>(bake_->atlas.width)},
-                      {"atlas_height", static_cast<double>(bake_->atlas.height)},
-                      {"atlas_charts", static_cast<double>(bake_->atlas.charts.size())},
-                      {"cube_maps", static_cast<double>(maps.depth.maps)},
-                      {"cube_face_size", static_cast<double>(maps.settings.face_size)},
-                      {"depth_runs", static_cast<double>(maps.depth.runs())},
-                      {"uncompressed_bytes", static_cast<double>(maps.depth.uncompressed_bytes())},
-                      {"compressed_bytes", static_cast<double>(maps.depth.compressed_bytes())},
+        double bake_seconds = 0.0;
+        std::size_t charts = 0, loaded = 0, csm_maps = 0;
+        for (const BakeGroup& group : bake_->groups) {
+            bake_seconds += group.maps.bake_seconds + (group.csm ? group.csm->bake_seconds : 0.0);
+            charts += group.atlas.charts.size();
+            loaded += group.loaded ? 1 : 0;
+            csm_maps += group.csm ? group.csm->directions.size() : 0;
+        }
+        stats.insert({{"atlas_texels", static_cast<double>(bake_->texel_count())},
+                      {"atlas_charts", static_cast<double>(charts)},
+                      {"bake_groups", static_cast<double>(bake_->groups.size())},
+                      {"bake_groups_loaded", static_cast<double>(loaded)},
+                      {"moving_objects", static_cast<double>(bake_->moving.size())},
+                      {"csm_maps", static_cast<double>(csm_maps)},
+                      {"hull_overlaps", static_cast<double>(overlaps_.size())},
+                      {"placements", static_cast<double>(placements_)},
+                      {"cube_maps", static_cast<double>(bake_->cube_maps())},
+                      {"cube_face_size", static_cast<double>(bake_->parameters.face_size)},
+                      {"uncompressed_bytes", static_cast<double>(bake_->uncompressed_bytes())},
+                      {"compressed_bytes", static_cast<double>(bake_->compressed_bytes())},
                       {"compression_ratio", compression_ratio()},
-                      {"bake_seconds", maps.bake_seconds},
+                      {"bake_seconds", bake_seconds},
                       {"tree_nodes", static_cast<double>(bake_->tree.nodes.size())},
                       {"gather_batches", static_cast<double>(batches_.size())},
                       {"texel_receivers", static_cast<double>(atlas_counters_[0])},
@@ -133,64 +161,152 @@ public:
 
 private:
     double compression_ratio() const {
-        const auto& depth = bake_->maps.depth;
-        return depth.compressed_bytes() > 0 ? static_cast<double>(depth.uncompressed_bytes()) / depth.compressed_bytes() : 0.0;
+        return bake_->compressed_bytes() > 0 ? static_cast<double>(bake_->uncompressed_bytes()) / bake_->compressed_bytes() : 0.0;
     }
 
     void prepare(const FrameContext& frame) override { ensure_bake(frame); }
 
-    // The bake these knobs need: kept, loaded from the cache directory, or baked (and stored there).
-    void ensure_bake(const FrameContext& frame) {
-        const BakeParameters parameters{static_cast<float>(frame.knob("atlas_resolution")), frame.knob_int("face_size"),
-                                        static_cast<Traversal>(frame.knob_int("traversal"))};
-        const std::uint64_t geometry = passes::geometry_fingerprint(frame.scene);
-        if (bake_ && bake_->parameters == parameters && bake_->geometry == geometry) return;
-        gpu::GpuTimers::Scope timing(frame.timers, "cssm_bake");
-        const Precompute& precompute = frame.precompute;
-        const std::string key = bake_key(frame.scene, parameters);
-        if (precompute.cache_dir) {
-            if (auto cached = load_cached_bake(*precompute.cache_dir, key, frame.scene)) {
-                bake_ = std::make_unique<CssmBake>(std::move(*cached));
-                ++bakes_loaded_;
-                ++bake_generation_;
-                log::info("cssm", "loaded bake {} ({} cube maps, {} bytes)", key, bake_->maps.depth.maps,
-                          bake_->maps.depth.compressed_bytes());
-                if (precompute.progress) precompute.progress(1.0, "loaded from cache");
-                upload();
-                return;
-            }
+    // The objects to bake as moving: those declared so, and those moved since the static group was
+    // baked (moving one of those costs a rebake of the static group without it, once).
+    std::vector<std::uint32_t> moving_objects(const scene::Scene& scene) const {
+        std::vector<std::uint32_t> moving;
+        for (std::uint32_t o = 0; o < scene.objects.size(); ++o) {
+            if (scene.objects[o].mesh < 0) continue;
+            const bool was_moving = bake_ && std::binary_search(bake_->moving.begin(), bake_->moving.end(), o);
+            const bool moved = bake_ && o < bake_->baked_transforms.size() && bake_->baked_transforms[o] != scene.objects[o].transform;
+            if (scene.objects[o].dynamic || was_moving || moved) moving.push_back(o);
         }
-        BakeProgress progress;
-        if (precompute.progress) {
-            progress = [&](std::uint32_t done, std::uint32_t total) {
-                return precompute.progress(total > 0 ? static_cast<double>(done) / total : 1.0, "depth cube maps");
-            };
-        }
-        // Replaces the resident bake only once complete: a cancelled bake loses nothing.
-        bake_ = std::make_unique<CssmBake>(bake_scene(frame.scene, parameters, progress));
-        ++bakes_;
-        ++bake_generation_;
-        log::info("cssm", "baked {} cube maps of 6x{}^2 over {} atlas texels in {:.2f} s ({} -> {} bytes, {:.1f}:1)",
-                  bake_->maps.depth.maps, parameters.face_size, bake_->atlas.texels.size(), bake_->maps.bake_seconds,
-                  bake_->maps.depth.uncompressed_bytes(), bake_->maps.depth.compressed_bytes(), compression_ratio());
-        if (precompute.cache_dir) {
-            try {
-                store_cached_bake(*precompute.cache_dir, key, *bake_);
-            } catch (const std::exception& error) {
-                log::warn("cssm", "bake not cached: {}", error.what());
-            }
-        }
-        upload();
+        return moving;
     }
 
+    // The bake these knobs need: kept (its moving objects placed anew), or baked group by group,
+    // each loaded from the cache directory when there, else baked and stored there.
+    void ensure_bake(const FrameContext& frame) {
+        frame_scene_ = &frame.scene;
+        const BakeParameters parameters{static_cast<float>(frame.knob("atlas_resolution")), frame.knob_int("face_size"),
+                                        static_cast<Traversal>(frame.knob_int("traversal")), frame.knob_int("csm_directions")};
+        const std::vector<std::uint32_t> moving = moving_objects(frame.scene);
+        const std::uint64_t geometry = passes::geometry_fingerprint(frame.scene);
+        if (bake_ && bake_->parameters == parameters && bake_->moving == moving) {
+            if (geometry != placed_geometry_) place(frame.scene);
+            return;
+        }
+        gpu::GpuTimers::Scope timing(frame.timers, "cssm_bake");
+        if (bake_) {
+            for (std::uint32_t o : moving) {
+                if (!std::binary_search(bake_->moving.begin(), bake_->moving.end(), o)) {
+                    log::info("cssm", "object '{}' moved without being declared dynamic: rebaking the static objects "
+                              "without it, and it alone with a CSM", frame.scene.objects[o].name);
+                }
+            }
+        }
+        // Replaces the resident bake only once complete: a cancelled bake loses nothing.
+        bake_ = std::make_unique<CssmBake>(bake_scene(frame.scene, parameters, moving,
+                                                      BakeOptions{frame.precompute.cache_dir, frame.precompute.progress}));
+        for (const BakeGroup& group : bake_->groups) {
+            if (group.loaded) {
+                ++bakes_loaded_;
+            } else {
+                ++bakes_;
+            }
+        }
+        ++bake_generation_;
+        log::info("cssm", "{} groups ({} from the cache): {} cube maps of 6x{}^2 over {} atlas texels ({} -> {} bytes, {:.1f}:1)",
+                  bake_->groups.size(), bakes_loaded_, bake_->cube_maps(), parameters.face_size, bake_->texel_count(),
+                  bake_->uncompressed_bytes(), bake_->compressed_bytes(), compression_ratio());
+        upload();
+        check_overlaps(frame.scene);
+        placed_geometry_ = geometry;
+    }
+
+    // Moving objects moved: their texels, the hierarchy over all texels and the GPU copies follow;
+    // no bake.
+    void place(const scene::Scene& scene) {
+        place_texels(scene, *bake_);
+        upload_placement(scene);
+        check_overlaps(scene);
+        placed_geometry_ = passes::geometry_fingerprint(scene);
+        ++placements_;
+    }
+
+    void check_overlaps(const scene::Scene& scene) {
+        overlaps_ = find_hull_overlaps(scene, bake_->moving);
+        for (const HullOverlap& overlap : overlaps_) {
+            log::warn("cssm", "object '{}' reaches into the convex hull of moving object '{}': visibility through '{}' "
+                      "is unreliable there (CSMs answer only outside their object's hull)",
+                      scene.objects[overlap.other].name, scene.objects[overlap.moving].name, scene.objects[overlap.moving].name);
+        }
+    }
+
+    // Every group's compressed sequences, concatenated: cube maps, then CSMs.
     void upload() {
         const CssmBake& bake = *bake_;
-        const std::size_t texel_count = bake.atlas.texels.size();
+        std::vector<std::uint32_t> pixel_runs, run_start, packed_depth;
+        std::vector<std::uint16_t> run_depth;
+        auto append = [&](const CompressedDepthMaps& depth) {
+            const auto first_entry = static_cast<std::uint32_t>(pixel_runs.size());
+            const auto run_base = static_cast<std::uint32_t>(run_start.size());
+            for (std::uint32_t entry : depth.pixel_runs) pixel_runs.push_back(run_base + entry);
+            run_start.insert(run_start.end(), depth.run_start.begin(), depth.run_start.end());
+            run_depth.insert(run_depth.end(), depth.run_depth.begin(), depth.run_depth.end());
+            return first_entry;
+        };
+        group_run_base_.clear();
+        std::vector<GpuCsm> csms;
+        std::vector<glm::vec4> directions;
+        std::vector<std::uint32_t> nearest;
+        for (std::uint32_t g = 0; g < bake.groups.size(); ++g) {
+            const BakeGroup& group = bake.groups[g];
+            group_run_base_.push_back(append(group.maps.depth));
+            if (group.csm) {
+                const std::uint32_t runs = append(group.csm->depth);
+                csms.push_back({glm::vec4(group.csm->centre, group.csm->radius),
+                                glm::uvec4(directions.size(), nearest.size(), runs, group.csm->face_size), glm::uvec4(g, 0, 0, 0)});
+                directions.insert(directions.end(), group.csm->directions.begin(), group.csm->directions.end());
+                nearest.insert(nearest.end(), group.csm->nearest_map.begin(), group.csm->nearest_map.end());
+            }
+        }
+        packed_depth.assign((run_depth.size() + 1) / 2, 0);
+        for (std::size_t r = 0; r < run_depth.size(); ++r)
+            packed_depth[r / 2] |= static_cast<std::uint32_t>(run_depth[r]) << (16 * (r % 2));
+        pixel_runs_ = storage(pixel_runs);
+        run_start_ = storage(run_start);
+        run_depth_ = storage(packed_depth);
+        csms_ = storage(csms);
+        csm_directions_ = storage(directions);
+        csm_nearest_ = storage(nearest);
+        csm_count_ = static_cast<unsigned>(csms.size());
+        const std::size_t texel_count = bake.texel_count();
+        for (gpu::Buffer* buffer : {&direct_, &bounce_, &total_, &irradiance_})
+            *buffer = gpu::Buffer(std::max<std::size_t>(1, texel_count) * sizeof(glm::vec4), nullptr, 0);
+        cssm_bytes_ = pixel_runs_.bytes() + run_start_.bytes() + run_depth_.bytes() + csms_.bytes() + csm_directions_.bytes() +
+                      csm_nearest_.bytes();
+        upload_placement(*frame_scene_);
+    }
+
+    // What moves with the objects: texels, groups' frames, the hierarchy.
+    void upload_placement(const scene::Scene& scene) {
+        const CssmBake& bake = *bake_;
+        const std::size_t texel_count = bake.texel_count();
         std::vector<GpuTexel> texels(texel_count);
         for (std::size_t t = 0; t < texel_count; ++t) {
-            texels[t] = {glm::vec4(bake.maps.origins[t], bake.atlas.texels[t].area),
-                         glm::vec4(bake.normals[t], static_cast<float>(bake.maps.map_of_texel[t])), glm::vec4(bake.albedo[t], 0.0f),
-                         glm::vec4(bake.emission[t], 0.0f)};
+            const std::uint32_t g = bake.texel_group[t];
+            const std::uint32_t local = static_cast<std::uint32_t>(t - bake.group_first_texel[g]);
+            texels[t] = {glm::vec4(bake.positions[t], bake.areas[t]),
+                         glm::vec4(bake.normals[t], static_cast<float>(bake.groups[g].maps.map_of_texel[local])),
+                         glm::vec4(bake.albedo[t], static_cast<float>(g)), glm::vec4(bake.emission[t], 0.0f)};
+        }
+        std::vector<GpuGroup> groups(bake.groups.size());
+        for (std::size_t g = 0; g < groups.size(); ++g) {
+            const BakeGroup& group = bake.groups[g];
+            std::uint32_t csm = kNoNode;
+            for (std::uint32_t c = 0, seen = 0; c <= g; ++c)
+                if (bake.groups[c].csm) {
+                    if (c == g) csm = seen;
+                    ++seen;
+                }
+            groups[g] = {world_to_group(scene, group), glm::uvec4(group_run_base_[g], csm, 0, 0),
+                         glm::vec4(group.maps.settings.near_plane, group.maps.settings.far_plane, 0.0f, 0.0f)};
         }
         std::vector<GpuNode> nodes(bake.tree.nodes.size());
         for (std::size_t n = 0; n < nodes.size(); ++n) {
@@ -198,22 +314,12 @@ private:
             nodes[n] = {glm::vec4(node.centre, node.radius), glm::vec4(node.normal, node.cone_cos), glm::vec4(node.area, 0, 0, 0),
                         glm::uvec4(node.child, node.skip, node.representative, node.texel)};
         }
-        const CompressedDepthMaps& depth = bake.maps.depth;
-        std::vector<std::uint32_t> packed_depth((depth.run_depth.size() + 1) / 2, 0);
-        for (std::size_t r = 0; r < depth.run_depth.size(); ++r)
-            packed_depth[r / 2] |= static_cast<std::uint32_t>(depth.run_depth[r]) << (16 * (r % 2));
-
         texels_ = storage(texels);
+        groups_ = storage(groups);
         nodes_ = storage(nodes);
-        node_radiance_ = gpu::Buffer(nodes.size() * sizeof(glm::vec4), nullptr, 0);
-        pixel_runs_ = storage(depth.pixel_runs);
-        run_start_ = storage(depth.run_start);
-        run_depth_ = storage(packed_depth);
+        node_radiance_ = gpu::Buffer(std::max<std::size_t>(1, nodes.size()) * sizeof(glm::vec4), nullptr, 0);
         level_nodes_ = storage(bake.tree.level_nodes);
-        for (gpu::Buffer* buffer : {&direct_, &bounce_, &total_, &irradiance_})
-            *buffer = gpu::Buffer(texel_count * sizeof(glm::vec4), nullptr, 0);
-        atlas_bytes_ = texels_.bytes() + 4 * direct_.bytes();
-        cssm_bytes_ = pixel_runs_.bytes() + run_start_.bytes() + run_depth_.bytes();
+        atlas_bytes_ = texels_.bytes() + 4 * direct_.bytes() + groups_.bytes();
         tree_bytes_ = nodes_.bytes() + node_radiance_.bytes() + level_nodes_.bytes();
         batch_pcf_ = -1;
     }
@@ -222,8 +328,12 @@ private:
     void set_batches(int pcf) {
         if (pcf == batch_pcf_) return;
         batch_pcf_ = pcf;
-        const double search_steps = std::log2(std::max<double>(2.0, bake_->maps.depth.maps)) + 2.0;
-        const double steps_per_node = static_cast<double>(pcf * pcf) * search_steps + 8.0;
+        const double search_steps = std::log2(std::max<double>(2.0, bake_->cube_maps())) + 2.0;
+        // A visibility query: the sender's PCF taps, the receiver's (with moving objects), and each
+        // CSM's lookup.
+        const double queries = csm_count_ > 0 ? 2.0 : 1.0;
+        const double steps_per_node = static_cast<double>(pcf * pcf) * search_steps * queries +
+                                      static_cast<double>(csm_count_) * (search_steps + 8.0) + 8.0 + 64.0 * (queries - 1.0);
         const auto budget = static_cast<std::uint32_t>(std::max(1.0, kStepsPerBatch / steps_per_node));
         const std::vector<std::uint32_t> roots = bake_->tree.cut((budget + 1) / 2);
         batches_.clear();
@@ -251,10 +361,13 @@ private:
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CSSM_BINDING_ROOTS, roots_.id());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CSSM_BINDING_LEVEL_NODES, level_nodes_.id());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CSSM_BINDING_COUNTERS, counters_.id());
-        const CubeMapSettings& cube = bake_->maps.settings;
-        program.set("u_face_size", cube.face_size);
-        program.set("u_far_plane", cube.far_plane);
-        program.set("u_near_plane", cube.near_plane);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CSSM_BINDING_GROUPS, groups_.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CSSM_BINDING_CSMS, csms_.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CSSM_BINDING_CSM_DIRECTIONS, csm_directions_.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CSSM_BINDING_CSM_NEAREST, csm_nearest_.id());
+        program.set("u_face_size", bake_->parameters.face_size);
+        program.set("u_csm_count", csm_count_);
+        program.set("u_texel_size", bake_->texel_size);
         program.set("u_pcf", pcf);
         program.set("u_threshold", threshold);
     }
@@ -262,7 +375,7 @@ private:
     // Direct light on the atlas, then bounces 1 .. n-1 by hierarchical radiosity; the texels'
     // total exitance is pulled up the tree for the final gather (which makes bounce n).
     void light_atlas(const FrameContext& frame, int bounces, float threshold, int pcf) {
-        const auto texel_count = static_cast<unsigned>(bake_->atlas.texels.size());
+        const auto texel_count = static_cast<unsigned>(bake_->texel_count());
         {
             gpu::GpuTimers::Scope timing(frame.timers, "cssm_atlas_direct");
             const gpu::ShaderProgram& program = frame.shaders.get(gpu::ProgramSource::compute_shader("cssm/atlas_direct.comp"));
@@ -384,6 +497,13 @@ private:
     std::uint64_t lighting_ = 0;
     std::size_t bakes_ = 0, bakes_loaded_ = 0, atlas_solutions_ = 0;
     gpu::Buffer texels_, nodes_, node_radiance_, pixel_runs_, run_start_, run_depth_, level_nodes_, roots_, counters_;
+    gpu::Buffer groups_, csms_, csm_directions_, csm_nearest_;
+    std::vector<std::uint32_t> group_run_base_;
+    unsigned csm_count_ = 0;
+    std::vector<HullOverlap> overlaps_;
+    std::uint64_t placed_geometry_ = 0;
+    std::size_t placements_ = 0;
+    const scene::Scene* frame_scene_ = nullptr;
     gpu::Buffer direct_, bounce_, total_, irradiance_;
     std::size_t atlas_bytes_ = 0, cssm_bytes_ = 0, tree_bytes_ = 0;
     std::vector<Batch> batches_;
@@ -408,9 +528,10 @@ MethodInfo method_info() {
          "radiosity: refine a sender while its tone-mapped radiance bound at the receiver texel exceeds this (0: every texel)"},
         {"final_threshold", 0, 100, false, "final gather: the same threshold for pixels"},
         {"pcf", 1, 7, true, "percentage-closer filter width over cube-map pixels"},
+        {"csm_directions", 16, 4096, true, "directions of each moving object's coherent shadow maps"},
         {"shadow_map_size", 16, 8192, true, "texels per side of each shadow map (direct light)"}};
     auto preset = [](double atlas, double face, double threshold, double pcf) {
-        return KnobValues{{"atlas_resolution", atlas}, {"face_size", face},      {"traversal", 2},
+        return KnobValues{{"atlas_resolution", atlas}, {"face_size", face},      {"traversal", 2}, {"csm_directions", 256},
                           {"bounces", 1},              {"threshold", threshold}, {"final_threshold", threshold},
                           {"pcf", pcf},                {"shadow_map_size", 2048}};
     };
