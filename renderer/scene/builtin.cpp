@@ -5,6 +5,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include <array>
+#include <map>
 #include <cmath>
 
 namespace bounce::scene {
@@ -168,11 +169,90 @@ int add_box(Scene& scene, const std::string& name, const glm::vec3& lo, const gl
     return static_cast<int>(scene.objects.size()) - 1;
 }
 
-std::vector<std::string> builtin_scene_names() { return {"cornell"}; }
+Scene make_cornell_blob() {
+    Scene scene = make_cornell_box();
+    scene.name = "cornell_blob";
+    // Replace the tall block by the blob, standing where the block stood.
+    const glm::mat4 place = scene.objects[2].transform;
+    scene.objects.pop_back();
+    scene.meshes.pop_back();
+
+    // An icosahedron subdivided four times (5120 triangles), projected to a sphere and displaced
+    // along the radius by smooth lobes: a closed, curved surface with concave folds and no UVs.
+    std::vector<glm::vec3> vertices;
+    std::vector<std::uint32_t> indices;
+    const float t = (1.0f + std::sqrt(5.0f)) / 2.0f;
+    for (const glm::vec3& v : {glm::vec3(-1, t, 0), glm::vec3(1, t, 0), glm::vec3(-1, -t, 0), glm::vec3(1, -t, 0),
+                               glm::vec3(0, -1, t), glm::vec3(0, 1, t), glm::vec3(0, -1, -t), glm::vec3(0, 1, -t),
+                               glm::vec3(t, 0, -1), glm::vec3(t, 0, 1), glm::vec3(-t, 0, -1), glm::vec3(-t, 0, 1)}) {
+        vertices.push_back(glm::normalize(v));
+    }
+    indices = {0, 11, 5, 0, 5, 1, 0, 1, 7, 0, 7, 10, 0, 10, 11, 1, 5, 9, 5, 11, 4, 11, 10, 2, 10, 7, 6, 7, 1, 8,
+               3, 9, 4, 3, 4, 2, 3, 2, 6, 3, 6, 8, 3, 8, 9, 4, 9, 5, 2, 4, 11, 6, 2, 10, 8, 6, 7, 9, 8, 1};
+    for (int level = 0; level < 4; ++level) {
+        std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> midpoints;
+        auto midpoint = [&](std::uint32_t a, std::uint32_t b) {
+            const auto key = std::make_pair(std::min(a, b), std::max(a, b));
+            const auto [it, added] = midpoints.emplace(key, static_cast<std::uint32_t>(vertices.size()));
+            if (added) vertices.push_back(glm::normalize(vertices[a] + vertices[b]));
+            return it->second;
+        };
+        std::vector<std::uint32_t> finer;
+        for (std::size_t i = 0; i < indices.size(); i += 3) {
+            const std::uint32_t a = indices[i], b = indices[i + 1], c = indices[i + 2];
+            const std::uint32_t ab = midpoint(a, b), bc = midpoint(b, c), ca = midpoint(c, a);
+            finer.insert(finer.end(), {a, ab, ca, b, bc, ab, c, ca, bc, ab, bc, ca});
+        }
+        indices = std::move(finer);
+    }
+    Primitive blob;
+    blob.material = 0;
+    constexpr float kRadius = 0.11f;
+    for (glm::vec3 d : vertices) {
+        const float lobes = 0.22f * std::sin(3.0f * d.x + 1.0f) * std::sin(2.0f * d.y + 0.5f) * std::cos(3.0f * d.z) +
+                            0.12f * std::sin(5.0f * d.y + 2.0f * d.x);
+        const glm::vec3 p = d * kRadius * (1.0f + lobes) * glm::vec3(1.0f, 1.6f, 1.0f);
+        blob.positions.push_back(p);
+    }
+    // Lift it onto the floor.
+    float lowest = 0.0f;
+    for (const glm::vec3& p : blob.positions) lowest = std::min(lowest, p.y);
+    for (glm::vec3& p : blob.positions) {
+        p.y -= lowest;
+        blob.bounds.extend(p);
+    }
+    blob.indices = indices;
+    // Smooth normals: area-weighted face normals (the sphere's winding faces outwards).
+    blob.normals.assign(blob.positions.size(), glm::vec3(0.0f));
+    for (std::size_t i = 0; i < indices.size(); i += 3) {
+        const glm::vec3 n = glm::cross(blob.positions[indices[i + 1]] - blob.positions[indices[i]],
+                                       blob.positions[indices[i + 2]] - blob.positions[indices[i]]);
+        for (int c = 0; c < 3; ++c) blob.normals[indices[i + c]] += n;
+    }
+    for (glm::vec3& n : blob.normals) n = glm::normalize(n);
+    for (const glm::vec3& n : blob.normals) {
+        const glm::vec3 tangent = glm::normalize(glm::cross(std::abs(n.y) < 0.99f ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0), n));
+        blob.tangents.emplace_back(tangent, 1.0f);
+    }
+    Mesh mesh;
+    mesh.name = "blob";
+    mesh.bounds = blob.bounds;
+    mesh.primitives.push_back(std::move(blob));
+    scene.meshes.push_back(std::move(mesh));
+    Object object;
+    object.name = "blob";
+    object.mesh = static_cast<int>(scene.meshes.size()) - 1;
+    object.initial_transform = object.transform = place;
+    scene.objects.push_back(object);
+    return scene;
+}
+
+std::vector<std::string> builtin_scene_names() { return {"cornell", "cornell_blob"}; }
 
 Scene make_builtin_scene(const std::string& name) {
     if (name == "cornell") return make_cornell_box();
-    throw InputError(fmt::format("unknown built-in scene '{}' (known: cornell)", name));
+    if (name == "cornell_blob") return make_cornell_blob();
+    throw InputError(fmt::format("unknown built-in scene '{}' (known: cornell, cornell_blob)", name));
 }
 
 }  // namespace bounce::scene

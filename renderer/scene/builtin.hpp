@@ -13,11 +13,16 @@ namespace bounce::scene {
 // below the ceiling.
 Scene make_cornell_box();
 
+// The Cornell box with its tall block replaced by an organic shape: a smoothly lobed, subdivided
+// icosphere (5120 triangles, no UVs) standing where the block stood. A curved mesh that atlas
+// charting and the cube-map bake must handle without a parametrization.
+Scene make_cornell_blob();
+
 // Appends an axis-aligned box [lo, hi] (metres, faces outward) as a movable object whose origin is
 // its centre; returns the object's index.
 int add_box(Scene& scene, const std::string& name, const glm::vec3& lo, const glm::vec3& hi, int material);
 
-// Names of the built-in scenes ("cornell").
+// Names of the built-in scenes ("cornell", "cornell_blob").
 std::vector<std::string> builtin_scene_names();
 // Throws InputError for an unknown name.
 Scene make_builtin_scene(const std::string& name);

@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <map>
+
 #include <cmath>
 
 namespace bounce::scene {
@@ -74,6 +76,35 @@ TEST(CornellBox, PublishedCamera) {
 TEST(BuiltinScenes, UnknownNameIsAnInputError) {
     EXPECT_THROW(make_builtin_scene("sponza"), InputError);
     EXPECT_EQ(make_builtin_scene("cornell").name, "cornell");
+}
+
+}  // namespace
+}  // namespace bounce::scene
+
+namespace bounce::scene {
+namespace {
+
+TEST(BuiltinScene, TheBlobIsAClosedOutwardFacingMeshStandingOnTheFloor) {
+    const Scene scene = make_builtin_scene("cornell_blob");
+    const auto index = scene.find_object("blob");
+    ASSERT_TRUE(index.has_value());
+    EXPECT_FALSE(scene.find_object("tall_block").has_value());
+    const Object& blob = scene.objects[*index];
+    const Primitive& p = scene.meshes[blob.mesh].primitives[0];
+    EXPECT_EQ(p.triangle_count(), 5120u);
+    std::map<std::pair<std::uint32_t, std::uint32_t>, int> edges;
+    glm::vec3 centre(0.0f);
+    for (const glm::vec3& v : p.positions) centre += v / static_cast<float>(p.positions.size());
+    double signed_volume = 0.0;
+    for (std::size_t t = 0; t < p.triangle_count(); ++t) {
+        const std::uint32_t a = p.indices[3 * t], b = p.indices[3 * t + 1], c = p.indices[3 * t + 2];
+        for (auto [u, v] : {std::pair{a, b}, std::pair{b, c}, std::pair{c, a}}) ++edges[{std::min(u, v), std::max(u, v)}];
+        signed_volume += glm::dot(p.positions[a] - centre, glm::cross(p.positions[b] - centre, p.positions[c] - centre)) / 6.0;
+    }
+    for (const auto& [edge, count] : edges) ASSERT_EQ(count, 2) << "an open or non-manifold edge";
+    EXPECT_GT(signed_volume, 0.0) << "triangles wound inwards";
+    const Aabb world = blob.world_bounds(scene.meshes[blob.mesh]);
+    EXPECT_NEAR(world.min.y, 0.0f, 1e-5f);
 }
 
 }  // namespace
