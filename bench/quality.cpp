@@ -3,6 +3,7 @@
 // resident memory and the error against the reference; it also measures the reference itself
 // (error reached per CPU second). Writes a CSV, a Markdown table (docs/benchmarks.md) and, through
 // bench/plot_quality.py, a plot of error against time.
+#include "bench/markdown_blocks.hpp"
 #include "bench/scenes.hpp"
 #include "renderer/base/log.hpp"
 #include "renderer/image/codec.hpp"
@@ -762,26 +763,6 @@ std::string isr_markdown(Renderer& renderer, const Options& options, const std::
 }
 
 // Replaces the isr block of an existing Markdown file (or appends one), keeping everything else.
-void splice_isr_markdown(const fs::path& path, const std::string& block) {
-    std::string text;
-    if (fs::exists(path)) {
-        std::ostringstream contents;
-        contents << std::ifstream(path).rdbuf();
-        text = contents.str();
-    }
-    const auto begin = text.find(kIsrBegin);
-    const auto end = begin == std::string::npos ? std::string::npos : text.find(kIsrEnd, begin);
-    if (end != std::string::npos) {
-        std::size_t after = end + kIsrEnd.size();
-        if (after < text.size() && text[after] == '\n') ++after;
-        text.replace(begin, after - begin, block);
-    } else {
-        if (!text.empty() && text.back() != '\n') text += '\n';
-        text += (text.empty() ? "" : "\n") + block;
-    }
-    std::ofstream(path) << text;
-}
-
 void write_markdown(const fs::path& path, const std::vector<Row>& rows, const Options& options, const std::string& gpu,
                     const std::string& command, const std::string& details) {
     std::ostringstream md;
@@ -815,7 +796,10 @@ void write_markdown(const fs::path& path, const std::vector<Row>& rows, const Op
         if (r.method == "reference") md << fmt::format("| {} | {} | {:.3g} |\n", r.scene, r.preset, r.rays_per_second);
     }
     md << details;
+    // bench/cssm's sections are its own: kept as they were.
+    const auto cssm = bench::find_block(path, bench::kCssmBegin, bench::kCssmEnd);
     std::ofstream(path) << md.str();
+    if (cssm) bench::splice_block(path, bench::kCssmBegin, bench::kCssmEnd, *cssm);
 }
 
 int parse_int(const std::string& text, const char* flag) {
@@ -870,7 +854,7 @@ int main(int argc, char** argv) {
         Renderer renderer(gpu::DeviceChoice::resolve(std::nullopt));
         if (options.isr_only) {
             const std::string block = isr_markdown(renderer, options, command, isr);
-            splice_isr_markdown(options.markdown, block);
+            bench::splice_block(options.markdown, kIsrBegin, kIsrEnd, block);
             log::info("bench", "wrote the isr sections of {} and their CSVs in {}", options.markdown.string(),
                       options.out.string());
             return 0;

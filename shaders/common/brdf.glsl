@@ -80,3 +80,20 @@ vec3 evaluate_brdf(SurfaceMaterial m, vec3 n, vec3 v, vec3 l) {
     vec3 metal_specular = (m.base_color + (1.0 - m.base_color) * fw) * specular_lobe;
     return diffuse_brdf(m, n_dot_l, n_dot_v) + mix(dielectric_specular, metal_specular, m.metallic);
 }
+
+// An upper bound (approximate for the specular lobe) of evaluate_brdf over light directions within
+// `cone` radians of `l_axis`, for refinement oracles: the diffuse part at its largest, plus the
+// GGX lobe at the half vector nearest n that such a direction allows (half the angle from the
+// mirror direction), with Smith visibility at the cone's most grazing n.l (kept above 0.1) and
+// Fresnel at 1 (metal) or at the specular factor (dielectric).
+float brdf_bound(SurfaceMaterial m, vec3 n, vec3 v, vec3 l_axis, float cone) {
+    float diffuse = max(m.base_color.r, max(m.base_color.g, m.base_color.b)) * (1.0 - m.metallic) * INV_PI;
+    float fresnel = mix(m.specular, 1.0, m.metallic);
+    if (fresnel <= 0.0) return diffuse;
+    vec3 mirror = reflect(-v, n);
+    float off_mirror = max(acos(clamp(dot(l_axis, mirror), -1.0, 1.0)) - cone, 0.0);
+    float alpha = ggx_alpha(m.roughness);
+    float n_dot_l = max(cos(min(acos(clamp(dot(n, l_axis), -1.0, 1.0)) + cone, 0.5 * PI)), 0.1);
+    float n_dot_v = max(dot(n, v), 1e-4);
+    return diffuse + fresnel * ggx_distribution(cos(0.5 * off_mirror), alpha) * smith_visibility(n_dot_l, n_dot_v, alpha);
+}

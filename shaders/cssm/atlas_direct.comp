@@ -6,6 +6,7 @@ layout(local_size_x = 64) in;
 #include "common/lights.glsl"
 #include "common/shadows.glsl"
 #define CSSM_BRDF(l) 1.0
+#define CSSM_BRDF_BOUND(l, cone) 1.0
 #include "cssm/cssm_tree.glsl"
 
 layout(std430, binding = CSSM_BINDING_TEXEL_OUT) buffer CssmTexelOut { vec4 texel_out[]; };

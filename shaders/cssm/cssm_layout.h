@@ -18,6 +18,8 @@
 #define CSSM_BINDING_CSM_DIRECTIONS 13  // vec4[]: each CSM's map directions
 #define CSSM_BINDING_CSM_NEAREST 14  // uint[]: each CSM's direction table (6 x CSM_TABLE_FACE^2)
 
+#define CSSM_BINDING_TEXEL_INDIRECT 15  // vec4[texels]: irradiance of every bounce, summed (per-texel display)
+
 #define CSSM_TABLE_FACE 16
 
 #define CSSM_NONE 0xFFFFFFFFu

@@ -49,6 +49,7 @@ uniform uint u_csm_count;     // moving groups
 uniform float u_texel_size;   // atlas texel edge, world units
 uniform int u_pcf;            // filter width in pixels (odd)
 uniform float u_threshold;    // refine while the tone-mapped bound on received radiance exceeds it
+uniform uint u_jitter_seed;   // 0: senders at their centres; else a frame's seed for jittered positions (§4.5)
 uniform uint u_first_root;    // this batch's subtrees: roots[u_first_root .. + u_root_count)
 uniform uint u_root_count;
 
@@ -155,6 +156,20 @@ uint texel_near(vec3 p, vec3 n) {
     return near ? texel : CSSM_NONE;
 }
 
+// The node above the nearest leaf that holds at most `leaves` texels: the neighbourhood of p.
+uint neighbourhood(vec3 p, uint leaves) {
+    uint node = 0u;
+    for (int depth = 0; depth < 64 && nodes[node].links.x != CSSM_NONE; ++depth) {
+        if (nodes[node].area.y <= float(leaves)) break;
+        uint left = nodes[node].links.x;
+        uint right = nodes[left].links.y;
+        float gap_left = length(p - nodes[left].centre_radius.xyz) - nodes[left].centre_radius.w;
+        float gap_right = length(p - nodes[right].centre_radius.xyz) - nodes[right].centre_radius.w;
+        node = gap_left <= gap_right ? left : right;
+    }
+    return node;
+}
+
 // Visibility between a sender texel and a receiver (§3.3): the sender's group by its cube map; the
 // receiver's group, when another, by the receiver's cube map; every other moving object by its CSM.
 float visibility(uint sender_texel, vec3 receiver, uint receiver_texel) {
@@ -187,10 +202,30 @@ struct Gathered {
     uint visited;
 };
 
+uint pcg_hash(uint v) {
+    uint state = v * 747796405u + 2891336453u;
+    uint word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+    return (word >> 22u) ^ word;
+}
+
+// Where a sender node emits from: its centre, or, jittered, a point of the disk of its area (at
+// most its bounding sphere) on its tangent plane, a different one each frame.
+vec3 sender_position(uint node) {
+    vec3 centre = nodes[node].centre_radius.xyz;
+    if (u_jitter_seed == 0u) return centre;
+    uint h1 = pcg_hash(node ^ pcg_hash(u_jitter_seed)), h2 = pcg_hash(h1);
+    float radius = min(sqrt(nodes[node].area.x * INV_PI), nodes[node].centre_radius.w) * sqrt(float(h1) / 4294967296.0);
+    float angle = 2.0 * PI * float(h2) / 4294967296.0;
+    vec3 normal = nodes[node].normal_cone.xyz;
+    vec3 helper = abs(normal.y) < 0.99 ? vec3(0.0, 1.0, 0.0) : vec3(1.0, 0.0, 0.0);
+    vec3 u = normalize(cross(helper, normal)), w = cross(normal, u);
+    return centre + radius * (cos(angle) * u + sin(angle) * w);
+}
+
 // Light a node sends to a receiver at p with normal n: the disk-to-point form factor times its
 // radiance, pi L A cos_s cos_r / (pi d^2 + A), weighted by the CSSM visibility.
 vec3 node_irradiance(uint node, vec3 p, vec3 n, uint receiver_texel, out vec3 l) {
-    vec3 to_node = nodes[node].centre_radius.xyz - p;
+    vec3 to_node = sender_position(node) - p;
     float d2 = max(dot(to_node, to_node), 1e-30);
     l = to_node * inversesqrt(d2);
     float cos_r = dot(n, l);
@@ -202,14 +237,16 @@ vec3 node_irradiance(uint node, vec3 p, vec3 n, uint receiver_texel, out vec3 l)
 }
 
 // Upper bound of the irradiance a node can give the receiver (0 when it lies wholly behind either
-// side), from its bounding sphere and normal cone, as in lightcuts.
-float irradiance_bound(uint node, vec3 p, vec3 n) {
+// side), from its bounding sphere and normal cone, as in lightcuts; `l` and `widen` give the cone
+// of directions towards the node.
+float irradiance_bound(uint node, vec3 p, vec3 n, out vec3 l, out float widen) {
     vec3 to_node = nodes[node].centre_radius.xyz - p;
     float d = length(to_node);
     float r = nodes[node].centre_radius.w;
+    l = to_node / max(d, 1e-30);
+    widen = 0.5 * PI;
     if (d <= r * 1.0001) return 3.0e38;  // the receiver is inside: refine
-    vec3 l = to_node / d;
-    float widen = asin(min(r / d, 1.0));
+    widen = asin(min(r / d, 1.0));
     float receiver_angle = acos(clamp(dot(n, l), -1.0, 1.0)) - widen;
     float sender_angle = acos(clamp(dot(nodes[node].normal_cone.xyz, -l), -1.0, 1.0)) -
                          acos(clamp(nodes[node].normal_cone.w, -1.0, 1.0)) - widen;
@@ -220,12 +257,12 @@ float irradiance_bound(uint node, vec3 p, vec3 n) {
 }
 
 // Refine and gather in one stackless walk over this batch's subtrees (the paper's Fig. 10): a node
-// whose bound, times the receiver's largest BRDF value and tone-mapped, exceeds the threshold is
+// whose bound, times the receiver's BRDF bound towards it and tone-mapped, exceeds the threshold is
 // refined (child pointer); otherwise it is gathered and skipped (skip pointer). Leaves are always
 // gathered. `exclude` is the receiver's own texel (for pixels, the texel under them, or
-// CSSM_NONE). The includer defines CSSM_BRDF(l) as the receiver's BRDF towards l (a constant for
-// texels).
-Gathered gather_cut(vec3 p, vec3 n, float brdf_max, uint exclude) {
+// CSSM_NONE). The includer defines CSSM_BRDF(l) as the receiver's BRDF towards l and
+// CSSM_BRDF_BOUND(l, cone) as its bound over a cone of directions (constants for texels).
+Gathered gather_cut(vec3 p, vec3 n, uint exclude) {
     Gathered result = Gathered(vec3(0.0), 0u, 0u);
     for (uint r = 0u; r < u_root_count; ++r) {
         uint root = roots[u_first_root + r];
@@ -239,12 +276,14 @@ Gathered gather_cut(vec3 p, vec3 n, float brdf_max, uint exclude) {
                 node = links.y;
                 continue;
             }
-            float bound = irradiance_bound(node, p, n);
+            vec3 towards;
+            float cone;
+            float bound = irradiance_bound(node, p, n, towards, cone);
             if (bound == 0.0) {
                 node = links.y;
                 continue;
             }
-            if (!leaf && tone_mapped(brdf_max * bound) > u_threshold) {
+            if (!leaf && tone_mapped(CSSM_BRDF_BOUND(towards, cone) * bound) > u_threshold) {
                 node = links.x;
                 continue;
             }

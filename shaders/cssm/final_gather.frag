@@ -14,6 +14,7 @@ uniform vec3 u_camera_position;
 SurfaceMaterial g_material;
 vec3 g_n, g_v;
 #define CSSM_BRDF(l) evaluate_brdf(g_material, g_n, g_v, l)
+#define CSSM_BRDF_BOUND(l, cone) brdf_bound(g_material, g_n, g_v, l, cone)
 #include "cssm/cssm_tree.glsl"
 
 out vec4 out_radiance;
@@ -28,11 +29,9 @@ void main() {
     g_material = SurfaceMaterial(albedo_metallic.rgb, albedo_metallic.w, normal_roughness.w, specular);
     g_n = normal_roughness.xyz;
     g_v = safe_normalize(u_camera_position - position.xyz, g_n);
-    vec3 diffuse = diffuse_albedo(g_material);
-    float brdf_max = max(diffuse.r, max(diffuse.g, diffuse.b)) * INV_PI;
     // With moving objects, the texel under the pixel tests its own group's occluders from its side.
     uint under = u_csm_count > 0u ? texel_near(position.xyz, g_n) : CSSM_NONE;
-    Gathered g = gather_cut(position.xyz, g_n, brdf_max, under);
+    Gathered g = gather_cut(position.xyz, g_n, under);
     count_gather(g);
     out_radiance = vec4(finite_or_zero(g.irradiance), 0.0);
 }

@@ -4,6 +4,8 @@
 layout(local_size_x = 64) in;
 #include "common/compute.glsl"
 #define CSSM_BRDF(l) 1.0
+#define CSSM_BRDF_BOUND(l, cone) g_brdf_max
+float g_brdf_max;
 #include "cssm/cssm_tree.glsl"
 
 layout(std430, binding = CSSM_BINDING_TEXEL_OUT) buffer CssmTexelOut { vec4 texel_out[]; };
@@ -15,8 +17,8 @@ void main() {
     uint t = thread_index();
     if (t >= u_texel_count) return;
     vec3 albedo = texels[t].albedo.rgb;
-    float brdf_max = max(albedo.r, max(albedo.g, albedo.b)) * INV_PI;
-    Gathered g = gather_cut(texels[t].position_area.xyz, texels[t].normal_map.xyz, brdf_max, t);
+    g_brdf_max = max(albedo.r, max(albedo.g, albedo.b)) * INV_PI;
+    Gathered g = gather_cut(texels[t].position_area.xyz, texels[t].normal_map.xyz, t);
     count_gather(g);
     vec3 previous = u_first_batch ? vec3(0.0) : texel_out[t].rgb;
     texel_out[t] = vec4(previous + finite_or_zero(g.irradiance), 0.0);

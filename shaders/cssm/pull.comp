@@ -4,6 +4,7 @@
 layout(local_size_x = 64) in;
 #include "common/compute.glsl"
 #define CSSM_BRDF(l) 1.0
+#define CSSM_BRDF_BOUND(l, cone) 1.0
 #include "cssm/cssm_tree.glsl"
 
 layout(std430, binding = CSSM_BINDING_TEXEL_IN) readonly buffer CssmTexelIn { vec4 texel_in[]; };

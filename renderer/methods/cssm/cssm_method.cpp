@@ -73,8 +73,9 @@ public:
         const int bounces = frame.knob_int("bounces");
         const float threshold = static_cast<float>(frame.knob("threshold"));
         const int pcf = frame.knob_int("pcf");
+        per_texel_ = frame.knob_int("per_texel") != 0;
         const std::uint64_t lighting = passes::light_view_fingerprint(frame.scene, frame.knob_int("shadow_map_size")) ^
-                                       (static_cast<std::uint64_t>(bounces) << 56) ^
+                                       (static_cast<std::uint64_t>(bounces) << 56) ^ (per_texel_ ? 1ull << 40 : 0ull) ^
                                        (static_cast<std::uint64_t>(pcf) << 48) ^
                                        std::hash<float>{}(threshold) ^ bake_generation_;
         set_batches(pcf);
@@ -86,7 +87,13 @@ public:
         }
         read_counters(atlas_counters_);
         reset_counters();
-        final_gather(frame, static_cast<float>(frame.knob("final_threshold")), pcf);
+        if (per_texel_) {
+            texel_display(frame, pcf);
+        } else if (frame.knob_int("jitter_frames") > 1) {
+            jittered_final_gather(frame, lighting, pcf);
+        } else {
+            final_gather(frame, frame.output, static_cast<float>(frame.knob("final_threshold")), pcf, 0);
+        }
         read_counters(pixel_counters_);
     }
 
@@ -119,6 +126,8 @@ public:
 
     std::map<std::string, double> statistics() const override {
         std::map<std::string, double> stats = {{"bakes", static_cast<double>(bakes_)},
+                                               {"per_texel", per_texel_ ? 1.0 : 0.0},
+                                               {"jittered_frames", static_cast<double>(jittered_frames_)},
                                                {"bakes_loaded", static_cast<double>(bakes_loaded_)},
                                                {"atlas_solutions", static_cast<double>(atlas_solutions_)}};
         if (!bake_) return stats;
@@ -277,7 +286,7 @@ private:
         csm_nearest_ = storage(nearest);
         csm_count_ = static_cast<unsigned>(csms.size());
         const std::size_t texel_count = bake.texel_count();
-        for (gpu::Buffer* buffer : {&direct_, &bounce_, &total_, &irradiance_})
+        for (gpu::Buffer* buffer : {&direct_, &bounce_, &total_, &irradiance_, &indirect_})
             *buffer = gpu::Buffer(std::max<std::size_t>(1, texel_count) * sizeof(glm::vec4), nullptr, 0);
         cssm_bytes_ = pixel_runs_.bytes() + run_start_.bytes() + run_depth_.bytes() + csms_.bytes() + csm_directions_.bytes() +
                       csm_nearest_.bytes();
@@ -311,7 +320,8 @@ private:
         std::vector<GpuNode> nodes(bake.tree.nodes.size());
         for (std::size_t n = 0; n < nodes.size(); ++n) {
             const RadiosityNode& node = bake.tree.nodes[n];
-            nodes[n] = {glm::vec4(node.centre, node.radius), glm::vec4(node.normal, node.cone_cos), glm::vec4(node.area, 0, 0, 0),
+            nodes[n] = {glm::vec4(node.centre, node.radius), glm::vec4(node.normal, node.cone_cos),
+                        glm::vec4(node.area, static_cast<float>(node.leaves), 0, 0),
                         glm::uvec4(node.child, node.skip, node.representative, node.texel)};
         }
         texels_ = storage(texels);
@@ -319,7 +329,7 @@ private:
         nodes_ = storage(nodes);
         node_radiance_ = gpu::Buffer(std::max<std::size_t>(1, nodes.size()) * sizeof(glm::vec4), nullptr, 0);
         level_nodes_ = storage(bake.tree.level_nodes);
-        atlas_bytes_ = texels_.bytes() + 4 * direct_.bytes() + groups_.bytes();
+        atlas_bytes_ = texels_.bytes() + 5 * direct_.bytes() + groups_.bytes();
         tree_bytes_ = nodes_.bytes() + node_radiance_.bytes() + level_nodes_.bytes();
         batch_pcf_ = -1;
     }
@@ -370,10 +380,12 @@ private:
         program.set("u_texel_size", bake_->texel_size);
         program.set("u_pcf", pcf);
         program.set("u_threshold", threshold);
+        program.set("u_jitter_seed", 0u);
     }
 
     // Direct light on the atlas, then bounces 1 .. n-1 by hierarchical radiosity; the texels'
-    // total exitance is pulled up the tree for the final gather (which makes bounce n).
+    // total exitance is pulled up the tree for the final gather (which makes bounce n). The
+    // per-texel display runs all n bounces here instead and sums their irradiance per texel.
     void light_atlas(const FrameContext& frame, int bounces, float threshold, int pcf) {
         const auto texel_count = static_cast<unsigned>(bake_->texel_count());
         {
@@ -397,7 +409,9 @@ private:
         }
         glCopyNamedBufferSubData(direct_.id(), total_.id(), 0, 0, static_cast<GLsizeiptr>(direct_.bytes()));
         glCopyNamedBufferSubData(direct_.id(), bounce_.id(), 0, 0, static_cast<GLsizeiptr>(direct_.bytes()));
-        for (int bounce = 1; bounce < bounces; ++bounce) {
+        glClearNamedBufferData(indirect_.id(), GL_RGBA32F, GL_RGBA, GL_FLOAT, nullptr);
+        const int atlas_bounces = per_texel_ ? bounces : bounces - 1;
+        for (int bounce = 1; bounce <= atlas_bounces; ++bounce) {
             pull(frame, bounce_);
             gpu::GpuTimers::Scope timing(frame.timers, "cssm_atlas_gather");
             const gpu::ShaderProgram& gather = frame.shaders.get(gpu::ProgramSource::compute_shader("cssm/gather.comp"));
@@ -417,6 +431,7 @@ private:
             bind_tree(finish, pcf, threshold);
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CSSM_BINDING_TEXEL_IN, irradiance_.id());
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CSSM_BINDING_TEXEL_OUT, total_.id());
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CSSM_BINDING_TEXEL_INDIRECT, indirect_.id());
             finish.set("u_texel_count", texel_count);
             dispatch_1d(texel_count);
             glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
@@ -449,14 +464,18 @@ private:
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
     }
 
-    void final_gather(const FrameContext& frame, float threshold, int pcf) {
+    // Draws the final gather's batches, added up into `target` (which holds the direct light, or
+    // nothing). A non-zero `jitter_seed` moves every sender to a random point of its area.
+    void final_gather(const FrameContext& frame, const gpu::Framebuffer& target, float threshold, int pcf,
+                      unsigned jitter_seed) {
         gpu::GpuTimers::Scope timing(frame.timers, "cssm_final_gather");
         const gpu::ShaderProgram& program = frame.shaders.get({"common/fullscreen.vert", "cssm/final_gather.frag", {}});
         program.use();
         bind_tree(program, pcf, threshold);
+        program.set("u_jitter_seed", jitter_seed);
         program.set("u_camera_position", frame.camera.position);
         gbuffer_.bind_textures();
-        glBindFramebuffer(GL_FRAMEBUFFER, frame.output.id());
+        glBindFramebuffer(GL_FRAMEBUFFER, target.id());
         glViewport(0, 0, frame.width, frame.height);
         frame.state.apply({.blend = gpu::Blend::additive});
         for (const Batch& batch : batches_) {
@@ -465,6 +484,69 @@ private:
             triangle_.draw();
         }
         glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
+    }
+
+    // §4.5: while nothing changes, each frame gathers from senders jittered anew and the frames'
+    // mean is shown, converging over `jitter_frames` frames (then kept without gathering).
+    void jittered_final_gather(const FrameContext& frame, std::uint64_t lighting, int pcf) {
+        const int frames = frame.knob_int("jitter_frames");
+        const float threshold = static_cast<float>(frame.knob("final_threshold"));
+        std::uint64_t view = lighting ^ std::hash<float>{}(threshold) ^ (static_cast<std::uint64_t>(pcf) << 32) ^
+                             (static_cast<std::uint64_t>(frame.width) << 16) ^ static_cast<std::uint64_t>(frame.height);
+        for (int c = 0; c < 4; ++c)
+            for (int r = 0; r < 4; ++r) view = view * 1099511628211ull ^ std::hash<float>{}(frame.view_projection[c][r]);
+        if (!jitter_mean_ || jitter_mean_.width() != frame.width || jitter_mean_.height() != frame.height) {
+            jitter_mean_ = gpu::Texture({GL_TEXTURE_2D, GL_RGBA32F, frame.width, frame.height});
+            jitter_frame_ = gpu::Texture({GL_TEXTURE_2D, GL_RGBA32F, frame.width, frame.height});
+            jitter_frame_.set_filter(GL_NEAREST, GL_NEAREST);
+            jitter_mean_.set_filter(GL_NEAREST, GL_NEAREST);
+            jitter_target_ = gpu::Framebuffer();
+            jitter_target_.attach_color(0, jitter_frame_);
+            jitter_target_.set_draw_buffers(1);
+            jitter_target_.check_complete("the cssm jitter frame");
+            jitter_view_ = ~view;
+        }
+        if (view != jitter_view_) {
+            jitter_view_ = view;
+            jittered_frames_ = 0;
+            glClearTexImage(jitter_mean_.id(), 0, GL_RGBA, GL_FLOAT, nullptr);
+        }
+        if (jittered_frames_ < frames) {
+            ++jittered_frames_;
+            glClearTexImage(jitter_frame_.id(), 0, GL_RGBA, GL_FLOAT, nullptr);
+            final_gather(frame, jitter_target_, threshold, pcf, static_cast<unsigned>(jittered_frames_));
+            gpu::GpuTimers::Scope timing(frame.timers, "cssm_accumulate");
+            const gpu::ShaderProgram& accumulate = frame.shaders.get(gpu::ProgramSource::compute_shader("cssm/accumulate.comp"));
+            accumulate.use();
+            glBindTextureUnit(BOUNCE_UNIT_HDR_INPUT, jitter_frame_.id());
+            glBindImageTexture(0, jitter_mean_.id(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
+            accumulate.set("u_size", glm::ivec2(frame.width, frame.height));
+            accumulate.set("u_weight", 1.0f / static_cast<float>(jittered_frames_));
+            glDispatchCompute(static_cast<GLuint>((frame.width + 7) / 8), static_cast<GLuint>((frame.height + 7) / 8), 1);
+            glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+        }
+        const gpu::ShaderProgram& composite = frame.shaders.get({"common/fullscreen.vert", "cssm/composite.frag", {}});
+        composite.use();
+        glBindTextureUnit(BOUNCE_UNIT_HDR_INPUT, jitter_mean_.id());
+        glBindFramebuffer(GL_FRAMEBUFFER, frame.output.id());
+        glViewport(0, 0, frame.width, frame.height);
+        frame.state.apply({.blend = gpu::Blend::additive});
+        triangle_.draw();
+    }
+
+    // The view-dependent lightmap: one draw, each pixel blending the summed irradiance of the
+    // texels around it.
+    void texel_display(const FrameContext& frame, int pcf) {
+        gpu::GpuTimers::Scope timing(frame.timers, "cssm_texel_display");
+        const gpu::ShaderProgram& program = frame.shaders.get({"common/fullscreen.vert", "cssm/texel_display.frag", {}});
+        program.use();
+        bind_tree(program, pcf, 0.0f);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CSSM_BINDING_TEXEL_INDIRECT, indirect_.id());
+        gbuffer_.bind_textures();
+        glBindFramebuffer(GL_FRAMEBUFFER, frame.output.id());
+        glViewport(0, 0, frame.width, frame.height);
+        frame.state.apply({.blend = gpu::Blend::additive});
+        triangle_.draw();
     }
 
     void reset_counters() {
@@ -504,7 +586,12 @@ private:
     std::uint64_t placed_geometry_ = 0;
     std::size_t placements_ = 0;
     const scene::Scene* frame_scene_ = nullptr;
-    gpu::Buffer direct_, bounce_, total_, irradiance_;
+    gpu::Buffer direct_, bounce_, total_, irradiance_, indirect_;
+    bool per_texel_ = false;
+    gpu::Texture jitter_mean_, jitter_frame_;
+    gpu::Framebuffer jitter_target_;
+    std::uint64_t jitter_view_ = 0;
+    int jittered_frames_ = 0;
     std::size_t atlas_bytes_ = 0, cssm_bytes_ = 0, tree_bytes_ = 0;
     std::vector<Batch> batches_;
     int batch_pcf_ = -1;
@@ -529,9 +616,15 @@ MethodInfo method_info() {
         {"final_threshold", 0, 100, false, "final gather: the same threshold for pixels"},
         {"pcf", 1, 7, true, "percentage-closer filter width over cube-map pixels"},
         {"csm_directions", 16, 4096, true, "directions of each moving object's coherent shadow maps"},
+        {"jitter_frames", 0, 4096, true,
+         "final gather: above 1, senders move to random points of their area each frame and the frames' mean is "
+         "shown while nothing changes, for up to this many frames (§4.5)"},
+        {"per_texel", 0, 1, true,
+         "0: the last bounce gathered per pixel (final gathering); 1: all n bounces on the atlas, pixels read the "
+         "texels around them (view-dependent lightmap)"},
         {"shadow_map_size", 16, 8192, true, "texels per side of each shadow map (direct light)"}};
     auto preset = [](double atlas, double face, double threshold, double pcf) {
-        return KnobValues{{"atlas_resolution", atlas}, {"face_size", face},      {"traversal", 2}, {"csm_directions", 256},
+        return KnobValues{{"atlas_resolution", atlas}, {"face_size", face},      {"traversal", 2}, {"csm_directions", 256}, {"per_texel", 0}, {"jitter_frames", 0},
                           {"bounces", 1},              {"threshold", threshold}, {"final_threshold", threshold},
                           {"pcf", pcf},                {"shadow_map_size", 2048}};
     };

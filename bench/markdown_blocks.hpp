@@ -1,0 +1,21 @@
+// Sections of docs/benchmarks.md that one bench writes and the others keep: each between an HTML
+// comment that opens it and one that closes it.
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <string_view>
+
+namespace bounce::bench {
+
+inline constexpr std::string_view kCssmBegin = "<!-- cssm sections: bench/cssm writes them -->";
+inline constexpr std::string_view kCssmEnd = "<!-- end of cssm sections -->";
+
+// The block from `begin` through `end` (and its newline), if the file has it.
+std::optional<std::string> find_block(const std::filesystem::path& path, std::string_view begin, std::string_view end);
+
+// Replaces that block with `block` (which starts with `begin` and ends with `end`), or appends it.
+void splice_block(const std::filesystem::path& path, std::string_view begin, std::string_view end, const std::string& block);
+
+}  // namespace bounce::bench
