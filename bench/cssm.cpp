@@ -127,7 +127,7 @@ std::string visibility_table(const Options& options, std::ofstream& csv) {
     const reference::RayScene rays(scene);
     const float far = 1.01f * glm::length(scene.world_bounds().extent());
     const int pairs = options.quick ? 2000 : 40000;
-    std::string md = "| cube face | disagree (PCF 1) | of which CSSM says occluded | disagree (PCF 3, < 50% lit) | "
+    std::string md = "| cube face | disagree (PCF 1) | of which falsely occluded | disagree (PCF 3, < 50% lit) | "
                      "bytes compressed |\n|---|---|---|---|---|\n";
     csv << "face,pairs,occluded_truth,disagree_pcf1,false_occluded_pcf1,disagree_pcf3\n";
     double occluded_fraction = 0.0;

@@ -79,13 +79,13 @@ public:
                                        (static_cast<std::uint64_t>(pcf) << 48) ^
                                        std::hash<float>{}(threshold) ^ bake_generation_;
         set_batches(pcf);
-        reset_counters();
         if (lighting != lighting_) {
+            reset_counters();
             light_atlas(frame, bounces, threshold, pcf);
             lighting_ = lighting;
             ++atlas_solutions_;
+            read_counters(atlas_counters_);  // kept: frames that reuse the solution report the one made
         }
-        read_counters(atlas_counters_);
         reset_counters();
         if (per_texel_) {
             texel_display(frame, pcf);
