@@ -104,10 +104,15 @@ public:
         if (!bake_) return structures;
         std::string objects;
         for (const BakeGroup& group : bake_->groups) {
-            objects += fmt::format("{}{} ({}: {} texels, {} cube maps{})", objects.empty() ? "" : "; ",
-                                   group.moving ? frame_scene_->objects[group.objects.front()].name : "static objects",
-                                   group.loaded ? "from the cache" : "baked", group.atlas.texels.size(), group.maps.depth.maps,
-                                   group.csm ? fmt::format(", a CSM of {} directions", group.csm->directions.size()) : "");
+            objects += fmt::format(
+                "{}{} ({}: {} texels, {} cube maps, {} bytes compressed{})", objects.empty() ? "" : "; ",
+                group.moving ? "moving object '" + frame_scene_->objects[group.objects.front()].name + "'"
+                             : fmt::format("{} static objects", group.objects.size()),
+                group.loaded ? "from the cache" : "baked", group.atlas.texels.size(), group.maps.depth.maps,
+                group.maps.depth.compressed_bytes(),
+                group.csm ? fmt::format("; its CSM: {} directions, {} bytes compressed", group.csm->directions.size(),
+                                        group.csm->depth.compressed_bytes())
+                          : "");
         }
         structures.push_back({"surface_atlas", atlas_bytes_,
                               fmt::format("{} texels over {} groups: senders, receivers and cube-map origins; radiance of "
