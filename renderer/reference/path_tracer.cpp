@@ -40,30 +40,6 @@ private:
 
 float luminance(const glm::vec3& c) { return 0.2126f * c.r + 0.7152f * c.g + 0.0722f * c.b; }
 
-float srgb_to_linear(float c) { return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f); }
-
-// Bilinear lookup with repeat wrapping, as the GL sampler does (without mipmaps: the reference
-// converges over many jittered samples instead).
-glm::vec4 sample_texture(const scene::Texture& texture, const glm::vec2& uv) {
-    if (texture.width <= 0 || texture.height <= 0 || texture.rgba8.empty()) return glm::vec4(1.0f);
-    const float x = uv.x * static_cast<float>(texture.width) - 0.5f;
-    const float y = uv.y * static_cast<float>(texture.height) - 0.5f;
-    const float fx = std::floor(x), fy = std::floor(y);
-    const float tx = x - fx, ty = y - fy;
-    auto texel = [&](int ix, int iy) {
-        ix = ((ix % texture.width) + texture.width) % texture.width;
-        iy = ((iy % texture.height) + texture.height) % texture.height;
-        const std::size_t i = (static_cast<std::size_t>(iy) * texture.width + ix) * 4;
-        glm::vec4 c(texture.rgba8[i], texture.rgba8[i + 1], texture.rgba8[i + 2], texture.rgba8[i + 3]);
-        c /= 255.0f;
-        if (texture.srgb) c = glm::vec4(srgb_to_linear(c.r), srgb_to_linear(c.g), srgb_to_linear(c.b), c.a);
-        return c;
-    };
-    const int ix = static_cast<int>(fx), iy = static_cast<int>(fy);
-    return glm::mix(glm::mix(texel(ix, iy), texel(ix + 1, iy), tx), glm::mix(texel(ix, iy + 1), texel(ix + 1, iy + 1), tx),
-                    ty);
-}
-
 struct Emitter {
     std::uint32_t object, primitive, triangle;
     glm::vec3 p0, p1, p2;
@@ -197,29 +173,15 @@ struct PathTracer::Impl {
         hit.geometric_normal = ng;
         hit.shading_normal = ns;
 
-        scene::SurfaceMaterial surface = scene::SurfaceMaterial::from(material);
-        glm::vec3 emitted = material.emissive;
-        auto uv_of = [&](int set) -> glm::vec2 {
-            const auto& uvs = set == 1 && !primitive.uv1.empty() ? primitive.uv1 : primitive.uv0;
+        auto uv_of = [&](const std::vector<glm::vec2>& uvs) -> glm::vec2 {
             if (uvs.empty()) return glm::vec2(0.0f);
             return w * uvs[i0] + u * uvs[i1] + v * uvs[i2];
         };
-        auto texture = [&](const scene::TextureRef& ref) -> const scene::Texture* {
-            return ref.valid() && ref.texture < static_cast<int>(scene.textures.size()) ? &scene.textures[ref.texture]
-                                                                                        : nullptr;
-        };
-        if (const auto* t = texture(material.base_color_texture)) {
-            surface.base_color *= glm::vec3(sample_texture(*t, uv_of(material.base_color_texture.uv_set)));
-        }
-        if (const auto* t = texture(material.metallic_roughness_texture)) {
-            const glm::vec4 mr = sample_texture(*t, uv_of(material.metallic_roughness_texture.uv_set));
-            surface.roughness *= mr.g;
-            surface.metallic *= mr.b;
-        }
-        if (const auto* t = texture(material.emissive_texture)) {
-            emitted *= glm::vec3(sample_texture(*t, uv_of(material.emissive_texture.uv_set)));
-        }
-        surface.base_color = glm::clamp(surface.base_color, 0.0f, 1.0f);
+        const glm::vec2 uv0 = uv_of(primitive.uv0);
+        const glm::vec2 uv1 = primitive.uv1.empty() ? uv0 : uv_of(primitive.uv1);
+        const scene::TexturedMaterial textured = scene::textured_material(scene, material, uv0, uv1);
+        const scene::SurfaceMaterial& surface = textured.surface;
+        const glm::vec3 emitted = textured.emitted;
         hit.material = surface;
         // Single-sided surfaces emit from their front only, as the raster path draws them.
         hit.emitted = hit.front || material.double_sided ? emitted : glm::vec3(0.0f);

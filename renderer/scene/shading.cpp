@@ -64,6 +64,52 @@ glm::vec3 evaluate_brdf(const SurfaceMaterial& m, const glm::vec3& n, const glm:
     return glm::mix(dielectric, metal, m.metallic);
 }
 
+namespace {
+float srgb_to_linear(float c) { return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f); }
+}  // namespace
+
+glm::vec4 sample_texture(const Texture& texture, const glm::vec2& uv) {
+    if (texture.width <= 0 || texture.height <= 0 || texture.rgba8.empty()) return glm::vec4(1.0f);
+    const float x = uv.x * static_cast<float>(texture.width) - 0.5f;
+    const float y = uv.y * static_cast<float>(texture.height) - 0.5f;
+    const float fx = std::floor(x), fy = std::floor(y);
+    const float tx = x - fx, ty = y - fy;
+    auto texel = [&](int ix, int iy) {
+        ix = ((ix % texture.width) + texture.width) % texture.width;
+        iy = ((iy % texture.height) + texture.height) % texture.height;
+        const std::size_t i = (static_cast<std::size_t>(iy) * texture.width + ix) * 4;
+        glm::vec4 c(texture.rgba8[i], texture.rgba8[i + 1], texture.rgba8[i + 2], texture.rgba8[i + 3]);
+        c /= 255.0f;
+        if (texture.srgb) c = glm::vec4(srgb_to_linear(c.r), srgb_to_linear(c.g), srgb_to_linear(c.b), c.a);
+        return c;
+    };
+    const int ix = static_cast<int>(fx), iy = static_cast<int>(fy);
+    return glm::mix(glm::mix(texel(ix, iy), texel(ix + 1, iy), tx), glm::mix(texel(ix, iy + 1), texel(ix + 1, iy + 1), tx),
+                    ty);
+}
+
+TexturedMaterial textured_material(const Scene& scene, const Material& material, const glm::vec2& uv0,
+                                   const glm::vec2& uv1) {
+    TexturedMaterial result{SurfaceMaterial::from(material), material.emissive};
+    auto texture = [&](const TextureRef& ref) -> const Texture* {
+        return ref.valid() && ref.texture < static_cast<int>(scene.textures.size()) ? &scene.textures[ref.texture] : nullptr;
+    };
+    auto uv = [&](const TextureRef& ref) { return ref.uv_set == 1 ? uv1 : uv0; };
+    if (const Texture* t = texture(material.base_color_texture)) {
+        result.surface.base_color *= glm::vec3(sample_texture(*t, uv(material.base_color_texture)));
+    }
+    if (const Texture* t = texture(material.metallic_roughness_texture)) {
+        const glm::vec4 mr = sample_texture(*t, uv(material.metallic_roughness_texture));
+        result.surface.roughness *= mr.g;
+        result.surface.metallic *= mr.b;
+    }
+    if (const Texture* t = texture(material.emissive_texture)) {
+        result.emitted *= glm::vec3(sample_texture(*t, uv(material.emissive_texture)));
+    }
+    result.surface.base_color = glm::clamp(result.surface.base_color, 0.0f, 1.0f);
+    return result;
+}
+
 glm::vec3 diffuse_albedo(const SurfaceMaterial& m) {
     const float mean_fresnel = m.specular * (kDielectricF0 + (1.0f - kDielectricF0) / 21.0f);
     return (1.0f - mean_fresnel) * (1.0f - mean_fresnel) * (1.0f - m.metallic) * m.base_color;

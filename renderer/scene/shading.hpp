@@ -31,6 +31,19 @@ float smith_visibility(float n_dot_l, float n_dot_v, float alpha);
 glm::vec3 evaluate_brdf(const SurfaceMaterial& material, const glm::vec3& n, const glm::vec3& v,
                         const glm::vec3& l);
 
+// Bilinear lookup with repeat wrapping, as the GL sampler does (without mipmaps), decoding sRGB
+// textures to linear; white for an empty texture.
+glm::vec4 sample_texture(const Texture& texture, const glm::vec2& uv);
+
+// A material at a surface point with its textures applied (base colour, metallic-roughness,
+// emission) at the point's UV sets.
+struct TexturedMaterial {
+    SurfaceMaterial surface;
+    glm::vec3 emitted{0.0f};
+};
+TexturedMaterial textured_material(const Scene& scene, const Material& material, const glm::vec2& uv0,
+                                   const glm::vec2& uv1);
+
 // The diffuse lobe's hemispherical albedo with Fresnel's mean over the hemisphere on the way in and out:
 // what a diffuse-only transport (radiosity) reflects. Twin of diffuse_albedo in brdf.glsl.
 glm::vec3 diffuse_albedo(const SurfaceMaterial& material);

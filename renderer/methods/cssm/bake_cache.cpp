@@ -15,7 +15,7 @@
 namespace bounce::methods::cssm {
 namespace {
 
-constexpr char kMagic[8] = {'B', 'N', 'C', 'S', 'S', 'M', '0', '2'};
+constexpr char kMagic[8] = {'B', 'N', 'C', 'S', 'S', 'M', '0', '3'};
 
 struct Fnv {
     std::uint64_t hash = 1469598103934665603ull;

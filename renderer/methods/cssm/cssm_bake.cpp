@@ -181,9 +181,10 @@ void place_texels(const scene::Scene& scene, CssmBake& bake) {
             bake.positions.push_back(glm::vec3(to_world * glm::vec4(group.maps.origins[t], 1.0f)));
             bake.normals.push_back(glm::normalize(glm::transpose(glm::inverse(glm::mat3(transform))) * texel.normal));
             bake.areas.push_back(texel.area);
-            const scene::Material& material = scene.material(texel.material);
-            bake.albedo.push_back(scene::diffuse_albedo(scene::SurfaceMaterial::from(material)));
-            bake.emission.push_back(material.emissive);
+            // The material with its textures at the texel's centre (a texel averages nothing finer).
+            const scene::TexturedMaterial material = scene::textured_material(scene, scene.material(texel.material), texel.uv0, texel.uv1);
+            bake.albedo.push_back(scene::diffuse_albedo(material.surface));
+            bake.emission.push_back(material.emitted);
             bake.texel_group.push_back(g);
         }
     }

@@ -65,11 +65,13 @@ AtlasTexel texel_from(const TriangleRef& triangle, const glm::vec3& barycentric,
         texel.position += barycentric[c] * primitive.positions[v];
         normal += barycentric[c] * primitive.normals[v];
         if (!primitive.uv0.empty()) texel.uv0 += barycentric[c] * primitive.uv0[v];
+        if (!primitive.uv1.empty()) texel.uv1 += barycentric[c] * primitive.uv1[v];
     }
     const glm::vec3 p0 = primitive.positions[triangle.vertex(0)], p1 = primitive.positions[triangle.vertex(1)],
                     p2 = primitive.positions[triangle.vertex(2)];
     const glm::vec3 face = glm::cross(p1 - p0, p2 - p0);
     texel.normal = glm::length(normal) > 1e-20f ? glm::normalize(normal) : glm::normalize(face);
+    if (primitive.uv1.empty()) texel.uv1 = texel.uv0;
     texel.object = object;
     texel.chart = chart;
     texel.material = primitive.material;

@@ -24,7 +24,7 @@ struct AtlasTexel {
     std::uint32_t object = 0;  // index into Scene::objects
     std::uint32_t chart = 0;
     int material = -1;
-    glm::vec2 uv0{0.0f};  // for textured materials
+    glm::vec2 uv0{0.0f}, uv1{0.0f};  // where its material's textures are read
     std::int32_t x = 0, y = 0;  // where it sits in the atlas
 };
 
