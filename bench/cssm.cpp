@@ -12,8 +12,8 @@
 #include "renderer/image/metrics.hpp"
 #include "renderer/methods/cssm/atlas_traversal.hpp"
 #include "renderer/methods/cssm/surface_shadow_maps.hpp"
-#include "renderer/reference/path_tracer.hpp"
-#include "renderer/reference/ray_scene.hpp"
+#include "renderer/methods/reference/path_tracer.hpp"
+#include "renderer/raytrace/ray_scene.hpp"
 #include "renderer/renderer.hpp"
 #include "renderer/scene/builtin.hpp"
 
@@ -124,7 +124,7 @@ std::string visibility_table(const Options& options, std::ofstream& csv) {
     const float atlas_resolution = options.quick ? 12.0f : 32.0f;
     settings.texel_size = texel_size_for(surface_area(scene, objects), atlas_resolution);
     const SurfaceAtlas atlas = build_surface_atlas(scene, objects, settings);
-    const reference::RayScene rays(scene);
+    const raytrace::RayScene rays(scene);
     const float far = 1.01f * glm::length(scene.world_bounds().extent());
     const int pairs = options.quick ? 2000 : 40000;
     std::string md = "| cube face | disagree (PCF 1) | of which falsely occluded | disagree (PCF 3, < 50% lit) | "
@@ -180,7 +180,7 @@ double median_ms(int repeats, Run&& run) {
 // Frame times (Table 1) and error per preset and bounce count against the reference.
 std::string frame_tables(Renderer& renderer, const Options& options, std::ofstream& time_csv, std::ofstream& error_csv) {
     const scene::Scene scene = scene::make_cornell_box();
-    const reference::PathTracer tracer(scene);
+    const methods::reference::PathTracer tracer(scene);
     std::string md;
     // Table 1: a warm frame (bake done, atlas solved) re-solves nothing; a changed light re-solves the
     // atlas (n - 1 bounces) and gathers again.
@@ -225,7 +225,7 @@ std::string frame_tables(Renderer& renderer, const Options& options, std::ofstre
                       options.size);
     error_csv << "bounces,preset,texels,rel_mse,mean_ratio,cold_ms,warm_ms,bake_s\n";
     for (const int bounces : {1, 2, 3}) {
-        reference::PathTracerSettings settings;
+        methods::reference::PathTracerSettings settings;
         settings.max_bounces = bounces;
         settings.pixel_jitter = false;
         const image::Frame truth = tracer.render(scene.cameras[0], options.size, options.size, options.reference_spp, settings);

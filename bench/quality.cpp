@@ -8,7 +8,7 @@
 #include "renderer/base/log.hpp"
 #include "renderer/image/codec.hpp"
 #include "renderer/image/metrics.hpp"
-#include "renderer/reference/path_tracer.hpp"
+#include "renderer/methods/reference/path_tracer.hpp"
 #include "renderer/renderer.hpp"
 #include "renderer/scene/builtin.hpp"
 
@@ -88,7 +88,7 @@ std::uint64_t scene_hash(const scene::Scene& scene) {
 }
 
 // The reference image, from the cache when the same scene, camera, size, bounces and code made it.
-image::Frame reference_image(const bench::BenchScene& bench_scene, const reference::PathTracer& tracer,
+image::Frame reference_image(const bench::BenchScene& bench_scene, const methods::reference::PathTracer& tracer,
                              const Options& options, int bounces) {
     const std::string key = fmt::format("{}-{:016x}-{}px-{}b-{}spp.exr", bench_scene.name, scene_hash(bench_scene.scene),
                                         options.size, bounces, options.reference_spp);
@@ -105,10 +105,10 @@ image::Frame reference_image(const bench::BenchScene& bench_scene, const referen
         return frame;
     }
     const auto start = Clock::now();
-    reference::PathTracerSettings settings;
+    methods::reference::PathTracerSettings settings;
     settings.max_bounces = bounces;
     settings.seed = 20260101;
-    reference::Accumulator accumulator(options.size, options.size);
+    methods::reference::Accumulator accumulator(options.size, options.size);
     // In slices, so a long reference shows progress.
     const int slice = std::max(1, options.reference_spp / 8);
     while (accumulator.samples() < options.reference_spp) {
@@ -867,7 +867,7 @@ int main(int argc, char** argv) {
                 std::find(options.scenes.begin(), options.scenes.end(), bench_scene.name) == options.scenes.end()) {
                 continue;
             }
-            reference::PathTracer tracer(bench_scene.scene);
+            methods::reference::PathTracer tracer(bench_scene.scene);
             const image::Frame truth = reference_image(bench_scene, tracer, options, options.reference_bounces);
             std::map<int, image::Frame> truth_by_bounces;
             auto truth_at = [&](int bounces) -> const image::Frame& {
@@ -929,7 +929,7 @@ int main(int argc, char** argv) {
             }
             // The reference itself: error reached per CPU second.
             for (const int spp : {1, 4, 16, 64}) {
-                reference::PathTracerSettings settings;
+                methods::reference::PathTracerSettings settings;
                 settings.max_bounces = options.reference_bounces;
                 settings.seed = 7;
                 const auto rays_before = tracer.rays_traced();

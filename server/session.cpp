@@ -3,8 +3,8 @@
 #include "renderer/base/log.hpp"
 #include "renderer/image/codec.hpp"
 #include "server/daemon.hpp"
-#include "renderer/reference/path_tracer.hpp"
-#include "renderer/reference/reference_method.hpp"
+#include "renderer/methods/reference/path_tracer.hpp"
+#include "renderer/methods/reference/reference_method.hpp"
 #include "server/request_error.hpp"
 
 #include <boost/asio/bind_executor.hpp>
@@ -322,7 +322,7 @@ void Session::render_on_cpu(const protocol::Message& message, const RenderOrder&
     const std::uint64_t id = message.request_id;
     const auto& registry = methods::MethodRegistry::builtin();
     const methods::KnobValues knobs = registry.resolve(order.request.method, order.request.preset, order.request.knobs);
-    const reference::ReferenceRequest traced = reference::request_from_knobs(knobs);
+    const methods::reference::ReferenceRequest traced = methods::reference::request_from_knobs(knobs);
     auto snapshot = std::make_shared<const scene::Scene>(*entry.scene);
     scene::Camera camera = camera_for(*snapshot, order.request);
     if (order.camera) {
@@ -344,7 +344,7 @@ void Session::render_on_cpu(const protocol::Message& message, const RenderOrder&
             if (cancelled->load()) throw RequestError(ErrorCode::cancelled, "cancelled before it ran");
             const auto started = Clock::now();
             auto result = std::make_shared<RenderResult>();
-            const reference::PathTracer tracer(*snapshot);
+            const methods::reference::PathTracer tracer(*snapshot);
             result->frame = tracer.render(camera, order.request.width, order.request.height, traced.spp, traced.settings);
             const auto rendered = Clock::now();
             daemon.finish_cpu_job();

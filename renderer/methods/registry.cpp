@@ -5,7 +5,7 @@
 #include "renderer/methods/direct/direct_method.hpp"
 #include "renderer/methods/isr/isr_method.hpp"
 #include "renderer/methods/vct/vct_method.hpp"
-#include "renderer/reference/reference_method.hpp"
+#include "renderer/methods/reference/reference_method.hpp"
 
 #include <algorithm>
 #include <cmath>

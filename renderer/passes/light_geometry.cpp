@@ -1,25 +1,14 @@
 #include "renderer/passes/light_geometry.hpp"
 
+#include "renderer/base/hash.hpp"
+
 #include <algorithm>
 #include <cmath>
 
 namespace bounce::passes {
 namespace {
 
-class Fnv1a {
-public:
-    template <typename T>
-    void add(const T& value) {
-        const auto* p = reinterpret_cast<const unsigned char*>(&value);
-        for (std::size_t i = 0; i < sizeof(T); ++i) hash_ = (hash_ ^ p[i]) * 1099511628211ull;
-    }
-    std::uint64_t value() const { return hash_; }
-
-private:
-    std::uint64_t hash_ = 1469598103934665603ull;
-};
-
-void add_geometry(Fnv1a& hash, const scene::Scene& scene) {
+void add_geometry(Hasher& hash, const scene::Scene& scene) {
     for (const scene::Object& object : scene.objects) {
         hash.add(object.mesh);
         hash.add(object.transform);
@@ -43,13 +32,13 @@ glm::vec3 up_for(const glm::vec3& direction) {
 }
 
 std::uint64_t geometry_fingerprint(const scene::Scene& scene) {
-    Fnv1a hash;
+    Hasher hash;
     add_geometry(hash, scene);
     return hash.value();
 }
 
 std::uint64_t light_view_fingerprint(const scene::Scene& scene, int size) {
-    Fnv1a hash;
+    Hasher hash;
     hash.add(size);
     for (const scene::Light& light : scene.lights) {
         hash.add(light.type);

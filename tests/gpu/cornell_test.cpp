@@ -3,7 +3,7 @@
 #include "gpu_fixture.hpp"
 #include "renderer/image/codec.hpp"
 #include "renderer/image/metrics.hpp"
-#include "renderer/reference/path_tracer.hpp"
+#include "renderer/methods/reference/path_tracer.hpp"
 #include "renderer/scene/builtin.hpp"
 
 #include <gtest/gtest.h>
@@ -106,8 +106,8 @@ TEST(Cornell, DirectAgreesWithTheReferenceAtZeroBounces) {
     request.width = request.height = 64;
     request.preset = "high";
     const auto direct = render_scene(scene, request);
-    reference::PathTracer tracer(scene);
-    reference::PathTracerSettings settings;
+    methods::reference::PathTracer tracer(scene);
+    methods::reference::PathTracerSettings settings;
     settings.max_bounces = 0;
     settings.pixel_jitter = false;
     const auto truth = tracer.render(scene.cameras[0], 64, 64, 4, settings);

@@ -3,7 +3,7 @@
 // between frames, and its statistics.
 #include "gpu_fixture.hpp"
 #include "renderer/image/metrics.hpp"
-#include "renderer/reference/path_tracer.hpp"
+#include "renderer/methods/reference/path_tracer.hpp"
 #include "renderer/scene/builtin.hpp"
 
 #include <gtest/gtest.h>
@@ -21,7 +21,7 @@ namespace {
 constexpr int kSize = 48;
 
 image::Frame reference_frame(const scene::Scene& scene, int bounces, bool indirect_visibility = true) {
-    reference::PathTracerSettings settings;
+    methods::reference::PathTracerSettings settings;
     settings.max_bounces = bounces;
     settings.indirect_visibility = indirect_visibility;
     return pixel_centre_reference(scene, kSize, 512, settings);

@@ -23,9 +23,9 @@ RenderRequest method_request(const std::string& method, const std::string& prese
 }
 
 image::Frame pixel_centre_reference(const scene::Scene& scene, int size, int spp,
-                                    reference::PathTracerSettings settings) {
+                                    methods::reference::PathTracerSettings settings) {
     settings.pixel_jitter = false;
-    return reference::PathTracer(scene).render(scene.cameras[0], size, size, spp, settings);
+    return methods::reference::PathTracer(scene).render(scene.cameras[0], size, size, spp, settings);
 }
 
 RenderResult render_scene(const scene::Scene& scene, const RenderRequest& request) {

@@ -2,7 +2,7 @@
 // small analytic scenes, and the world point a pixel centre sees.
 #pragma once
 
-#include "renderer/reference/path_tracer.hpp"
+#include "renderer/methods/reference/path_tracer.hpp"
 #include "renderer/renderer.hpp"
 #include "renderer/scene/scene.hpp"
 
@@ -19,7 +19,7 @@ RenderRequest method_request(const std::string& method, const std::string& prese
 // The path-traced reference from the scene's first camera through pixel centres (as raster methods
 // shade), square, with `settings` otherwise.
 image::Frame pixel_centre_reference(const scene::Scene& scene, int size, int spp,
-                                    reference::PathTracerSettings settings);
+                                    methods::reference::PathTracerSettings settings);
 
 // Renders `scene` once with fresh resources.
 RenderResult render_scene(const scene::Scene& scene, const RenderRequest& request);

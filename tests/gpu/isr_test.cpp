@@ -4,7 +4,7 @@
 // its upsampling, its VPL selection modes, and what it keeps between frames.
 #include "gpu_fixture.hpp"
 #include "renderer/image/metrics.hpp"
-#include "renderer/reference/path_tracer.hpp"
+#include "renderer/methods/reference/path_tracer.hpp"
 #include "renderer/scene/builtin.hpp"
 
 #include <gtest/gtest.h>
@@ -19,7 +19,7 @@ namespace {
 constexpr int kSize = 64;
 
 image::Frame reference_frame(const scene::Scene& scene, bool indirect_visibility, int spp, int bounces = 1) {
-    reference::PathTracerSettings settings;
+    methods::reference::PathTracerSettings settings;
     settings.max_bounces = bounces;
     settings.indirect_visibility = indirect_visibility;
     return pixel_centre_reference(scene, kSize, spp, settings);

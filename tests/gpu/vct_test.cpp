@@ -3,7 +3,7 @@
 #include "gpu_fixture.hpp"
 #include "renderer/image/metrics.hpp"
 #include "renderer/methods/vct/vct_method.hpp"
-#include "renderer/reference/path_tracer.hpp"
+#include "renderer/methods/reference/path_tracer.hpp"
 #include "renderer/scene/builtin.hpp"
 
 #include <gtest/gtest.h>
@@ -19,7 +19,7 @@ constexpr int kSize = 64;
 
 
 image::Frame reference_frame(const scene::Scene& scene, int bounces, bool ambient_occlusion, int spp) {
-    reference::PathTracerSettings settings;
+    methods::reference::PathTracerSettings settings;
     settings.max_bounces = bounces;
     settings.ambient_occlusion = ambient_occlusion;
     return pixel_centre_reference(scene, kSize, spp, settings);
@@ -190,8 +190,8 @@ TEST(Vct, ThinWallLeaksLittleLight) {
 // about 0.004), mean 4% low. Bounds: relMSE 0.05, mean 10%.
 TEST(Vct, AmbientOcclusionMatchesTheReference) {
     const scene::Scene scene = scene::make_cornell_box();
-    reference::PathTracer tracer(scene);
-    reference::PathTracerSettings settings;
+    methods::reference::PathTracer tracer(scene);
+    methods::reference::PathTracerSettings settings;
     settings.pixel_jitter = false;
     settings.ambient_occlusion = true;
     settings.ao_lambda = 4.0f;

@@ -5,7 +5,7 @@
 #include "renderer/methods/cssm/bake_cache.hpp"
 #include "renderer/methods/cssm/hull_overlap.hpp"
 #include "renderer/methods/cssm/surface_shadow_maps.hpp"
-#include "renderer/reference/ray_scene.hpp"
+#include "renderer/raytrace/ray_scene.hpp"
 #include "renderer/scene/builtin.hpp"
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -173,7 +173,7 @@ TEST(CssmCompression, EveryDecompressedDepthLiesInItsMapsIntervalWithTheFewestRu
 TEST(CssmVisibility, CubeMapsAgreeWithRayQueriesOnRandomCornellPairs) {
     const scene::Scene scene = scene::make_cornell_box();
     const SurfaceAtlas atlas = cornell_atlas(scene, 24.0f);
-    const reference::RayScene rays(scene);
+    const raytrace::RayScene rays(scene);
     const float far = glm::length(scene.world_bounds().extent());
     const CubeMapSettings settings{32, 0.25f * texel_size_for(atlas.surface_area, 24.0f), far};
     std::uint32_t reported = 0;
@@ -284,7 +284,7 @@ TEST(CssmMovingObjects, CoherentShadowMapsAgreeWithRayQueriesForSegmentsPastTheB
     block.mesh = 0;
     block.transform = glm::mat4(1.0f);
     alone.objects.push_back(block);
-    const reference::RayScene rays(alone);
+    const raytrace::RayScene rays(alone);
     const scene::Aabb bounds = alone.meshes[0].bounds;
     const float radius = 0.5f * glm::length(bounds.extent()) * 1.01f;
     const CoherentShadowMaps csm = bake_coherent_shadow_maps(rays, bounds.center(), radius, 512, 32);

@@ -2,8 +2,8 @@
 #include "renderer/base/error.hpp"
 #include "renderer/image/metrics.hpp"
 #include "renderer/methods/registry.hpp"
-#include "renderer/reference/path_tracer.hpp"
-#include "renderer/reference/reference_method.hpp"
+#include "renderer/methods/reference/path_tracer.hpp"
+#include "renderer/methods/reference/reference_method.hpp"
 #include "renderer/scene/builtin.hpp"
 #include "renderer/scene/shading.hpp"
 
@@ -15,7 +15,7 @@
 #include <numbers>
 #include <string>
 
-namespace bounce::reference {
+namespace bounce::methods::reference {
 namespace {
 
 scene::Material matte(const glm::vec3& albedo, const glm::vec3& emissive = glm::vec3(0.0f)) {
@@ -375,4 +375,4 @@ TEST(ReferenceIndirectVisibility, NeedsOneBounceAndIsAKnobOfEveryPreset) {
 }
 
 }  // namespace
-}  // namespace bounce::reference
+}  // namespace bounce::methods::reference

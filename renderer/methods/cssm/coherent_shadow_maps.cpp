@@ -1,7 +1,7 @@
 #include "renderer/methods/cssm/coherent_shadow_maps.hpp"
 
 #include "renderer/methods/cssm/atlas_traversal.hpp"
-#include "renderer/reference/ray_scene.hpp"
+#include "renderer/raytrace/ray_scene.hpp"
 
 #include <tbb/parallel_for.h>
 
@@ -17,7 +17,7 @@ void csm_basis(const glm::vec3& d, glm::vec3& u, glm::vec3& w) {
     w = glm::cross(d, u);
 }
 
-CoherentShadowMaps bake_coherent_shadow_maps(const reference::RayScene& rays, const glm::vec3& centre, float radius,
+CoherentShadowMaps bake_coherent_shadow_maps(const raytrace::RayScene& rays, const glm::vec3& centre, float radius,
                                              int directions, int face_size) {
     const auto started = std::chrono::steady_clock::now();
     CoherentShadowMaps maps;

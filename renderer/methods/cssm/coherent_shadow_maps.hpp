@@ -32,7 +32,7 @@ void csm_basis(const glm::vec3& d, glm::vec3& u, glm::vec3& w);
 
 // Bakes `directions` maps of `face_size`^2 of the geometry `rays` holds (in object space), bounded
 // by the sphere (centre, radius).
-CoherentShadowMaps bake_coherent_shadow_maps(const reference::RayScene& rays, const glm::vec3& centre, float radius,
+CoherentShadowMaps bake_coherent_shadow_maps(const raytrace::RayScene& rays, const glm::vec3& centre, float radius,
                                              int directions, int face_size);
 
 // Whether the segment from `from` to `to` (object space) passes through the object: the CPU twin of

@@ -3,7 +3,7 @@
 #include "renderer/base/error.hpp"
 #include "renderer/base/log.hpp"
 #include "renderer/methods/cssm/bake_cache.hpp"
-#include "renderer/reference/ray_scene.hpp"
+#include "renderer/raytrace/ray_scene.hpp"
 #include "renderer/scene/shading.hpp"
 
 #include <algorithm>
@@ -48,7 +48,7 @@ void bake_group(const scene::Scene& scene, BakeGroup& group, const BakeParameter
         // The maps hold this object alone, so they need reach no farther than its diameter; a
         // receiver beyond still compares against what lies between.
         const CubeMapSettings cube{parameters.face_size, 0.25f * texel_size, 2.0f * radius};
-        const reference::RayScene rays(alone);
+        const raytrace::RayScene rays(alone);
         group.maps = bake_surface_shadow_maps(alone, group.atlas, traverse_atlas(alone, group.atlas, parameters.traversal), cube,
                                               rays, progress.for_stage("depth cube maps (" + first_name + ")"));
         progress.done += group.atlas.texels.size();
@@ -69,7 +69,7 @@ void bake_group(const scene::Scene& scene, BakeGroup& group, const BakeParameter
     for (std::uint32_t o : group.objects) bounds.extend(scene.objects[o].world_bounds(scene.meshes[scene.objects[o].mesh]));
     CubeMapSettings cube{parameters.face_size, 0.25f * texel_size, std::max(1.01f * glm::length(bounds.extent()), 1e-30f)};
     const std::vector<std::uint32_t>& members = group.objects;
-    const reference::RayScene rays(scene, [&](std::size_t o) {
+    const raytrace::RayScene rays(scene, [&](std::size_t o) {
         return std::binary_search(members.begin(), members.end(), static_cast<std::uint32_t>(o));
     });
     group.maps = bake_surface_shadow_maps(scene, group.atlas, traverse_atlas(scene, group.atlas, parameters.traversal), cube,

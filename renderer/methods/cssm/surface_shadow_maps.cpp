@@ -1,7 +1,7 @@
 #include "renderer/methods/cssm/surface_shadow_maps.hpp"
 
 #include "renderer/base/error.hpp"
-#include "renderer/reference/ray_scene.hpp"
+#include "renderer/raytrace/ray_scene.hpp"
 
 #include <tbb/parallel_for.h>
 
@@ -38,7 +38,7 @@ glm::vec3 cube_pixel_direction(std::uint32_t pixel, int face_size) {
 
 SurfaceShadowMaps bake_surface_shadow_maps(const scene::Scene& scene, const SurfaceAtlas& atlas,
                                            std::vector<std::uint32_t> order, const CubeMapSettings& settings,
-                                           const reference::RayScene& rays, const BakeProgress& progress) {
+                                           const raytrace::RayScene& rays, const BakeProgress& progress) {
     BOUNCE_CHECK(order.size() == atlas.texels.size(), "bake: traversal of {} texels for an atlas of {}", order.size(),
                  atlas.texels.size());
     BOUNCE_CHECK(settings.face_size >= 1 && settings.far_plane > settings.near_plane && settings.near_plane >= 0.0f,

@@ -14,7 +14,7 @@
 
 #include <functional>
 
-namespace bounce::reference {
+namespace bounce::raytrace {
 class RayScene;
 }
 
@@ -54,7 +54,7 @@ using BakeProgress = std::function<bool(std::uint32_t done, std::uint32_t total)
 // holds (first and second hits by ray casting through each pixel centre).
 SurfaceShadowMaps bake_surface_shadow_maps(const scene::Scene& scene, const SurfaceAtlas& atlas,
                                            std::vector<std::uint32_t> order, const CubeMapSettings& settings,
-                                           const reference::RayScene& rays, const BakeProgress& progress = {});
+                                           const raytrace::RayScene& rays, const BakeProgress& progress = {});
 
 // The depth bias a receiver at linear depth `depth` (over the far plane) needs: the near plane
 // plus one pixel's footprint, the slack of a surface seen at 45 degrees.

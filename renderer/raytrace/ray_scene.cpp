@@ -1,4 +1,4 @@
-#include "renderer/reference/ray_scene.hpp"
+#include "renderer/raytrace/ray_scene.hpp"
 
 #include "renderer/base/error.hpp"
 
@@ -9,7 +9,7 @@
 #include <limits>
 #include <vector>
 
-namespace bounce::reference {
+namespace bounce::raytrace {
 
 struct RayScene::Impl {
     const scene::Scene& scene;
@@ -134,4 +134,4 @@ bool RayScene::occluded(const glm::vec3& origin, const glm::vec3& direction, flo
 
 std::uint64_t RayScene::rays_traced() const { return impl_->rays.load(std::memory_order_relaxed); }
 
-}  // namespace bounce::reference
+}  // namespace bounce::raytrace

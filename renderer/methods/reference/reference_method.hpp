@@ -2,9 +2,9 @@
 #pragma once
 
 #include "renderer/methods/registry.hpp"
-#include "renderer/reference/path_tracer.hpp"
+#include "renderer/methods/reference/path_tracer.hpp"
 
-namespace bounce::reference {
+namespace bounce::methods::reference {
 
 methods::MethodInfo method_info();
 
@@ -15,4 +15,4 @@ struct ReferenceRequest {
 // From knobs resolved by the registry (spp, bounces, seed, ao, ao_lambda, indirect_visibility).
 ReferenceRequest request_from_knobs(const methods::KnobValues& knobs);
 
-}  // namespace bounce::reference
+}  // namespace bounce::methods::reference

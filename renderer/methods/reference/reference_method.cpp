@@ -1,6 +1,6 @@
-#include "renderer/reference/reference_method.hpp"
+#include "renderer/methods/reference/reference_method.hpp"
 
-namespace bounce::reference {
+namespace bounce::methods::reference {
 
 methods::MethodInfo method_info() {
     methods::MethodInfo info;
@@ -36,4 +36,4 @@ ReferenceRequest request_from_knobs(const methods::KnobValues& knobs) {
     return request;
 }
 
-}  // namespace bounce::reference
+}  // namespace bounce::methods::reference

@@ -1,7 +1,7 @@
-#include "renderer/reference/path_tracer.hpp"
+#include "renderer/methods/reference/path_tracer.hpp"
 
 #include "renderer/base/error.hpp"
-#include "renderer/reference/ray_scene.hpp"
+#include "renderer/raytrace/ray_scene.hpp"
 #include "renderer/scene/shading.hpp"
 
 #include <glm/gtc/matrix_inverse.hpp>
@@ -14,7 +14,7 @@
 #include <cmath>
 #include <limits>
 
-namespace bounce::reference {
+namespace bounce::methods::reference {
 namespace {
 
 constexpr float kInfinity = std::numeric_limits<float>::infinity();
@@ -73,7 +73,7 @@ void check_settings(const PathTracerSettings& settings) {
 
 struct PathTracer::Impl {
     const scene::Scene& scene;
-    RayScene rays;
+    raytrace::RayScene rays;
     std::vector<glm::mat4> normal_matrices;
     std::vector<Emitter> emitters;
     std::vector<float> emitter_cdf;  // by power
@@ -141,7 +141,7 @@ struct PathTracer::Impl {
 
     // The first surface along the ray beyond `tnear`.
     bool intersect(const glm::vec3& origin, const glm::vec3& direction, SurfaceHit& hit, float tnear = 0.0f) const {
-        const std::optional<RayHit> ray_hit = rays.intersect(origin, direction, tnear, kInfinity);
+        const std::optional<raytrace::RayHit> ray_hit = rays.intersect(origin, direction, tnear, kInfinity);
         if (!ray_hit) return false;
         hit.object = ray_hit->object;
         hit.primitive = ray_hit->primitive;
@@ -447,4 +447,4 @@ image::Frame PathTracer::render(const scene::Camera& camera, int width, int heig
     return accumulator.frame();
 }
 
-}  // namespace bounce::reference
+}  // namespace bounce::methods::reference

@@ -24,7 +24,7 @@
 #include <memory>
 #include <vector>
 
-namespace bounce::reference {
+namespace bounce::methods::reference {
 
 struct PathTracerSettings {
     int max_bounces = 4;  // indirect bounces; 0 = direct light only
@@ -91,4 +91,4 @@ private:
     std::unique_ptr<Impl> impl_;
 };
 
-}  // namespace bounce::reference
+}  // namespace bounce::methods::reference

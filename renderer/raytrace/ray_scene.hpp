@@ -10,7 +10,7 @@
 #include <memory>
 #include <optional>
 
-namespace bounce::reference {
+namespace bounce::raytrace {
 
 struct RayHit {
     std::uint32_t object = 0, primitive = 0, triangle = 0;
@@ -42,4 +42,4 @@ private:
     std::unique_ptr<Impl> impl_;
 };
 
-}  // namespace bounce::reference
+}  // namespace bounce::raytrace
