@@ -1,4 +1,4 @@
-// bench/cssm: method `cssm` in the shape of its paper (../shared/papers/cssm-ritschel-2008.md), on
+// bench/cssm: method `cssm` in the shape of its paper ([cssm] in docs/references.md), on
 // the built-in Cornell box and on cornell_blob (an organic, UV-less mesh):
 // - Table 2: compression per traversal (greedy, zig-zag, spiral) and atlas size, 6x32^2 cube maps;
 // - Table 3: cube maps, bytes raw and compressed, ratio and bake time per atlas size, 6x64^2;

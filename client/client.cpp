@@ -22,15 +22,6 @@ Endpoint Endpoint::parse(const std::string& text) {
     return endpoint;
 }
 
-std::string read_token_file(const std::string& path) {
-    std::ifstream in(path);
-    if (!in) throw std::runtime_error("cannot read token file " + path);
-    std::string token;
-    std::getline(in, token);
-    while (!token.empty() && (token.back() == '\r' || token.back() == ' ')) token.pop_back();
-    return token;
-}
-
 Client::Client(const Endpoint& endpoint, std::optional<std::string> token) : socket_(io_) {
     asio::ip::tcp::resolver resolver(io_);
     boost::system::error_code error;

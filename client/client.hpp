@@ -68,7 +68,5 @@ private:
     protocol::Limits limits_;
 };
 
-// Reads a token file (first line, trailing whitespace removed).
-std::string read_token_file(const std::string& path);
 
 }  // namespace bounce::client

@@ -222,7 +222,7 @@ int run(const std::vector<std::string>& words) {
         if (words[i] == "--connect") {
             endpoint = bounce::client::Endpoint::parse(words[i + 1]);
         } else if (words[i] == "--token-file") {
-            token = bounce::client::read_token_file(words[i + 1]);
+            token = bounce::protocol::read_token_file(words[i + 1]);
         } else {
             throw UsageError("unknown option " + words[i]);
         }

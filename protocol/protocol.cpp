@@ -1,6 +1,7 @@
 #include "protocol/protocol.hpp"
 
 #include <algorithm>
+#include <fstream>
 #include <cmath>
 #include <limits>
 #include <utility>
@@ -541,6 +542,23 @@ Message make_error(std::uint64_t request_id, const ProtocolError& error) {
 
 Message make_ok(std::uint64_t request_id, nlohmann::json body) {
     return make_message(MessageType::ok, request_id, std::move(body));
+}
+
+std::string read_token_file(const std::string& path) {
+    std::ifstream in(path);
+    if (!in) throw std::runtime_error("cannot read token file " + path);
+    std::string token;
+    std::getline(in, token);
+    while (!token.empty() && (token.back() == '\r' || token.back() == ' ')) token.pop_back();
+    return token;
+}
+
+bool same_token(const std::string& given, const std::string& expected) {
+    unsigned difference = given.size() == expected.size() ? 0u : 1u;
+    for (std::size_t i = 0; i < given.size(); ++i) {
+        difference |= static_cast<unsigned>(given[i] ^ expected[i % std::max<std::size_t>(expected.size(), 1)]);
+    }
+    return difference == 0;
 }
 
 }  // namespace bounce::protocol

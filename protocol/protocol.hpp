@@ -198,4 +198,10 @@ Message make_error(std::uint64_t request_id, ErrorCode code, std::string message
 Message make_error(std::uint64_t request_id, const ProtocolError& error);
 Message make_ok(std::uint64_t request_id, nlohmann::json body = nlohmann::json::object());
 
+// The shared token of `hello` (docs/protocol.md, "Authentication"): the first line of a file,
+// trailing spaces and CR removed. Throws std::runtime_error naming the file when it cannot be read.
+std::string read_token_file(const std::string& path);
+// Constant-time comparison, so a wrong token's timing says nothing about the right one.
+bool same_token(const std::string& given, const std::string& expected);
+
 }  // namespace bounce::protocol

@@ -75,37 +75,35 @@ void Renderer::ensure_output(int width, int height) {
     output_framebuffer_.check_complete("the HDR output");
 }
 
-void Renderer::make_display_image(image::Frame& frame, const image::DisplayTransform& transform) {
-    BOUNCE_CHECK(frame.width > 0 && frame.height > 0 &&
-                     frame.rgba.size() == static_cast<std::size_t>(frame.width) * frame.height * 4,
-                 "frame {}x{} with {} values", frame.width, frame.height, frame.rgba.size());
-    ensure_output(frame.width, frame.height);
-    // Frames are stored top row first; GL's first row is the bottom one.
-    const std::size_t row = static_cast<std::size_t>(frame.width) * 4;
-    std::vector<float> bottom_up(frame.rgba.size());
-    for (int y = 0; y < frame.height; ++y) {
-        std::copy_n(frame.rgba.begin() + static_cast<std::ptrdiff_t>(row * y), row,
-                    bottom_up.begin() + static_cast<std::ptrdiff_t>(row * (frame.height - 1 - y)));
-    }
-    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-    glTextureSubImage2D(output_.id(), 0, 0, 0, frame.width, frame.height, GL_RGBA, GL_FLOAT, bottom_up.data());
-    timers_.begin_frame();
-    const gpu::Texture& display = tonemap_.run(shaders_, state_, timers_, output_, transform);
-    frame.display_rgba8 = read_texture<std::uint8_t>(display, GL_UNSIGNED_BYTE);
-    timers_.resolve();
-}
-
-namespace {
-
-void check_size(const RenderRequest& request) {
+FramePlan plan_frame(const RenderRequest& request) {
     if (request.width < 1 || request.height < 1 || request.width > Renderer::kMaxDimension ||
         request.height > Renderer::kMaxDimension) {
         throw InputError(fmt::format("frame size {}x{} is outside 1..{} per side", request.width, request.height,
                                      Renderer::kMaxDimension));
     }
+    const auto& registry = methods::MethodRegistry::builtin();
+    FramePlan plan;
+    plan.site = registry.find(request.method).device == methods::MethodDevice::cpu ? FrameSite::cpu : FrameSite::gpu;
+    plan.knobs = registry.resolve(request.method, request.preset, request.knobs);
+    return plan;
 }
 
-}  // namespace
+RenderResult render_on_cpu(const scene::Scene& scene, const RenderRequest& request, const FramePlan& plan,
+                           const std::atomic<bool>* cancelled) {
+    BOUNCE_CHECK(plan.site == FrameSite::cpu, "method '{}' is not a CPU method", request.method);
+    const auto start = Clock::now();
+    const auto method = methods::MethodRegistry::builtin().create_cpu(request.method);
+    const scene::Camera camera = camera_for(scene, request);
+    RenderResult result;
+    result.frame = method->render({scene, camera, request.width, request.height, plan.knobs, cancelled});
+    if (request.make_display_image) image::make_display_image(result.frame, request.display);
+    result.stats.method = request.method;
+    result.stats.preset = request.preset;
+    result.stats.knobs = plan.knobs;
+    result.stats.method_statistics = method->statistics();
+    result.stats.render_ms = ms_since(start);
+    return result;
+}
 
 void Renderer::fill_stats(FrameStats& stats, const RenderRequest& request, const methods::KnobValues& knobs,
                           const methods::Method& method, const SceneResources& resources) {
@@ -122,10 +120,11 @@ void Renderer::fill_stats(FrameStats& stats, const RenderRequest& request, const
 template <typename Run>
 void Renderer::with_frame(SceneResources& resources, const RenderRequest& request, const methods::Precompute& precompute,
                           Run&& run) {
-    const auto& registry = methods::MethodRegistry::builtin();
-    const methods::KnobValues knobs = registry.resolve(request.method, request.preset, request.knobs);
+    const FramePlan plan = plan_frame(request);
+    if (plan.site != FrameSite::gpu) throw InputError(fmt::format("method '{}' {}", request.method, kRunsOnCpu));
+    const methods::KnobValues& knobs = plan.knobs;
     auto& method = resources.methods[request.method];
-    if (!method) method = registry.create(request.method);
+    if (!method) method = methods::MethodRegistry::builtin().create(request.method);
 
     ensure_output(request.width, request.height);
 
@@ -145,9 +144,8 @@ void Renderer::with_frame(SceneResources& resources, const RenderRequest& reques
 FrameStats Renderer::prepare(SceneResources& resources, const RenderRequest& request,
                              const std::function<bool(double, const std::string&)>& progress) {
     const auto start = Clock::now();
-    check_size(request);
-    if (methods::MethodRegistry::builtin().find(request.method).device != methods::MethodDevice::gpu) {
-        throw InputError(fmt::format("method '{}' has nothing to bake", request.method));
+    if (plan_frame(request).site != FrameSite::gpu) {
+        throw InputError(fmt::format("method '{}' has nothing to bake: it {}", request.method, kRunsOnCpu));
     }
     methods::Precompute precompute = precompute_;
     precompute.progress = progress;
@@ -164,7 +162,6 @@ FrameStats Renderer::prepare(SceneResources& resources, const RenderRequest& req
 
 RenderResult Renderer::render(SceneResources& resources, const RenderRequest& request) {
     const auto start = Clock::now();
-    check_size(request);
     RenderResult result;
     with_frame(resources, request, precompute_, [&](methods::Method& method, const methods::FrameContext& frame,
                                                     const methods::KnobValues& knobs) {

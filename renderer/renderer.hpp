@@ -1,6 +1,8 @@
-// The render entry point: owns the EGL context and what every method shares (shader cache, state
-// owner, timers, tone mapping, the output target), and renders a scene with a method into a frame.
-// One thread, the render thread, creates a Renderer and makes every call on it.
+// The render entry point. plan_frame() decides, once and on any thread, whether a request runs on
+// the GPU or on CPU threads and with which knobs. GPU plans go to the Renderer, which owns the EGL
+// context and what every GPU method shares (shader cache, state owner, timers, tone mapping, the
+// output target); one thread, the render thread, creates it and makes every call on it. CPU plans go
+// to render_on_cpu() on any other thread.
 #pragma once
 
 #include "renderer/gpu/egl_device.hpp"
@@ -9,6 +11,7 @@
 #include "renderer/methods/registry.hpp"
 #include "renderer/passes/tonemap_pass.hpp"
 
+#include <atomic>
 #include <filesystem>
 #include <functional>
 #include <map>
@@ -47,6 +50,25 @@ struct RenderResult {
     FrameStats stats;
 };
 
+// Where a frame is made: on the render thread through the Renderer (GL), or on CPU threads.
+enum class FrameSite { gpu, cpu };
+
+struct FramePlan {
+    FrameSite site = FrameSite::gpu;
+    methods::KnobValues knobs;  // the preset with the request's overrides, validated
+};
+
+// The one place that decides where a request runs: validates its method, preset, knobs and size
+// (InputError naming the fault) and resolves its knobs. Thread-safe: the daemon plans a request
+// before queueing it.
+FramePlan plan_frame(const RenderRequest& request);
+
+// Renders a CPU plan on the calling thread (never the render thread) from a scene snapshot that no
+// one mutates meanwhile, and tone-maps it on the CPU when the request wants a display image.
+// Throws Cancelled when `cancelled` is set during the work.
+RenderResult render_on_cpu(const scene::Scene& scene, const RenderRequest& request, const FramePlan& plan,
+                           const std::atomic<bool>* cancelled = nullptr);
+
 // A scene's resident GPU state: its geometry and textures and the methods that rendered it (with
 // their precomputed structures). Destroy it on the render thread, before the Renderer.
 class SceneResources {
@@ -71,7 +93,8 @@ public:
     // lights and materials at every frame).
     std::unique_ptr<SceneResources> upload(const scene::Scene& scene);
 
-    // Throws InputError for bad requests (unknown method, preset or knob, size out of range).
+    // Renders a GPU plan. Throws InputError for bad requests (unknown method, preset or knob, size
+    // out of range, a method that runs on the CPU).
     RenderResult render(SceneResources& resources, const RenderRequest& request);
 
     // Builds the method's precomputed structures for the request's knobs (Method::prepare) and
@@ -82,10 +105,6 @@ public:
 
     // Where methods persist baked structures across restarts (none by default).
     void set_cache_dir(std::optional<std::filesystem::path> dir) { precompute_.cache_dir = std::move(dir); }
-
-    // Tone-maps a linear frame made elsewhere (the CPU reference) into frame.display_rgba8 with the
-    // same GPU pass every GPU frame goes through.
-    void make_display_image(image::Frame& frame, const image::DisplayTransform& transform);
 
     static constexpr int kMaxDimension = 16384;
 
@@ -103,6 +122,7 @@ private:
     template <typename Run>
     void with_frame(SceneResources& resources, const RenderRequest& request, const methods::Precompute& precompute,
                     Run&& run);
+    static constexpr std::string_view kRunsOnCpu = "runs on CPU threads, not through the GL renderer";
     gpu::Texture output_;
     gpu::Framebuffer output_framebuffer_;
 };

@@ -38,11 +38,12 @@ bool is_loopback(const std::string& host) {
 }
 
 std::string read_token(const std::filesystem::path& path) {
-    std::ifstream in(path);
-    if (!in) throw InputError(fmt::format("--token-file {}: cannot read it", path.string()));
     std::string token;
-    std::getline(in, token);
-    while (!token.empty() && (token.back() == '\r' || token.back() == ' ')) token.pop_back();
+    try {
+        token = protocol::read_token_file(path.string());
+    } catch (const std::exception& error) {
+        throw InputError(fmt::format("--token-file: {}", error.what()));
+    }
     if (token.size() < 16) throw InputError(fmt::format("--token-file {}: the token has fewer than 16 characters", path.string()));
     return token;
 }

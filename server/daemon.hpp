@@ -5,6 +5,7 @@
 #include "protocol/protocol.hpp"
 #include "server/metrics.hpp"
 #include "server/render_service.hpp"
+#include "server/request_handlers.hpp"
 #include "server/scene_requests.hpp"
 
 #include <boost/asio.hpp>
@@ -56,11 +57,12 @@ public:
     protocol::Limits limits() const;
     RenderService& render_service() { return *render_; }
     Metrics& metrics() { return metrics_; }
+    RequestHandlers& handlers() { return handlers_; }
     boost::asio::thread_pool& encode_pool() { return encode_pool_; }
     // CPU methods (the path-traced reference) run here, never on the render thread.
     boost::asio::thread_pool& cpu_pool() { return cpu_pool_; }
     bool try_start_cpu_job();  // false when kMaxCpuJobs are queued or running
-    void finish_cpu_job() { --cpu_jobs_; }
+    void finish_cpu_job() { --cpu_jobs_; }  // once for every true try_start_cpu_job()
     static constexpr int kMaxCpuJobs = 4;
     const SceneRoot& scene_root() const { return scene_root_; }
     bool shutting_down() const { return shutting_down_.load(); }
@@ -79,6 +81,7 @@ private:
     SceneRoot scene_root_;
     std::unique_ptr<RenderService> render_;
     Metrics metrics_;
+    RequestHandlers handlers_{*this};
     boost::asio::io_context io_;
     boost::asio::thread_pool encode_pool_{2};
     boost::asio::thread_pool cpu_pool_{1};  // one trace at a time: it uses every core through TBB

@@ -52,7 +52,7 @@ Daemon options:
 
 Render options (--render-once renders one frame and exits):
   --scene NAME|FILE     built-in scene name (cornell) or a .gltf/.glb file   [cornell]
-  --method M            rendering method (direct)                           [direct]
+  --method M            any method, reference included (direct)             [direct]
   --preset P            draft, low, medium, high, ultra                      [medium]
   --set KNOB=VALUE      override one knob of the method (repeatable)
   --size WxH            frame size                                           [512x512]
@@ -168,34 +168,36 @@ bounce::scene::Scene load_scene(const std::string& name) {
 }
 
 int render_once(const Options& options) {
-    {
-        const auto format = bounce::image::image_format_from_path(options.render_once);
-        bounce::scene::Scene scene = load_scene(options.scene);
+    const auto format = bounce::image::image_format_from_path(options.render_once);
+    const bounce::scene::Scene scene = load_scene(options.scene);
+    bounce::RenderRequest request;
+    request.method = options.method;
+    request.preset = options.preset;
+    request.knobs = options.knobs;
+    request.width = options.width;
+    request.height = options.height;
+    request.display = {options.exposure, bounce::image::parse_tone_curve(options.tone)};
+    request.make_display_image = format != bounce::image::ImageFormat::exr;
+    const bounce::FramePlan plan = bounce::plan_frame(request);
 
+    bounce::RenderResult result;
+    if (plan.site == bounce::FrameSite::cpu) {
+        result = bounce::render_on_cpu(scene, request, plan);  // no GL context needed
+    } else {
         bounce::Renderer renderer(bounce::gpu::DeviceChoice::resolve(options.device));
         auto resources = renderer.upload(scene);
-        bounce::RenderRequest request;
-        request.method = options.method;
-        request.preset = options.preset;
-        request.knobs = options.knobs;
-        request.width = options.width;
-        request.height = options.height;
-        request.display = {options.exposure, bounce::image::parse_tone_curve(options.tone)};
-        request.make_display_image = format != bounce::image::ImageFormat::exr;
-        const auto result = renderer.render(*resources, request);
-        const auto bytes = bounce::image::encode_image(result.frame, format);
-        bounce::image::write_file_atomic(options.render_once, bytes);
-        resources.reset();
-
-        std::string passes;
-        for (const auto& pass : result.stats.passes) passes += fmt::format(" {}={:.2f}ms", pass.pass, pass.gpu_ms);
-        bounce::log::info("render", "wrote {} ({}x{}, {} bytes) method={} preset={} render={:.1f}ms gpu={:.2f}ms{} "
-                          "resident={}B",
-                          options.render_once, options.width, options.height, bytes.size(), request.method,
-                          request.preset, result.stats.render_ms, result.stats.gpu_ms, passes,
-                          result.stats.resident_bytes);
-        return 0;
+        result = renderer.render(*resources, request);
     }
+    const auto bytes = bounce::image::encode_image(result.frame, format);
+    bounce::image::write_file_atomic(options.render_once, bytes);
+
+    std::string passes;
+    for (const auto& pass : result.stats.passes) passes += fmt::format(" {}={:.2f}ms", pass.pass, pass.gpu_ms);
+    bounce::log::info("render", "wrote {} ({}x{}, {} bytes) method={} preset={} render={:.1f}ms gpu={:.2f}ms{} "
+                      "resident={}B",
+                      options.render_once, options.width, options.height, bytes.size(), request.method,
+                      request.preset, result.stats.render_ms, result.stats.gpu_ms, passes, result.stats.resident_bytes);
+    return 0;
 }
 
 }  // namespace

@@ -1,9 +1,11 @@
-// One client connection: reads frames on its strand, runs requests on the render thread, and
-// writes replies through one queue (never two writes at once). Reading pauses while the client
-// has `max_in_flight` requests pending; a reader that lets its output pile up is dropped.
+// One client connection, and only the connection: reads frames on its strand, answers hello, ping
+// and cancel itself, hands every other request to the daemon's RequestHandlers, and writes replies
+// through one queue (never two writes at once). Reading pauses while the client has
+// `max_in_flight` requests pending; a reader that lets its output pile up is dropped.
 #pragma once
 
 #include "protocol/protocol.hpp"
+#include "server/request.hpp"
 
 #include <boost/asio.hpp>
 
@@ -15,24 +17,18 @@
 #include <memory>
 #include <vector>
 
-namespace bounce {
-class Renderer;
-struct RenderResult;
-}
-
 namespace bounce::server {
 
 class Daemon;
-struct RenderOrder;
-struct SceneEntry;
-class SceneRegistry;
 
-class Session : public std::enable_shared_from_this<Session> {
+class Session final : public ReplyChannel, public std::enable_shared_from_this<Session> {
 public:
     Session(Daemon& daemon, boost::asio::ip::tcp::socket socket);
     void start();
     // Thread-safe: queues a message for this client.
-    void send(protocol::Message message);
+    void send(protocol::Message message) override;
+    void send_error(std::uint64_t request_id, const Failure& failure) override;
+    void end_request(std::uint64_t request_id) override;
     // Thread-safe: closes the connection (pending replies are dropped).
     void close();
 
@@ -45,16 +41,9 @@ private:
     void read_header();
     void read_body(const protocol::Header& header);
     void dispatch(protocol::Message message);
+    void hello(const protocol::Message& message);
+    void cancel(const protocol::Message& message);
     void submit(protocol::Message message);
-    void execute(const protocol::Message& message, Clock::time_point received, Clock::time_point deadline,
-                 const std::shared_ptr<std::atomic<bool>>& cancelled, SceneRegistry& registry, Renderer& renderer);
-    nlohmann::json bake(std::uint64_t id, const nlohmann::json& body, SceneRegistry& registry, Renderer& renderer,
-                        const std::shared_ptr<std::atomic<bool>>& cancelled);
-    void render_on_cpu(const protocol::Message& message, const RenderOrder& order, const SceneEntry& entry,
-                       Clock::time_point received, const std::shared_ptr<std::atomic<bool>>& cancelled);
-    void deliver_frame(std::uint64_t id, const RenderOrder& order, std::shared_ptr<RenderResult> result,
-                       std::uint64_t scene_version, Clock::time_point received, Clock::time_point started,
-                       Clock::time_point rendered);
     void finish(std::uint64_t request_id);
     void fail(std::uint64_t request_id, protocol::ErrorCode code, const std::string& message,
               std::optional<std::string> field = {});

@@ -1,5 +1,5 @@
-// The one error metric of the project (design.md): relMSE, RMSE, PSNR and non-finite counts,
-// over linear HDR RGB. Tests and bench/quality use this implementation and no other.
+// The one error metric of the project (design note D1 in docs/references.md): relMSE, RMSE, PSNR
+// and non-finite counts, over linear HDR RGB. Tests and bench/quality use this implementation and no other.
 #pragma once
 
 #include "renderer/image/frame.hpp"

@@ -2,6 +2,8 @@
 // then sRGB encoding. EXR output stays linear and untouched.
 #pragma once
 
+#include "renderer/image/frame.hpp"
+
 #include <string>
 #include <string_view>
 
@@ -17,5 +19,11 @@ struct DisplayTransform {
     float exposure = 0.0f;  // stops: radiance is scaled by 2^exposure
     ToneCurve curve = ToneCurve::aces;
 };
+
+// The CPU twin of the tone-map pass (shaders/passes/tonemap.frag, shaders/common/tonemap.glsl):
+// fills frame.display_rgba8 from frame.rgba, non-finite radiance as black, alpha 255. Frames made
+// on CPU threads (the path-traced reference) go through this one; the GPU tests hold the two to
+// one 8-bit step of each other.
+void make_display_image(Frame& frame, const DisplayTransform& transform);
 
 }  // namespace bounce::image

@@ -1,4 +1,5 @@
-// The interface every global-illumination method implements, and what a frame hands it.
+// The interface every GPU method implements, and what a frame hands it (CPU methods implement
+// cpu_method.hpp's CpuMethod instead).
 //
 // A method is a plug-in: one folder under renderer/methods/, one class behind this interface,
 // registered by name in registry.cpp with its knobs and presets. Nothing outside its folder knows
@@ -6,6 +7,7 @@
 // precomputed structures between frames and rebuilds only what a change invalidates.
 #pragma once
 
+#include "renderer/methods/knobs.hpp"
 #include "renderer/passes/pass_context.hpp"
 
 #include <filesystem>
@@ -17,16 +19,6 @@
 #include <vector>
 
 namespace bounce::methods {
-
-// Knob values by name, after presets and overrides are resolved and validated.
-using KnobValues = std::map<std::string, double>;
-
-// A structure a method keeps resident, its size, and why the scene needs it.
-struct ResidentStructure {
-    std::string name;
-    std::size_t bytes = 0;
-    std::string reason;
-};
 
 // What long precomputations (bakes) may use: a directory where they persist across restarts, and
 // a progress report (fraction done, stage) that cancels the work when it returns false.

@@ -38,7 +38,10 @@ const MethodRegistry& MethodRegistry::builtin() {
 }
 
 void MethodRegistry::add(MethodInfo info) {
-    BOUNCE_CHECK(info.device == MethodDevice::cpu || info.create != nullptr, "method '{}' has no factory", info.name);
+    const bool gpu = info.device == MethodDevice::gpu;
+    BOUNCE_CHECK(gpu ? info.create != nullptr && info.create_cpu == nullptr
+                     : info.create_cpu != nullptr && info.create == nullptr,
+                 "method '{}' must have exactly the factory of its device ({})", info.name, gpu ? "gpu" : "cpu");
     for (const auto& preset : preset_names()) {
         const auto it = info.presets.find(preset);
         BOUNCE_CHECK(it != info.presets.end(), "method '{}' lacks preset '{}'", info.name, preset);
@@ -94,10 +97,14 @@ KnobValues MethodRegistry::resolve(const std::string& method, const std::string&
 
 std::unique_ptr<Method> MethodRegistry::create(const std::string& method) const {
     const MethodInfo& info = find(method);
-    if (info.device != MethodDevice::gpu) {
-        throw InputError(fmt::format("method '{}' runs on the CPU, not through the GL renderer", method));
-    }
+    BOUNCE_CHECK(info.device == MethodDevice::gpu, "method '{}' runs on CPU threads, not through the GL renderer", method);
     return info.create();
+}
+
+std::unique_ptr<CpuMethod> MethodRegistry::create_cpu(const std::string& method) const {
+    const MethodInfo& info = find(method);
+    BOUNCE_CHECK(info.device == MethodDevice::cpu, "method '{}' runs on the GPU, not on CPU threads", method);
+    return info.create_cpu();
 }
 
 }  // namespace bounce::methods

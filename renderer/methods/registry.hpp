@@ -3,6 +3,7 @@
 // are InputErrors that name what was wrong and what is accepted.
 #pragma once
 
+#include "renderer/methods/cpu_method.hpp"
 #include "renderer/methods/method.hpp"
 
 #include <functional>
@@ -24,7 +25,8 @@ struct KnobSpec {
 const std::vector<std::string>& preset_names();
 
 // Where a method runs: GPU methods render through Renderer on the render thread; CPU methods
-// (the path-traced reference) run on their own threads and never hold the GL context.
+// (the path-traced reference) run on their own threads and never hold the GL context. A method has
+// the factory of its device and no other.
 enum class MethodDevice { gpu, cpu };
 
 struct MethodInfo {
@@ -36,7 +38,8 @@ struct MethodInfo {
     int indirect_bounces = 0;
     std::vector<KnobSpec> knobs;
     std::map<std::string, KnobValues> presets;  // every name of preset_names(), every knob set
-    std::function<std::unique_ptr<Method>()> create;  // GPU methods only
+    std::function<std::unique_ptr<Method>()> create;         // GPU methods
+    std::function<std::unique_ptr<CpuMethod>()> create_cpu;  // CPU methods
 };
 
 class MethodRegistry {
@@ -49,7 +52,9 @@ public:
     std::vector<std::string> names() const;
     // The preset's values with `overrides` applied, every value validated.
     KnobValues resolve(const std::string& method, const std::string& preset, const KnobValues& overrides) const;
+    // The method's instance; Error when it runs on the other device.
     std::unique_ptr<Method> create(const std::string& method) const;
+    std::unique_ptr<CpuMethod> create_cpu(const std::string& method) const;
 
 private:
     std::vector<MethodInfo> methods_;

@@ -1,4 +1,5 @@
-// Display transform: exposure, a tone curve, then sRGB encoding.
+// Display transform: exposure, a tone curve, then sRGB encoding. Its CPU twin, for frames made on
+// CPU threads, is image::make_display_image (renderer/image/tone.cpp): change both together.
 #include "common/shared_layout.h"
 
 vec3 tone_curve(vec3 x, int curve) {

@@ -542,3 +542,79 @@ TEST(Daemon, SigtermExitsCleanly) {
 
 }  // namespace
 }  // namespace bounce::test
+
+namespace bounce::test {
+namespace {
+
+// Reads messages until the reply (ok, frame or error) to `id`; progress events are skipped.
+protocol::Message reply_to(Client& client, std::uint64_t id) {
+    for (;;) {
+        auto message = client.read();
+        if (message.request_id == id && message.type != static_cast<std::uint16_t>(MessageType::progress)) return message;
+    }
+}
+
+// A cancelled `reference` render answers `cancelled` and gives its CPU slot back, whether the
+// cancel arrives before the trace starts or during it: six cancels in a row (the daemon has four
+// slots) and a render after them still gets a frame, not `busy`.
+TEST(Daemon, CancelledReferenceRendersFreeTheirSlots) {
+    DaemonProcess daemon;
+    Client client(daemon.endpoint());
+    const json hours = {{"scene", "cornell"}, {"method", "reference"}, {"width", 128}, {"height", 128},
+                        {"knobs", {{"spp", 65536}}}};
+    for (std::uint64_t id = 100; id < 106; ++id) {
+        client.send_raw(protocol::encode({static_cast<std::uint16_t>(MessageType::render), id, hours, {}}));
+        // Every other one is cancelled while it traces, the rest while queued or at once.
+        if (id % 2 == 0) std::this_thread::sleep_for(std::chrono::milliseconds(300));
+        client.send_raw(protocol::encode({static_cast<std::uint16_t>(MessageType::cancel), id + 1000, {{"id", id}}, {}}));
+        const auto reply = reply_to(client, id);
+        ASSERT_EQ(reply.type, static_cast<std::uint16_t>(MessageType::error));
+        EXPECT_EQ(reply.body.at("code").get<std::string>(), "cancelled") << reply.body.dump();
+    }
+    const auto frame = render(client, {{"scene", "cornell"}, {"method", "reference"}, {"width", 16}, {"height", 16},
+                                       {"knobs", {{"spp", 1}}}});
+    EXPECT_EQ(frame.width, 16);
+}
+
+// Validation happens before queueing: an unknown knob or method is refused with the field's
+// fault, and a malformed `hello` field is a bad request, not the end of the connection.
+TEST(Daemon, FieldsAreCheckedBeforeQueueingAndHelloSurvivesBadTypes) {
+    DaemonProcess daemon;
+    Client client(daemon.endpoint());
+    expect_error([&] { client.request(MessageType::render, {{"scene", "cornell"}, {"method", "photon"}}); },
+                 ErrorCode::bad_request);
+    expect_error([&] { client.request(MessageType::render, {{"scene", "cornell"}, {"knobs", {{"warp", 1}}}}); },
+                 ErrorCode::bad_request);
+    expect_error([&] { client.request(MessageType::bake, {{"scene", "cornell"}, {"method", "reference"}}); },
+                 ErrorCode::bad_request, "method");
+    expect_error([&] { client.request(MessageType::light_set, {{"scene", "cornell"}, {"light", "l"},
+                                                                {"position", {1e39, 0, 0}}}); },
+                 ErrorCode::bad_request, "position");
+    for (const json& protocol : {json("1"), json::array({1}), json(-1)}) {
+        expect_error([&] { client.request(MessageType::hello, {{"protocol", protocol}}); }, ErrorCode::bad_request,
+                     "protocol");
+    }
+    EXPECT_EQ(client.request(MessageType::ping).type, static_cast<std::uint16_t>(MessageType::pong));
+}
+
+// `bounced --render-once` renders every method, the CPU reference included (without a GL
+// context), and writes a decodable frame of the asked size.
+TEST(RenderOnce, WritesAFrameForEveryMethod) {
+    const auto directory = std::filesystem::temp_directory_path() / ("bounce-render-once-" + std::to_string(::getpid()));
+    std::filesystem::create_directories(directory);
+    for (const std::string method : {"direct", "reference"}) {
+        const auto out = directory / (method + ".png");
+        const std::string command = std::string(BOUNCED_PATH) + " --render-once " + out.string() + " --method " + method +
+                                    " --preset draft --size 24x16 --log-level warn";
+        ASSERT_EQ(std::system(command.c_str()), 0) << command;
+        std::ifstream in(out, std::ios::binary);
+        const std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+        const auto image = image::decode_image(bytes);
+        EXPECT_EQ(image.width, 24) << method;
+        EXPECT_EQ(image.height, 16) << method;
+    }
+    std::filesystem::remove_all(directory);
+}
+
+}  // namespace
+}  // namespace bounce::test

@@ -45,7 +45,9 @@ TEST(MethodRegistry, ReferenceIsACpuMethodWithValidatedKnobs) {
     EXPECT_EQ(registry.resolve("reference", "ultra", {}).at("spp"), 1024.0);
     EXPECT_EQ(registry.resolve("reference", "draft", {{"bounces", 0}}).at("bounces"), 0.0);
     EXPECT_THROW(registry.resolve("reference", "draft", {{"spp", 0}}), InputError);
-    EXPECT_THROW(registry.create("reference"), InputError);  // not a GL method
+    EXPECT_THROW(registry.create("reference"), Error);  // not a GL method
+    EXPECT_EQ(registry.create_cpu("reference")->name(), "reference");
+    EXPECT_THROW(registry.create_cpu("direct"), Error);  // not a CPU method
 }
 
 TEST(MethodRegistry, IncompleteMethodsAreRejected) {

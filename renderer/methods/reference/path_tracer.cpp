@@ -397,7 +397,7 @@ void PathTracer::update_transforms() { impl_->update_transforms(); }
 std::uint64_t PathTracer::rays_traced() const { return impl_->rays.rays_traced(); }
 
 void PathTracer::render(Accumulator& accumulator, const scene::Camera& camera, int count,
-                        const PathTracerSettings& settings) const {
+                        const PathTracerSettings& settings, const std::atomic<bool>* cancelled) const {
     BOUNCE_CHECK(count >= 0, "sample count {}", count);
     check_settings(settings);
     const int width = accumulator.width(), height = accumulator.height();
@@ -409,6 +409,7 @@ void PathTracer::render(Accumulator& accumulator, const scene::Camera& camera, i
         tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
             for (int y = rows.begin(); y < rows.end(); ++y) {
                 for (int x = 0; x < width; ++x) {
+                    if (cancelled && cancelled->load(std::memory_order_relaxed)) return;
                     const std::uint64_t pixel = static_cast<std::uint64_t>(y) * width + x;
                     glm::dvec3 sum(0.0);
                     for (int s = first; s < first + count; ++s) {
@@ -437,6 +438,7 @@ void PathTracer::render(Accumulator& accumulator, const scene::Camera& camera, i
             }
         });
     });
+    if (cancelled && cancelled->load()) throw Cancelled("reference: the trace was cancelled");
     accumulator.samples_ += count;
 }
 

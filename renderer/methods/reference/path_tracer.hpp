@@ -20,6 +20,7 @@
 #include "renderer/image/frame.hpp"
 #include "renderer/scene/scene.hpp"
 
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -77,8 +78,11 @@ public:
     void update_transforms();
 
     // Adds `count` samples per pixel, continuing from the accumulator's sample count.
-    void render(Accumulator& accumulator, const scene::Camera& camera, int count,
-                const PathTracerSettings& settings) const;
+    // `cancelled`, when given and set from another thread, stops the work after at most one pixel's
+    // samples on each worker and throws Cancelled; the accumulator is then left unchanged in count
+    // but partly summed, so it must not be used further.
+    void render(Accumulator& accumulator, const scene::Camera& camera, int count, const PathTracerSettings& settings,
+                const std::atomic<bool>* cancelled = nullptr) const;
 
     // Convenience: a fresh image of `spp` samples per pixel.
     image::Frame render(const scene::Camera& camera, int width, int height, int spp,

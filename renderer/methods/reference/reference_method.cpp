@@ -7,6 +7,7 @@ methods::MethodInfo method_info() {
     info.name = "reference";
     info.description = "CPU path tracer (Embree): the ground truth every method is measured against";
     info.device = methods::MethodDevice::cpu;
+    info.create_cpu = [] { return std::make_unique<ReferenceMethod>(); };
     info.knobs = {{"spp", 1, 65536, true, "samples per pixel"},
                   {"bounces", 0, 64, true, "indirect bounces (0: direct light only)"},
                   {"seed", 0, 4294967295.0, true, "random seed; the same seed gives the same image"},
@@ -34,6 +35,20 @@ ReferenceRequest request_from_knobs(const methods::KnobValues& knobs) {
     request.settings.indirect_visibility = knobs.at("indirect_visibility") != 0.0;
     check_settings(request.settings);  // InputError: the daemon answers with an error reply
     return request;
+}
+
+image::Frame ReferenceMethod::render(const CpuFrameContext& frame) {
+    const ReferenceRequest request = request_from_knobs(frame.knobs);
+    const PathTracer tracer(frame.scene);
+    Accumulator accumulator(frame.width, frame.height);
+    tracer.render(accumulator, frame.camera, request.spp, request.settings, frame.cancelled);
+    rays_traced_ = tracer.rays_traced();
+    spp_ = request.spp;
+    return accumulator.frame();
+}
+
+std::map<std::string, double> ReferenceMethod::statistics() const {
+    return {{"rays_traced", static_cast<double>(rays_traced_)}, {"samples_per_pixel", static_cast<double>(spp_)}};
 }
 
 }  // namespace bounce::methods::reference

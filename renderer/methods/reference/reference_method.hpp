@@ -1,8 +1,10 @@
-// Method `reference` in the registry: its knobs and presets, and the settings they make.
+// Method `reference`: the CPU path tracer (path_tracer.hpp) behind the CPU method interface, with
+// its knobs and presets in the registry.
 #pragma once
 
-#include "renderer/methods/registry.hpp"
+#include "renderer/methods/cpu_method.hpp"
 #include "renderer/methods/reference/path_tracer.hpp"
+#include "renderer/methods/registry.hpp"
 
 namespace bounce::methods::reference {
 
@@ -14,5 +16,17 @@ struct ReferenceRequest {
 };
 // From knobs resolved by the registry (spp, bounces, seed, ao, ao_lambda, indirect_visibility).
 ReferenceRequest request_from_knobs(const methods::KnobValues& knobs);
+
+class ReferenceMethod final : public CpuMethod {
+public:
+    std::string_view name() const override { return "reference"; }
+    // Builds the ray scene for the frame's snapshot and traces request_from_knobs(frame.knobs).
+    image::Frame render(const CpuFrameContext& frame) override;
+    std::map<std::string, double> statistics() const override;
+
+private:
+    std::uint64_t rays_traced_ = 0;
+    int spp_ = 0;
+};
 
 }  // namespace bounce::methods::reference

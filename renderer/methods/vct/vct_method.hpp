@@ -1,5 +1,5 @@
 // Method `vct`: voxel cone tracing on a GPU-built sparse voxel octree (Crassin et al. 2011,
-// ../shared/papers/vct-crassin-2011.md). Direct light as `direct` renders it, plus one bounce of
+// [vct] in docs/references.md). Direct light as `direct` renders it, plus one bounce of
 // diffuse indirect light gathered by a few wide cones through the octree's mipmapped radiance;
 // or the paper's ambient occlusion.
 #pragma once

@@ -1,0 +1,45 @@
+#include "server/frame_json.hpp"
+
+namespace bounce::server {
+
+using nlohmann::json;
+
+double ms_between(FrameClock::Clock::time_point from, FrameClock::Clock::time_point to) {
+    return std::chrono::duration<double, std::milli>(to - from).count();
+}
+
+json resident_json(const std::vector<methods::ResidentStructure>& structures) {
+    json resident = json::array();
+    for (const auto& s : structures) resident.push_back({{"structure", s.name}, {"bytes", s.bytes}, {"reason", s.reason}});
+    return resident;
+}
+
+json stats_json(const FrameStats& stats) {
+    return {{"method", stats.method},
+            {"preset", stats.preset},
+            {"knobs", stats.knobs},
+            {"resident", resident_json(stats.resident)},
+            {"resident_bytes", stats.resident_bytes},
+            {"method_stats", stats.method_statistics}};
+}
+
+json frame_json(const RenderResult& result, std::uint64_t scene_version, std::string_view format,
+                const FrameClock& clock) {
+    json passes = json::object();
+    for (const auto& pass : result.stats.passes) passes[pass.pass] = pass.gpu_ms;
+    json body = stats_json(result.stats);
+    body["scene_version"] = scene_version;
+    body["width"] = result.frame.width;
+    body["height"] = result.frame.height;
+    body["format"] = format;
+    body["timings_ms"] = {{"queue", ms_between(clock.received, clock.started)},
+                          {"render", ms_between(clock.started, clock.rendered)},
+                          {"gpu", result.stats.gpu_ms},
+                          {"readback", result.stats.readback_ms},
+                          {"encode", ms_between(clock.rendered, clock.encoded)},
+                          {"total", ms_between(clock.received, clock.encoded)},
+                          {"passes", passes}};
+    return body;
+}
+
+}  // namespace bounce::server

@@ -1,0 +1,213 @@
+#include "server/orders.hpp"
+
+#include "renderer/image/codec.hpp"
+#include "server/request_error.hpp"
+
+#include <glm/gtc/type_ptr.hpp>
+
+#include <cmath>
+
+namespace bounce::server {
+namespace {
+
+using nlohmann::json;
+using protocol::ErrorCode;
+using protocol::FieldError;
+using protocol::MessageType;
+
+float finite_float(double value, const char* field) {
+    const auto f = static_cast<float>(value);
+    if (!std::isfinite(f)) throw FieldError(field, fmt::format("field '{}' does not fit a finite float", field));
+    return f;
+}
+
+std::optional<glm::vec3> optional_vec3(const json& body, const char* field) {
+    const auto v = protocol::get_optional_numbers(body, field, 3);
+    if (!v) return std::nullopt;
+    return glm::vec3(finite_float((*v)[0], field), finite_float((*v)[1], field), finite_float((*v)[2], field));
+}
+
+std::optional<float> optional_in_range(const json& body, const char* field, double min, double max) {
+    const auto v = protocol::get_optional_number(body, field);
+    if (!v) return std::nullopt;
+    if (!(*v >= min && *v <= max)) throw FieldError(field, fmt::format("field '{}' is {}, outside [{}, {}]", field, *v, min, max));
+    return finite_float(*v, field);
+}
+
+scene::LightType parse_light_type(const std::string& name) {
+    if (name == "point") return scene::LightType::point;
+    if (name == "spot") return scene::LightType::spot;
+    if (name == "directional") return scene::LightType::directional;
+    throw FieldError("type", fmt::format("field 'type' is '{}', expected point, spot or directional", name));
+}
+
+LoadOrder parse_load(const json& body, bool has_attachment) {
+    LoadOrder order;
+    order.name = protocol::get_string(body, "name");
+    if (order.name.empty() || order.name.size() > 128) throw FieldError("name", "field 'name' must have 1 to 128 characters");
+    order.path = protocol::get_optional_string(body, "path");
+    if (!order.path) {
+        order.upload = has_attachment;
+        if (!order.upload) order.builtin = protocol::get_optional_string(body, "builtin");
+        if (!order.upload && !order.builtin) {
+            throw FieldError("path", "scene.load needs a 'path', a 'builtin' scene or a .glb attachment");
+        }
+    }
+    if (body.contains("dynamic")) {
+        const json& dynamic = body["dynamic"];
+        if (!dynamic.is_array()) throw FieldError("dynamic", "field 'dynamic' must be an array of object names");
+        for (const json& entry : dynamic) {
+            if (!entry.is_string()) throw FieldError("dynamic", "field 'dynamic' must be an array of object names");
+            order.dynamic.push_back(entry.get<std::string>());
+        }
+    }
+    return order;
+}
+
+ObjectRef parse_object(const json& body) {
+    if (body.contains("object") && body["object"].is_number_integer()) {
+        const auto index = body["object"].get<std::int64_t>();
+        if (index < 0) throw RequestError(ErrorCode::not_found, fmt::format("object index {} is negative", index), "object");
+        return static_cast<std::uint64_t>(index);
+    }
+    return protocol::get_string(body, "object");
+}
+
+TransformOrder parse_transform(const json& body) {
+    TransformOrder order;
+    order.scene = protocol::get_string(body, "scene");
+    order.object = parse_object(body);
+    if (const auto matrix = protocol::get_optional_numbers(body, "matrix", 16)) {
+        glm::mat4 m(1.0f);
+        for (int i = 0; i < 16; ++i) glm::value_ptr(m)[i] = finite_float((*matrix)[i], "matrix");
+        order.matrix = m;
+        return order;
+    }
+    order.translation = optional_vec3(body, "translation");
+    order.rotation_deg = optional_vec3(body, "rotation_deg");
+    if (const auto scale = protocol::get_optional_number(body, "scale")) {
+        if (!(*scale > 0.0 && *scale <= 1e6)) {
+            throw FieldError("scale", fmt::format("field 'scale' is {}, outside (0, 1e6]", *scale));
+        }
+        order.scale = finite_float(*scale, "scale");
+    }
+    if (!order.translation && !order.rotation_deg && !order.scale) {
+        throw FieldError("matrix", "object.set_transform needs 'matrix' or any of 'translation', 'rotation_deg', 'scale'");
+    }
+    return order;
+}
+
+LightOrder parse_light(const json& body) {
+    LightOrder order;
+    order.scene = protocol::get_string(body, "scene");
+    order.light = protocol::get_string(body, "light");
+    if (const auto type = protocol::get_optional_string(body, "type")) order.type = parse_light_type(*type);
+    order.position = optional_vec3(body, "position");
+    if (const auto direction = optional_vec3(body, "direction")) {
+        if (!(glm::length(*direction) > 1e-12f)) throw FieldError("direction", "field 'direction' is zero");
+        order.direction = glm::normalize(*direction);
+    }
+    order.color = optional_vec3(body, "color");
+    if (order.color && glm::any(glm::lessThan(*order.color, glm::vec3(0.0f)))) {
+        throw FieldError("color", "field 'color' has a negative component");
+    }
+    order.intensity = optional_in_range(body, "intensity", 0.0, 1e12);
+    if (const auto inner = optional_in_range(body, "inner_cone_deg", 0.0, 90.0)) order.inner_cone = glm::radians(*inner);
+    if (const auto outer = optional_in_range(body, "outer_cone_deg", 0.0, 90.0)) order.outer_cone = glm::radians(*outer);
+    return order;
+}
+
+CameraOrder parse_camera(const json& body) {
+    CameraOrder order;
+    order.scene = protocol::get_string(body, "scene");
+    order.camera = protocol::get_optional_string(body, "camera");
+    if (order.camera) return order;
+    order.position = optional_vec3(body, "position");
+    order.look_at = optional_vec3(body, "look_at");
+    if (!order.look_at) {
+        if (const auto q = protocol::get_optional_numbers(body, "orientation", 4)) {
+            const glm::quat orientation(finite_float((*q)[3], "orientation"), finite_float((*q)[0], "orientation"),
+                                        finite_float((*q)[1], "orientation"), finite_float((*q)[2], "orientation"));
+            if (!(glm::length(orientation) > 1e-6f)) throw FieldError("orientation", "field 'orientation' is zero");
+            order.orientation = glm::normalize(orientation);
+        }
+    }
+    if (const auto fov = protocol::get_optional_number(body, "fov_deg")) {
+        if (!(*fov > 0.1 && *fov < 179.0)) throw FieldError("fov_deg", "field 'fov_deg' is outside (0.1, 179)");
+        order.fov = glm::radians(static_cast<float>(*fov));
+    }
+    return order;
+}
+
+}  // namespace
+
+RenderOrder parse_render(const json& body, std::uint64_t max_pixels) {
+    RenderOrder order;
+    order.scene = protocol::get_string(body, "scene");
+    order.camera = protocol::get_optional_string(body, "camera");
+    RenderRequest& request = order.request;
+    request.method = protocol::get_optional_string(body, "method").value_or("direct");
+    request.preset = protocol::get_optional_string(body, "preset").value_or("medium");
+    request.width = static_cast<int>(protocol::get_optional_integer(body, "width", 1, Renderer::kMaxDimension).value_or(512));
+    request.height = static_cast<int>(protocol::get_optional_integer(body, "height", 1, Renderer::kMaxDimension).value_or(512));
+    const std::uint64_t pixels = static_cast<std::uint64_t>(request.width) * static_cast<std::uint64_t>(request.height);
+    if (pixels > max_pixels) {
+        throw RequestError(ErrorCode::too_large,
+                           fmt::format("{}x{} is {} pixels, above this daemon's limit of {}", request.width,
+                                       request.height, pixels, max_pixels), "width");
+    }
+    if (body.contains("knobs")) {
+        const json& knobs = body["knobs"];
+        if (!knobs.is_object()) throw FieldError("knobs", "field 'knobs' must be an object of numbers");
+        for (const auto& [name, value] : knobs.items()) {
+            if (!value.is_number()) throw FieldError("knobs", fmt::format("knob '{}' must be a number", name));
+            request.knobs[name] = value.get<double>();
+        }
+    }
+    order.format = protocol::get_optional_string(body, "format").value_or("png");
+    const auto format = image::parse_image_format(order.format);
+    request.make_display_image = format != image::ImageFormat::exr;
+    if (const auto exposure = protocol::get_optional_number(body, "exposure")) {
+        if (std::abs(*exposure) > 64.0) throw FieldError("exposure", "field 'exposure' is outside [-64, 64] stops");
+        request.display.exposure = static_cast<float>(*exposure);
+    }
+    if (const auto tone = protocol::get_optional_string(body, "tone")) request.display.curve = image::parse_tone_curve(*tone);
+    order.jpeg_quality = static_cast<int>(protocol::get_optional_integer(body, "jpeg_quality", 1, 100).value_or(90));
+    order.exr_half = protocol::get_optional_bool(body, "exr_half").value_or(false);
+    if (const auto version = protocol::get_optional_integer(body, "min_scene_version", 0, INT64_MAX)) {
+        order.min_scene_version = static_cast<std::uint64_t>(*version);
+    }
+    order.plan = plan_frame(request);  // method, preset, knobs and size, refused here rather than queued
+    return order;
+}
+
+Order parse_order(const protocol::Message& message, std::uint64_t max_pixels) {
+    const json& body = message.body;
+    switch (static_cast<MessageType>(message.type)) {
+        case MessageType::scene_load: return parse_load(body, !message.attachment.empty());
+        case MessageType::scene_unload:
+        case MessageType::scene_describe: return SceneNameOrder{protocol::get_string(body, "name")};
+        case MessageType::scene_list: return ListOrder{};
+        case MessageType::stats: return StatsOrder{};
+        case MessageType::object_set_transform: return parse_transform(body);
+        case MessageType::light_set: return parse_light(body);
+        case MessageType::light_remove: return RemoveLightOrder{protocol::get_string(body, "scene"),
+                                                                protocol::get_string(body, "light")};
+        case MessageType::camera_set: return parse_camera(body);
+        case MessageType::render: return parse_render(body, max_pixels);
+        case MessageType::bake: {
+            BakeOrder order{parse_render(body, max_pixels)};
+            if (order.frame.plan.site != FrameSite::gpu) {
+                throw FieldError("method", fmt::format("method '{}' has nothing to bake: it runs on CPU threads",
+                                                       order.frame.request.method));
+            }
+            return order;
+        }
+        default:
+            throw RequestError(ErrorCode::unsupported,
+                               fmt::format("'{}' is not a request the render thread runs",
+                                           protocol::message_type_name(message.type)));
+    }
+}
+
+}  // namespace bounce::server

@@ -1,0 +1,101 @@
+// Requests as typed orders. A session parses every request body into its order on the network
+// thread, before anything is queued, so a malformed or out-of-range field is refused without
+// touching the render thread. What depends on scene state (does the object exist, does look_at
+// equal the current camera position) is checked when the order is applied.
+#pragma once
+
+#include "protocol/protocol.hpp"
+#include "renderer/renderer.hpp"
+
+#include <glm/glm.hpp>
+#include <glm/gtc/quaternion.hpp>
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <variant>
+#include <vector>
+
+namespace bounce::server {
+
+// scene.load: exactly one of a path under the scene root, a built-in scene or an uploaded .glb.
+struct LoadOrder {
+    std::string name;
+    std::optional<std::string> path;
+    std::optional<std::string> builtin;
+    bool upload = false;                // the scene is the message's attachment
+    std::vector<std::string> dynamic;   // objects declared movable
+};
+
+// scene.unload, scene.describe.
+struct SceneNameOrder {
+    std::string name;
+};
+
+struct ListOrder {};
+struct StatsOrder {};
+
+// An object by index or by name.
+using ObjectRef = std::variant<std::uint64_t, std::string>;
+
+// object.set_transform: a matrix, or any of translation, rotation and scale about the object's
+// origin, relative to how it was loaded.
+struct TransformOrder {
+    std::string scene;
+    ObjectRef object;
+    std::optional<glm::mat4> matrix;
+    std::optional<glm::vec3> translation;
+    std::optional<glm::vec3> rotation_deg;
+    std::optional<float> scale;
+};
+
+// light.set: the fields given replace the light's (a new light starts from the defaults).
+struct LightOrder {
+    std::string scene;
+    std::string light;
+    std::optional<scene::LightType> type;
+    std::optional<glm::vec3> position, direction, color;
+    std::optional<float> intensity;
+    std::optional<float> inner_cone, outer_cone;  // radians
+};
+
+struct RemoveLightOrder {
+    std::string scene;
+    std::string light;
+};
+
+// camera.set: make a named camera the default, or move the default one.
+struct CameraOrder {
+    std::string scene;
+    std::optional<std::string> camera;
+    std::optional<glm::vec3> position, look_at;
+    std::optional<glm::quat> orientation;
+    std::optional<float> fov;  // radians
+};
+
+// render and bake: the frame's fields, and where and with which knobs it runs.
+struct RenderOrder {
+    std::string scene;
+    RenderRequest request;
+    FramePlan plan;
+    std::string format = "png";
+    int jpeg_quality = 90;
+    bool exr_half = false;
+    std::optional<std::uint64_t> min_scene_version;
+    std::optional<std::string> camera;  // a camera of the scene, for this render only
+};
+struct BakeOrder {
+    RenderOrder frame;
+};
+
+using Order = std::variant<LoadOrder, SceneNameOrder, ListOrder, StatsOrder, TransformOrder, LightOrder,
+                           RemoveLightOrder, CameraOrder, RenderOrder, BakeOrder>;
+
+// Parses the body of a request the render thread runs. Throws protocol::FieldError, RequestError
+// or InputError naming the fault; `max_pixels` is the daemon's --max-pixels.
+Order parse_order(const protocol::Message& message, std::uint64_t max_pixels);
+
+// The render fields alone (render and bake share them), planned with plan_frame().
+RenderOrder parse_render(const nlohmann::json& body, std::uint64_t max_pixels);
+
+}  // namespace bounce::server

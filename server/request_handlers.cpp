@@ -1,0 +1,211 @@
+#include "server/request_handlers.hpp"
+
+#include "renderer/image/codec.hpp"
+#include "server/daemon.hpp"
+#include "server/scene_requests.hpp"
+
+namespace bounce::server {
+namespace {
+
+using nlohmann::json;
+using protocol::ErrorCode;
+using protocol::MessageType;
+using Clock = std::chrono::steady_clock;
+
+// The camera a render names, as a one-off: the scene's own view is untouched.
+std::optional<scene::Camera> named_camera(const scene::Scene& scene, const RenderOrder& order) {
+    if (!order.camera) return std::nullopt;
+    const auto index = scene.find_camera(*order.camera);
+    if (!index) {
+        throw RequestError(ErrorCode::not_found, fmt::format("scene '{}' has no camera '{}'", order.scene, *order.camera),
+                           "camera");
+    }
+    return scene.cameras[*index];
+}
+
+void check_scene_version(const SceneEntry& entry, const RenderOrder& order) {
+    if (order.min_scene_version && entry.version < *order.min_scene_version) {
+        throw RequestError(ErrorCode::bad_request,
+                           fmt::format("scene '{}' is at version {}, below min_scene_version {}", order.scene,
+                                       entry.version, *order.min_scene_version),
+                           "min_scene_version");
+    }
+}
+
+// Holds one of the daemon's CPU-frame slots and gives it back however the frame ends.
+class CpuSlot {
+public:
+    explicit CpuSlot(Daemon& daemon) : daemon_(daemon) {}
+    ~CpuSlot() { daemon_.finish_cpu_job(); }
+    CpuSlot(const CpuSlot&) = delete;
+    CpuSlot& operator=(const CpuSlot&) = delete;
+
+private:
+    Daemon& daemon_;
+};
+
+}  // namespace
+
+void RequestHandlers::admit(const std::shared_ptr<Request>& request) {
+    try {
+        const json& body = request->message().body;
+        if (const auto timeout = protocol::get_optional_integer(body, "timeout_ms", 1, 24ll * 3600 * 1000)) {
+            request->deadline = request->received + std::chrono::milliseconds(*timeout);
+        }
+        request->order = parse_order(request->message(), daemon_.config().max_pixels);
+        const bool queued = daemon_.render_service().submit(
+            [this, request](Renderer& renderer, SceneRegistry& registry) { execute(request, renderer, registry); });
+        if (!queued) {
+            throw RequestError(ErrorCode::busy,
+                               fmt::format("the render queue is full ({} jobs)", daemon_.render_service().queue_capacity()));
+        }
+        daemon_.metrics().set_queue_depth(daemon_.render_service().queue_depth());
+    } catch (...) {
+        request->fail(std::current_exception());
+    }
+}
+
+// Runs on the render thread.
+void RequestHandlers::execute(const std::shared_ptr<Request>& request, Renderer& renderer, SceneRegistry& registry) {
+    daemon_.metrics().set_queue_depth(daemon_.render_service().queue_depth());
+    try {
+        request->check_still_wanted();
+        const std::span<const std::uint8_t> attachment = request->message().attachment;
+        const json reply = std::visit(
+            [&](const auto& order) -> json {
+                using T = std::decay_t<decltype(order)>;
+                if constexpr (std::is_same_v<T, LoadOrder>) {
+                    return load_scene(registry, daemon_.scene_root(), order, attachment);
+                } else if constexpr (std::is_same_v<T, SceneNameOrder>) {
+                    if (request->message().type == static_cast<std::uint16_t>(MessageType::scene_describe)) {
+                        return describe_scene(registry, order);
+                    }
+                    json unloaded = unload_scene(registry, order);
+                    daemon_.metrics().forget_scene(order.name);
+                    return unloaded;
+                } else if constexpr (std::is_same_v<T, ListOrder>) {
+                    return list_scenes(registry);
+                } else if constexpr (std::is_same_v<T, StatsOrder>) {
+                    return stats(renderer, registry);
+                } else if constexpr (std::is_same_v<T, TransformOrder>) {
+                    return set_object_transform(registry, order);
+                } else if constexpr (std::is_same_v<T, LightOrder>) {
+                    return set_light(registry, order);
+                } else if constexpr (std::is_same_v<T, RemoveLightOrder>) {
+                    return remove_light(registry, order);
+                } else if constexpr (std::is_same_v<T, CameraOrder>) {
+                    return set_camera(registry, order);
+                } else if constexpr (std::is_same_v<T, BakeOrder>) {
+                    return bake(request, order, renderer, registry);
+                } else {
+                    static_assert(std::is_same_v<T, RenderOrder>);
+                    if (order.plan.site == FrameSite::cpu) {
+                        render_on_cpu(request, order, registry);
+                    } else {
+                        render_on_gpu(request, order, renderer, registry);
+                    }
+                    return nullptr;  // frames answer from the encode pool
+                }
+            },
+            request->order.value());
+        if (!reply.is_null()) request->answer(protocol::make_ok(request->id(), reply));
+    } catch (...) {
+        request->fail(std::current_exception());
+    }
+}
+
+void RequestHandlers::render_on_gpu(const std::shared_ptr<Request>& request, const RenderOrder& order,
+                                    Renderer& renderer, SceneRegistry& registry) {
+    FrameClock clock{request->received, Clock::now(), {}, {}};
+    SceneEntry& entry = registry.get(order.scene);
+    check_scene_version(entry, order);
+    RenderRequest frame = order.request;
+    if (auto camera = named_camera(*entry.scene, order)) frame.camera = std::move(camera);
+    auto result = std::make_shared<const RenderResult>(renderer.render(*entry.resources, frame));
+    clock.rendered = Clock::now();
+    daemon_.metrics().set_resident_bytes(order.scene, result->stats.resident_bytes);
+    deliver(request, order, std::move(result), entry.version, clock);
+}
+
+// On the render thread only long enough to snapshot the scene, so the trace on the CPU pool never
+// races with later mutations and never holds the render thread.
+void RequestHandlers::render_on_cpu(const std::shared_ptr<Request>& request, const RenderOrder& order,
+                                    SceneRegistry& registry) {
+    const SceneEntry& entry = registry.get(order.scene);
+    check_scene_version(entry, order);
+    auto snapshot = std::make_shared<const scene::Scene>(*entry.scene);
+    RenderRequest frame = order.request;
+    if (auto camera = named_camera(*snapshot, order)) frame.camera = std::move(camera);
+    if (!daemon_.try_start_cpu_job()) {
+        throw RequestError(ErrorCode::busy, fmt::format("{} CPU renders are already queued", Daemon::kMaxCpuJobs));
+    }
+    auto slot = std::make_shared<CpuSlot>(daemon_);
+    const std::uint64_t version = entry.version;
+    boost::asio::post(daemon_.cpu_pool(), [this, request, order, frame, snapshot, version, slot] {
+        try {
+            request->check_still_wanted();
+            FrameClock clock{request->received, Clock::now(), {}, {}};
+            auto result = std::make_shared<const RenderResult>(
+                bounce::render_on_cpu(*snapshot, frame, order.plan, request->cancelled.get()));
+            clock.rendered = Clock::now();
+            deliver(request, order, std::move(result), version, clock);
+        } catch (...) {
+            request->fail(std::current_exception());
+        }
+    });
+}
+
+void RequestHandlers::deliver(const std::shared_ptr<Request>& request, const RenderOrder& order,
+                              std::shared_ptr<const RenderResult> result, std::uint64_t scene_version, FrameClock clock) {
+    boost::asio::post(daemon_.encode_pool(), [this, request, order, result = std::move(result), scene_version, clock]() mutable {
+        try {
+            const auto format = image::parse_image_format(order.format);
+            auto bytes = image::encode_image(result->frame, format, {order.jpeg_quality, order.exr_half});
+            clock.encoded = Clock::now();
+            json body = frame_json(*result, scene_version, image::image_format_name(format), clock);
+            daemon_.metrics().count_frame(ms_between(clock.started, clock.rendered), ms_between(clock.received, clock.encoded));
+            request->answer({static_cast<std::uint16_t>(MessageType::frame), request->id(), std::move(body), std::move(bytes)});
+        } catch (...) {
+            request->fail(std::current_exception());
+        }
+    });
+}
+
+// Runs on the render thread: builds a method's precomputed structures for a preset and knobs,
+// sending `progress` events (at most five a second, and the last) until the `ok` with its stats.
+// A `cancel` of this request stops it between steps.
+json RequestHandlers::bake(const std::shared_ptr<Request>& request, const BakeOrder& order, Renderer& renderer,
+                           SceneRegistry& registry) {
+    SceneEntry& entry = registry.get(order.frame.scene);
+    const auto started = Clock::now();
+    auto last_sent = started - std::chrono::seconds(1);
+    const FrameStats stats =
+        renderer.prepare(*entry.resources, order.frame.request, [&](double fraction, const std::string& stage) {
+            if (request->is_cancelled()) return false;
+            const auto now = Clock::now();
+            if (now - last_sent >= std::chrono::milliseconds(200) || fraction >= 1.0) {
+                request->send(protocol::make_message(MessageType::progress, request->id(),
+                                                     {{"fraction", fraction}, {"stage", stage}}));
+                last_sent = now;
+            }
+            return true;
+        });
+    daemon_.metrics().set_resident_bytes(order.frame.scene, stats.resident_bytes);
+    json reply = stats_json(stats);
+    reply["scene"] = order.frame.scene;
+    reply["bake_ms"] = ms_between(started, Clock::now());
+    return reply;
+}
+
+json RequestHandlers::stats(Renderer& renderer, SceneRegistry& registry) {
+    json errors = json::object();
+    for (const auto& [code, count] : daemon_.metrics().errors()) errors[code] = count;
+    json reply = list_scenes(registry);
+    reply["frames"] = daemon_.metrics().frames();
+    reply["errors"] = errors;
+    reply["queue_depth"] = daemon_.render_service().queue_depth();
+    reply["renderer"] = renderer.gpu_info().renderer;
+    return reply;
+}
+
+}  // namespace bounce::server

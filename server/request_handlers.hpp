@@ -1,0 +1,49 @@
+// Executes the requests sessions admit. The path of a request (docs/architecture.md):
+//
+//   network thread (session strand): parse_order + plan_frame; refused here, nothing queued
+//   render thread: scene requests, GPU frames, bakes; CPU frames only snapshot the scene here
+//   CPU pool: CPU frames (trace, CPU tone map)
+//   encode pool: every frame's encoding and reply
+//
+// Each hop runs inside one boundary that turns any exception into the request's error reply, so
+// no input reaches terminate().
+#pragma once
+
+#include "server/frame_json.hpp"
+#include "server/request.hpp"
+
+#include <memory>
+
+namespace bounce {
+class Renderer;
+}
+
+namespace bounce::server {
+
+class Daemon;
+class SceneRegistry;
+
+class RequestHandlers {
+public:
+    explicit RequestHandlers(Daemon& daemon) : daemon_(daemon) {}
+
+    // On the network thread: parses and plans the request, then queues it for the render thread.
+    // Refusals (bad fields, unknown methods or knobs, a full queue) answer the request at once.
+    void admit(const std::shared_ptr<Request>& request);
+
+private:
+    void execute(const std::shared_ptr<Request>& request, Renderer& renderer, SceneRegistry& registry);
+    void render_on_gpu(const std::shared_ptr<Request>& request, const RenderOrder& order, Renderer& renderer,
+                       SceneRegistry& registry);
+    void render_on_cpu(const std::shared_ptr<Request>& request, const RenderOrder& order, SceneRegistry& registry);
+    nlohmann::json bake(const std::shared_ptr<Request>& request, const BakeOrder& order, Renderer& renderer,
+                        SceneRegistry& registry);
+    nlohmann::json stats(Renderer& renderer, SceneRegistry& registry);
+    // Encodes the frame on the encode pool and answers with it.
+    void deliver(const std::shared_ptr<Request>& request, const RenderOrder& order,
+                 std::shared_ptr<const RenderResult> result, std::uint64_t scene_version, FrameClock clock);
+
+    Daemon& daemon_;
+};
+
+}  // namespace bounce::server
