@@ -1510,17 +1510,9 @@ private:
                       "a light is added (light.set)");
     }
 
-    // A camera that sees the whole scene: the bounding sphere fits the 0.8 rad vertical field of view,
-    // looking from +Z towards the centre.
+    // A camera that sees the whole scene.
     void add_default_camera() {
-        constexpr float fov = 0.8f;
-        const Aabb bounds = scene_.world_bounds();
-        const glm::vec3 center = bounds.empty() ? glm::vec3(0.0f) : bounds.center();
-        float radius = 0.5f * glm::length(bounds.extent());
-        if (!(radius > 0.0f) || !std::isfinite(radius)) radius = 1.0f;
-        const float distance = radius / std::sin(0.5f * fov);
-        Camera camera = Camera::look_at(center + glm::vec3(0.0f, 0.0f, distance), center,
-                                        glm::vec3(0.0f, 1.0f, 0.0f), fov);
+        Camera camera = framing_camera(scene_.world_bounds());
         camera.name = camera_names_.claim("default", "default");
         scene_.cameras.push_back(std::move(camera));
     }
