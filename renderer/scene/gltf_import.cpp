@@ -8,6 +8,7 @@
 
 #include "renderer/base/error.hpp"
 #include "renderer/base/log.hpp"
+#include "renderer/scene/mesh_utils.hpp"
 
 #include <nlohmann/json.hpp>
 #include <tiny_gltf.h>
@@ -805,9 +806,7 @@ std::vector<std::uint32_t> read_indices(const AccessorView& view) {
 }
 
 // ------------------------------------------------------------------------------------------------
-// Geometry: topology, normals, tangents.
-
-bool finite(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+// Topology: strips and fans.
 
 // Triangle lists from strips and fans, with the winding the spec gives for each triangle.
 std::vector<std::uint32_t> triangles_from_strip(const std::vector<std::uint32_t>& strip) {
@@ -823,75 +822,6 @@ std::vector<std::uint32_t> triangles_from_fan(const std::vector<std::uint32_t>& 
     std::vector<std::uint32_t> out;
     for (std::size_t i = 1; i + 1 < fan.size(); ++i) out.insert(out.end(), {fan[i], fan[i + 1], fan[0]});
     return out;
-}
-
-// Area-weighted vertex normals (the cross product's length is twice the triangle's area); a vertex
-// touched only by zero-area triangles gets +Y rather than NaN.
-std::vector<glm::vec3> generate_normals(const Primitive& primitive) {
-    std::vector<glm::vec3> sums(primitive.positions.size(), glm::vec3(0.0f));
-    for (std::size_t t = 0; t + 2 < primitive.indices.size(); t += 3) {
-        const std::uint32_t i0 = primitive.indices[t], i1 = primitive.indices[t + 1],
-                            i2 = primitive.indices[t + 2];
-        const glm::vec3 weighted = glm::cross(primitive.positions[i1] - primitive.positions[i0],
-                                              primitive.positions[i2] - primitive.positions[i0]);
-        if (!finite(weighted)) continue;
-        sums[i0] += weighted;
-        sums[i1] += weighted;
-        sums[i2] += weighted;
-    }
-    for (glm::vec3& normal : sums) {
-        const float length = glm::length(normal);
-        normal = length > 1e-30f && std::isfinite(length) ? normal / length : glm::vec3(0.0f, 1.0f, 0.0f);
-    }
-    return sums;
-}
-
-glm::vec4 default_tangent(const glm::vec3& normal) {
-    const glm::vec3 helper =
-        std::abs(normal.x) < 0.9f ? glm::vec3(1.0f, 0.0f, 0.0f) : glm::vec3(0.0f, 1.0f, 0.0f);
-    return {glm::normalize(helper - normal * glm::dot(normal, helper)), 1.0f};
-}
-
-// Per-triangle tangent frames from the UV derivatives, accumulated per vertex, then made orthogonal
-// to the normal (Gram-Schmidt) with the handedness from the accumulated bitangent, as MikkTSpace does.
-// glTF's v runs down the image while a normal map's green axis points up it, so the bitangent is taken
-// along -v (MikkTSpace on 1 - v): a plainly mapped quad gets w = +1.
-std::vector<glm::vec4> generate_tangents(const Primitive& primitive, const std::vector<glm::vec2>& uvs) {
-    const std::size_t vertex_count = primitive.positions.size();
-    std::vector<glm::vec3> tangent_sums(vertex_count, glm::vec3(0.0f));
-    std::vector<glm::vec3> bitangent_sums(vertex_count, glm::vec3(0.0f));
-    for (std::size_t t = 0; t + 2 < primitive.indices.size(); t += 3) {
-        const std::uint32_t i0 = primitive.indices[t], i1 = primitive.indices[t + 1],
-                            i2 = primitive.indices[t + 2];
-        const glm::vec3 edge1 = primitive.positions[i1] - primitive.positions[i0];
-        const glm::vec3 edge2 = primitive.positions[i2] - primitive.positions[i0];
-        const glm::vec2 duv1 = uvs[i1] - uvs[i0];
-        const glm::vec2 duv2 = uvs[i2] - uvs[i0];
-        const float determinant = duv1.x * duv2.y - duv2.x * duv1.y;
-        if (std::abs(determinant) < 1e-20f || !std::isfinite(determinant)) continue;  // no UV area
-        const glm::vec3 tangent = (edge1 * duv2.y - edge2 * duv1.y) / determinant;
-        const glm::vec3 bitangent = (edge1 * duv2.x - edge2 * duv1.x) / determinant;
-        if (!finite(tangent) || !finite(bitangent)) continue;
-        for (const std::uint32_t i : {i0, i1, i2}) {
-            tangent_sums[i] += tangent;
-            bitangent_sums[i] += bitangent;
-        }
-    }
-    std::vector<glm::vec4> tangents(vertex_count);
-    for (std::size_t v = 0; v < vertex_count; ++v) {
-        const glm::vec3& normal = primitive.normals[v];
-        const glm::vec3 orthogonal = tangent_sums[v] - normal * glm::dot(normal, tangent_sums[v]);
-        const float length = glm::length(orthogonal);
-        if (!(length > 1e-30f) || !std::isfinite(length)) {
-            tangents[v] = default_tangent(normal);
-            continue;
-        }
-        const glm::vec3 tangent = orthogonal / length;
-        const float handedness =
-            glm::dot(glm::cross(normal, tangent), bitangent_sums[v]) < 0.0f ? -1.0f : 1.0f;
-        tangents[v] = {tangent, handedness};
-    }
-    return tangents;
 }
 
 // ------------------------------------------------------------------------------------------------
@@ -1251,7 +1181,7 @@ private:
     void fill_normals(Primitive& primitive, const std::vector<glm::vec3>& file_normals,
                       const std::string& where) {
         if (file_normals.empty()) {
-            primitive.normals = generate_normals(primitive);
+            primitive.normals = vertex_normals(primitive);
             return;
         }
         primitive.normals = file_normals;
@@ -1264,7 +1194,7 @@ private:
                 normal /= length;
                 continue;
             }
-            if (generated.empty()) generated = generate_normals(primitive);
+            if (generated.empty()) generated = vertex_normals(primitive);
             normal = generated[v];
             ++replaced;
         }
@@ -1289,7 +1219,7 @@ private:
                 if (length > 1e-6f * std::max(glm::length(xyz), 1e-30f) && std::isfinite(length)) {
                     primitive.tangents[v] = {orthogonal / length, file_tangents[v].w < 0.0f ? -1.0f : 1.0f};
                 } else {
-                    primitive.tangents[v] = default_tangent(normal);
+                    primitive.tangents[v] = fallback_tangent(normal);
                     ++replaced;
                 }
             }
@@ -1305,12 +1235,12 @@ private:
         const std::vector<glm::vec2>& uvs =
             material.normal_texture.uv_set == 1 ? primitive.uv1 : primitive.uv0;
         if (material.normal_texture.valid() && uvs.size() == vertex_count) {
-            primitive.tangents = generate_tangents(primitive, uvs);
+            primitive.tangents = uv_tangents(primitive, uvs);
             return;
         }
         primitive.tangents.resize(vertex_count);
         for (std::size_t v = 0; v < vertex_count; ++v) {
-            primitive.tangents[v] = default_tangent(primitive.normals[v]);
+            primitive.tangents[v] = fallback_tangent(primitive.normals[v]);
         }
     }
 
