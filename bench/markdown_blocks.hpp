@@ -9,6 +9,10 @@
 
 namespace bounce::bench {
 
+// The opening comment keeps the text docs/benchmarks.md has always had, so that the block is found.
+inline constexpr std::string_view kIsrBegin = "<!-- isr sections: bench/quality writes them (alone with --isr-only) -->";
+inline constexpr std::string_view kIsrEnd = "<!-- end of isr sections -->";
+
 inline constexpr std::string_view kCssmBegin = "<!-- cssm sections: bench/cssm writes them -->";
 inline constexpr std::string_view kCssmEnd = "<!-- end of cssm sections -->";
 

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Plots bench/quality's isr sections: isr_fig9.csv (error against the eye-space depth threshold,
+"""Plots bench/isr's CSVs: isr_fig9.csv (error against the eye-space depth threshold,
 one curve per normal threshold; the paper's Fig. 9) and isr_fig13.csv (error against the VPL-tree
 threshold tau, one curve per max_depth; the paper's Fig. 13), into isr_fig9.png and isr_fig13.png
 in the same folder. Usage: plot_isr.py [RESULTS_DIR] (default bench/results)."""

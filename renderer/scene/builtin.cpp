@@ -1,6 +1,7 @@
 #include "renderer/scene/builtin.hpp"
 
 #include "renderer/base/error.hpp"
+#include "renderer/scene/mesh_utils.hpp"
 
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -222,18 +223,9 @@ Scene make_cornell_blob() {
         blob.bounds.extend(p);
     }
     blob.indices = indices;
-    // Smooth normals: area-weighted face normals (the sphere's winding faces outwards).
-    blob.normals.assign(blob.positions.size(), glm::vec3(0.0f));
-    for (std::size_t i = 0; i < indices.size(); i += 3) {
-        const glm::vec3 n = glm::cross(blob.positions[indices[i + 1]] - blob.positions[indices[i]],
-                                       blob.positions[indices[i + 2]] - blob.positions[indices[i]]);
-        for (int c = 0; c < 3; ++c) blob.normals[indices[i + c]] += n;
-    }
-    for (glm::vec3& n : blob.normals) n = glm::normalize(n);
-    for (const glm::vec3& n : blob.normals) {
-        const glm::vec3 tangent = glm::normalize(glm::cross(std::abs(n.y) < 0.99f ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0), n));
-        blob.tangents.emplace_back(tangent, 1.0f);
-    }
+    // Smooth normals, area-weighted (the sphere's winding faces outwards); no UVs, so any tangent.
+    blob.normals = vertex_normals(blob);
+    for (const glm::vec3& n : blob.normals) blob.tangents.push_back(fallback_tangent(n));
     Mesh mesh;
     mesh.name = "blob";
     mesh.bounds = blob.bounds;

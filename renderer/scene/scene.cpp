@@ -52,6 +52,19 @@ Camera Camera::look_at(const glm::vec3& eye, const glm::vec3& target, const glm:
     return camera;
 }
 
+// At radius / sin(fov / 2) from the centre the bounding sphere touches the top and bottom of the
+// view cone (and fits across frames at least as wide as tall); 10% farther keeps what lies on the
+// sphere off the frame's edge. An empty or flat-to-a-point box is framed as a unit sphere.
+Camera framing_camera(const Aabb& bounds) {
+    constexpr float fov = 0.8f;
+    constexpr float margin = 1.1f;
+    const glm::vec3 center = bounds.empty() ? glm::vec3(0.0f) : bounds.center();
+    float radius = 0.5f * glm::length(bounds.extent());
+    if (!(radius > 0.0f) || !std::isfinite(radius)) radius = 1.0f;
+    const float distance = margin * radius / std::sin(0.5f * fov);
+    return Camera::look_at(center + glm::vec3(0.0f, 0.0f, distance), center, glm::vec3(0.0f, 1.0f, 0.0f), fov);
+}
+
 Aabb Scene::world_bounds() const {
     Aabb bounds;
     for (const Object& object : objects) {

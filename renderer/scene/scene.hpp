@@ -152,6 +152,9 @@ struct Camera {
                           float vertical_fov);
 };
 
+// The view of a scene that has no camera: from +Z towards the centre of `bounds`, all of them in view.
+Camera framing_camera(const Aabb& bounds);
+
 struct Scene {
     std::string name;
     std::vector<Texture> textures;

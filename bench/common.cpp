@@ -1,0 +1,74 @@
+#include "bench/common.hpp"
+
+#include <fmt/format.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <ctime>
+#include <fstream>
+#include <thread>
+
+namespace bounce::bench {
+
+Arguments::Arguments(int argc, char** argv, std::string program, std::string invocation)
+    : argc_(argc), argv_(argv), program_(std::move(program)), command_(std::move(invocation)) {}
+
+bool Arguments::next() {
+    if (++at_ >= argc_) return false;
+    flag_ = argv_[at_];
+    command_ += " " + flag_;
+    return true;
+}
+
+std::string Arguments::value() {
+    if (at_ + 1 >= argc_) {
+        std::fprintf(stderr, "%s: %s needs a value\n", program_.c_str(), flag_.c_str());
+        std::exit(2);
+    }
+    const std::string text = argv_[++at_];
+    command_ += " " + text;
+    return text;
+}
+
+int Arguments::number() {
+    const std::string text = value();
+    try {
+        return std::stoi(text);
+    } catch (const std::exception&) {
+        std::fprintf(stderr, "%s: %s expects a number, got '%s'\n", program_.c_str(), flag_.c_str(), text.c_str());
+        std::exit(2);
+    }
+}
+
+double ms_since(Clock::time_point start) { return std::chrono::duration<double, std::milli>(Clock::now() - start).count(); }
+
+RenderRequest linear_request(const std::string& method, const std::string& preset, methods::KnobValues knobs, int size) {
+    RenderRequest request;
+    request.method = method;
+    request.preset = preset;
+    request.knobs = std::move(knobs);
+    request.width = request.height = size;
+    request.make_display_image = false;
+    return request;
+}
+
+std::string machine_description() {
+    std::ifstream cpuinfo("/proc/cpuinfo");
+    std::string line, model = "unknown CPU";
+    while (std::getline(cpuinfo, line)) {
+        if (line.rfind("model name", 0) == 0) {
+            model = line.substr(line.find(':') + 2);
+            break;
+        }
+    }
+    return fmt::format("{}, {} hardware threads", model, std::thread::hardware_concurrency());
+}
+
+std::string today() {
+    const std::time_t now = std::time(nullptr);
+    char date[32];
+    std::strftime(date, sizeof(date), "%Y-%m-%d", std::gmtime(&now));
+    return date;
+}
+
+}  // namespace bounce::bench

@@ -1,0 +1,45 @@
+// What the benches share besides their scenes: their command lines, requests for linear frames, the
+// machine and date their reports name, elapsed time.
+#pragma once
+
+#include "renderer/renderer.hpp"
+
+#include <chrono>
+#include <string>
+
+namespace bounce::bench {
+
+// A bench's flags, each value after its flag. A missing or malformed value ends the program with
+// status 2 and a message that names `program`. command() is the command line as the reports quote
+// it: `invocation` and every argument read so far.
+class Arguments {
+public:
+    Arguments(int argc, char** argv, std::string program, std::string invocation);
+    // Moves to the next flag; false when there is none.
+    bool next();
+    const std::string& flag() const { return flag_; }
+    std::string value();
+    int number();
+    const std::string& command() const { return command_; }
+
+private:
+    int argc_;
+    char** argv_;
+    int at_ = 0;
+    std::string program_, command_, flag_;
+};
+
+using Clock = std::chrono::steady_clock;
+
+double ms_since(Clock::time_point start);
+
+// A square frame of linear radiance only (no display image).
+RenderRequest linear_request(const std::string& method, const std::string& preset, methods::KnobValues knobs, int size);
+
+// The CPU model and its hardware thread count.
+std::string machine_description();
+
+// Today's date in UTC, YYYY-MM-DD.
+std::string today();
+
+}  // namespace bounce::bench

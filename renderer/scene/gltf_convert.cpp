@@ -1,0 +1,679 @@
+#include "renderer/scene/gltf_convert.hpp"
+
+#include "renderer/scene/gltf_accessors.hpp"
+#include "renderer/scene/mesh_utils.hpp"
+
+#include <glm/gtc/type_ptr.hpp>
+#include <glm/gtx/string_cast.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <optional>
+#include <set>
+#include <utility>
+
+namespace bounce::scene::gltf {
+namespace {
+
+// ------------------------------------------------------------------------------------------------
+// Topology: strips and fans.
+
+// Triangle lists from strips and fans, with the winding the spec gives for each triangle.
+std::vector<std::uint32_t> triangles_from_strip(const std::vector<std::uint32_t>& strip) {
+    std::vector<std::uint32_t> out;
+    for (std::size_t i = 0; i + 2 < strip.size(); ++i) {
+        const bool odd = i % 2 == 1;
+        out.insert(out.end(), {strip[i], strip[i + (odd ? 2 : 1)], strip[i + (odd ? 1 : 2)]});
+    }
+    return out;
+}
+
+std::vector<std::uint32_t> triangles_from_fan(const std::vector<std::uint32_t>& fan) {
+    std::vector<std::uint32_t> out;
+    for (std::size_t i = 1; i + 1 < fan.size(); ++i) out.insert(out.end(), {fan[i], fan[i + 1], fan[0]});
+    return out;
+}
+
+// ------------------------------------------------------------------------------------------------
+// The conversion from the tinygltf model to the scene model.
+
+// Unique names within one kind of thing: "name", "name_2", ...; `fallback` when the file has none.
+class NameRegistry {
+public:
+    std::string claim(const std::string& wanted, const std::string& fallback) {
+        const std::string base = wanted.empty() ? fallback : wanted;
+        std::string name = base;
+        for (int suffix = 2; used_.contains(name); ++suffix) name = fmt::format("{}_{}", base, suffix);
+        used_.insert(name);
+        return name;
+    }
+
+private:
+    std::set<std::string> used_;
+};
+
+const tinygltf::Value* extension_object(const tinygltf::ExtensionMap& extensions, const std::string& name) {
+    const auto it = extensions.find(name);
+    if (it == extensions.end() || !it->second.IsObject()) return nullptr;
+    return &it->second;
+}
+
+std::optional<double> number_member(const tinygltf::Value& object, const std::string& key) {
+    if (!object.Has(key) || !object.Get(key).IsNumber()) return std::nullopt;
+    return object.Get(key).GetNumberAsDouble();
+}
+
+template <typename Vec>
+Vec to_vec(const std::vector<double>& values, const Vec& fallback) {
+    if (values.size() != static_cast<std::size_t>(Vec::length())) return fallback;
+    Vec out;
+    for (int i = 0; i < Vec::length(); ++i) out[i] = static_cast<float>(values[static_cast<std::size_t>(i)]);
+    return out;
+}
+
+glm::mat4 local_transform(const tinygltf::Node& node) {
+    if (node.matrix.size() == 16) {
+        glm::mat4 matrix;
+        for (int i = 0; i < 16; ++i) {
+            glm::value_ptr(matrix)[i] = static_cast<float>(node.matrix[std::size_t(i)]);
+        }
+        return matrix;  // both glTF and glm are column-major
+    }
+    const glm::vec3 translation = to_vec(node.translation, glm::vec3(0.0f));
+    const glm::vec3 scale = to_vec(node.scale, glm::vec3(1.0f));
+    const glm::vec4 xyzw = to_vec(node.rotation, glm::vec4(0.0f, 0.0f, 0.0f, 1.0f));
+    glm::quat rotation(xyzw.w, xyzw.x, xyzw.y, xyzw.z);
+    const float length = glm::length(rotation);
+    rotation = length > 1e-12f ? rotation / length : glm::quat(1.0f, 0.0f, 0.0f, 0.0f);
+    glm::mat4 matrix = glm::mat4_cast(rotation);
+    matrix[0] *= scale.x;
+    matrix[1] *= scale.y;
+    matrix[2] *= scale.z;
+    matrix[3] = glm::vec4(translation, 1.0f);
+    return matrix;
+}
+
+glm::vec3 normalized_or(const glm::vec3& v, const glm::vec3& fallback) {
+    const float length = glm::length(v);
+    return length > 1e-12f && std::isfinite(length) ? v / length : fallback;
+}
+
+// The rotation of a world transform with scale and shear removed; -Z (forward) and +Y (up) are kept.
+glm::quat rotation_of(const glm::mat4& world) {
+    const glm::vec3 back = normalized_or(glm::vec3(world[2]), glm::vec3(0.0f, 0.0f, 1.0f));
+    glm::vec3 up = glm::vec3(world[1]) - back * glm::dot(back, glm::vec3(world[1]));
+    up = normalized_or(up,
+                       std::abs(back.y) < 0.9f ? glm::vec3(0.0f, 1.0f, 0.0f) : glm::vec3(1.0f, 0.0f, 0.0f));
+    up = glm::normalize(up - back * glm::dot(back, up));
+    const glm::vec3 right = glm::cross(up, back);
+    return glm::normalize(glm::quat_cast(glm::mat3(right, up, back)));
+}
+
+class Converter {
+public:
+    Converter(const tinygltf::Model& model, const LoadContext& context, Warnings& warnings)
+        : model_(model), context_(context), warnings_(warnings) {}
+
+    Scene convert(std::string name) {
+        scene_.name = std::move(name);
+        check_accessor_bounds(model_);
+        convert_materials();
+        convert_meshes();
+        flatten_nodes();
+        if (scene_.cameras.empty()) add_default_camera();
+        warn_if_unlit();
+        return std::move(scene_);
+    }
+
+private:
+    // -- materials and textures
+
+    void convert_materials() {
+        for (std::size_t m = 0; m < model_.materials.size(); ++m) {
+            const tinygltf::Material& source = model_.materials[m];
+            const tinygltf::PbrMetallicRoughness& pbr = source.pbrMetallicRoughness;
+            const std::string where = fmt::format("material {} ('{}')", m, source.name);
+            Material material;
+            material.name = source.name.empty() ? fmt::format("material_{}", m) : source.name;
+            material.base_color = to_vec(pbr.baseColorFactor, glm::vec4(1.0f));
+            material.metallic = static_cast<float>(pbr.metallicFactor);
+            material.roughness = static_cast<float>(pbr.roughnessFactor);
+            material.emissive = to_vec(source.emissiveFactor, glm::vec3(0.0f));
+            if (const tinygltf::Value* strength =
+                    extension_object(source.extensions, "KHR_materials_emissive_strength")) {
+                material.emissive *=
+                    static_cast<float>(number_member(*strength, "emissiveStrength").value_or(1.0));
+            }
+            if (const tinygltf::Value* specular =
+                    extension_object(source.extensions, "KHR_materials_specular")) {
+                material.specular =
+                    static_cast<float>(number_member(*specular, "specularFactor").value_or(1.0));
+            }
+            material.normal_scale = static_cast<float>(source.normalTexture.scale);
+            material.double_sided = source.doubleSided;
+            material.base_color_texture =
+                texture_ref(pbr.baseColorTexture, true, where + " baseColorTexture");
+            material.metallic_roughness_texture =
+                texture_ref(pbr.metallicRoughnessTexture, false, where + " metallicRoughnessTexture");
+            material.normal_texture = texture_ref(source.normalTexture, false, where + " normalTexture");
+            material.emissive_texture = texture_ref(source.emissiveTexture, true, where + " emissiveTexture");
+            scene_.materials.push_back(std::move(material));
+        }
+    }
+
+    // A texture reference; on any problem the reference is none, so the factor alone applies.
+    // An image used both as sRGB and as linear data becomes two Textures, one per colour space.
+    template <typename Info>
+    TextureRef texture_ref(const Info& info, bool srgb, const std::string& where) {
+        TextureRef ref;
+        if (info.index < 0) return ref;
+        if (static_cast<std::size_t>(info.index) >= model_.textures.size()) {
+            reject(fmt::format("{} refers to texture {} (there are {})", where, info.index,
+                               model_.textures.size()));
+        }
+        if (info.extensions.count("KHR_texture_transform") != 0) {
+            warnings_.add(fmt::format("{}: KHR_texture_transform is not applied", where));
+        }
+        if (info.texCoord > 1) {
+            warnings_.add(
+                fmt::format("{} uses TEXCOORD_{}; only 0 and 1 are supported, the texture is ignored", where,
+                            info.texCoord));
+            return ref;
+        }
+        const int image_index = model_.textures[static_cast<std::size_t>(info.index)].source;
+        if (image_index < 0) {
+            warnings_.add(fmt::format("{}: texture {} has no image Bounce can read; the texture is ignored",
+                                      where, info.index));
+            return ref;
+        }
+        if (static_cast<std::size_t>(image_index) >= model_.images.size()) {
+            reject(fmt::format("texture {} refers to image {} (there are {})", info.index, image_index,
+                               model_.images.size()));
+        }
+        const auto key = std::pair{image_index, srgb};
+        if (const auto made = textures_made_.find(key); made != textures_made_.end()) {
+            ref.texture = made->second;
+        } else {
+            std::optional<Texture> texture = convert_image(image_index, info.index);
+            if (!texture) return ref;
+            texture->srgb = srgb;
+            ref.texture = static_cast<int>(scene_.textures.size());
+            scene_.textures.push_back(std::move(*texture));
+            textures_made_[key] = ref.texture;
+        }
+        ref.uv_set = info.texCoord;
+        return ref;
+    }
+
+    std::optional<Texture> convert_image(int image_index, int texture_index) {
+        const tinygltf::Image& image = model_.images[static_cast<std::size_t>(image_index)];
+        const std::string label = !image.uri.empty()    ? image.uri
+                                  : !image.name.empty() ? image.name
+                                                        : fmt::format("image_{}", image_index);
+        auto unusable = [&](const std::string& reason) -> std::optional<Texture> {
+            if (images_warned_.insert(image_index).second) {
+                warnings_.add(fmt::format("texture {} (image {} '{}'): {}; materials use their factors alone",
+                                          texture_index, image_index, label, reason));
+            }
+            return std::nullopt;
+        };
+        if (const auto failure = context_.image_failures.find(image_index);
+            failure != context_.image_failures.end()) {
+            return unusable(failure->second);
+        }
+        if (image.image.empty()) return unusable("the image file is missing or unreadable");
+        const int bytes_per_channel = image.bits == 16 ? 2 : 1;
+        const std::size_t pixels =
+            static_cast<std::size_t>(std::max(image.width, 0)) * std::max(image.height, 0);
+        if (image.bits != 8 && image.bits != 16) {
+            return unusable(fmt::format("{}-bit images are not supported", image.bits));
+        }
+        if (image.component < 1 || image.component > 4 || pixels == 0 ||
+            image.image.size() != pixels * image.component * bytes_per_channel) {
+            return unusable("the decoded pixel data has an unexpected layout");
+        }
+        Texture texture;
+        texture.name = label;
+        texture.width = image.width;
+        texture.height = image.height;
+        texture.rgba8.resize(pixels * 4);
+        auto channel = [&](std::size_t index) -> std::uint8_t {
+            if (bytes_per_channel == 1) return image.image[index];
+            // 16-bit samples are in host order (stb_image); keep the high byte, rounded.
+            const auto value = load_unaligned<std::uint16_t>(image.image.data() + index * 2);
+            return static_cast<std::uint8_t>((value * 255u + 32767u) / 65535u);
+        };
+        const std::size_t components = static_cast<std::size_t>(image.component);
+        for (std::size_t p = 0; p < pixels; ++p) {
+            const std::size_t in = p * components;
+            std::uint8_t* out = texture.rgba8.data() + p * 4;
+            if (components <= 2) {  // grey or grey + alpha
+                out[0] = out[1] = out[2] = channel(in);
+                out[3] = components == 2 ? channel(in + 1) : 255;
+            } else {
+                out[0] = channel(in);
+                out[1] = channel(in + 1);
+                out[2] = channel(in + 2);
+                out[3] = components == 4 ? channel(in + 3) : 255;
+            }
+        }
+        return texture;
+    }
+
+    // -- meshes
+
+    void convert_meshes() {
+        for (std::size_t m = 0; m < model_.meshes.size(); ++m) {
+            const tinygltf::Mesh& source = model_.meshes[m];
+            Mesh mesh;
+            mesh.name = source.name.empty() ? fmt::format("mesh_{}", m) : source.name;
+            for (std::size_t p = 0; p < source.primitives.size(); ++p) {
+                std::optional<Primitive> primitive = convert_primitive(source.primitives[p], m, p);
+                if (!primitive) continue;
+                mesh.bounds.extend(primitive->bounds);
+                mesh.primitives.push_back(std::move(*primitive));
+            }
+            scene_.meshes.push_back(std::move(mesh));
+        }
+    }
+
+    std::optional<Primitive> convert_primitive(const tinygltf::Primitive& source, std::size_t mesh_index,
+                                               std::size_t primitive_index) {
+        const std::string where = fmt::format("mesh {} primitive {}", mesh_index, primitive_index);
+        const int mode = source.mode < 0 ? TINYGLTF_MODE_TRIANGLES : source.mode;
+        if (mode == TINYGLTF_MODE_POINTS || mode == TINYGLTF_MODE_LINE || mode == TINYGLTF_MODE_LINE_LOOP ||
+            mode == TINYGLTF_MODE_LINE_STRIP) {
+            warnings_.add(
+                fmt::format("{}: points and lines (mode {}) are not rendered; skipped", where, mode));
+            return std::nullopt;
+        }
+        if (mode != TINYGLTF_MODE_TRIANGLES && mode != TINYGLTF_MODE_TRIANGLE_STRIP &&
+            mode != TINYGLTF_MODE_TRIANGLE_FAN) {
+            reject(fmt::format("{}: unknown primitive mode {}", where, mode));
+        }
+        if (!source.targets.empty()) {
+            warnings_.add(fmt::format("{}: morph targets are ignored (the base shape is used)", where));
+        }
+
+        Primitive primitive;
+        primitive.material = source.material;
+        if (source.material >= 0 && static_cast<std::size_t>(source.material) >= model_.materials.size()) {
+            reject(fmt::format("{} refers to material {} (there are {})", where, source.material,
+                               model_.materials.size()));
+        }
+
+        constexpr int float_type = TINYGLTF_COMPONENT_TYPE_FLOAT;
+        const int position_accessor = attribute_accessor(source, "POSITION");
+        if (position_accessor < 0) reject(fmt::format("{} has no POSITION attribute", where));
+        primitive.positions = read_vectors<glm::vec3>(view_accessor(
+            model_, position_accessor, where + " POSITION", TINYGLTF_TYPE_VEC3, {float_type}, false));
+        const std::size_t vertex_count = primitive.positions.size();
+        for (std::size_t v = 0; v < vertex_count; ++v) {
+            if (!finite(primitive.positions[v])) {
+                reject(fmt::format("{}: vertex {} has a non-finite position {}", where, v,
+                                   glm::to_string(primitive.positions[v])));
+            }
+        }
+
+        primitive.indices = read_primitive_indices(source, where, vertex_count);
+        if (mode == TINYGLTF_MODE_TRIANGLE_STRIP) primitive.indices = triangles_from_strip(primitive.indices);
+        if (mode == TINYGLTF_MODE_TRIANGLE_FAN) primitive.indices = triangles_from_fan(primitive.indices);
+        if (primitive.indices.size() % 3 != 0) {
+            reject(fmt::format("{}: {} vertex indices do not make whole triangles (not a multiple of 3)",
+                               where, primitive.indices.size()));
+        }
+
+        const AttributeRead read{source, where, vertex_count};
+        const std::initializer_list<int> uv_components = {float_type, TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE,
+                                                          TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT};
+        primitive.uv0 =
+            read_attribute<glm::vec2>(read, "TEXCOORD_0", TINYGLTF_TYPE_VEC2, uv_components, true);
+        primitive.uv1 =
+            read_attribute<glm::vec2>(read, "TEXCOORD_1", TINYGLTF_TYPE_VEC2, uv_components, true);
+        const auto file_normals =
+            read_attribute<glm::vec3>(read, "NORMAL", TINYGLTF_TYPE_VEC3, {float_type}, false);
+        const auto file_tangents =
+            read_attribute<glm::vec4>(read, "TANGENT", TINYGLTF_TYPE_VEC4, {float_type}, false);
+
+        fill_normals(primitive, file_normals, where);
+        fill_tangents(primitive, file_tangents, where);
+        for (const glm::vec3& position : primitive.positions) primitive.bounds.extend(position);
+        return primitive;
+    }
+
+    static int attribute_accessor(const tinygltf::Primitive& source, const char* name) {
+        const auto it = source.attributes.find(name);
+        return it == source.attributes.end() ? -1 : it->second;
+    }
+
+    struct AttributeRead {
+        const tinygltf::Primitive& source;
+        const std::string& where;
+        std::size_t vertex_count;
+    };
+
+    // An optional vertex attribute (empty when absent); it must match POSITION element for element.
+    template <typename Vec>
+    std::vector<Vec> read_attribute(const AttributeRead& read, const char* name, int type,
+                                    std::initializer_list<int> components, bool normalized_ints) const {
+        const int accessor = attribute_accessor(read.source, name);
+        if (accessor < 0) return {};
+        std::vector<Vec> values = read_vectors<Vec>(view_accessor(
+            model_, accessor, fmt::format("{} {}", read.where, name), type, components, normalized_ints));
+        if (values.size() != read.vertex_count) {
+            reject(fmt::format("{}: {} has {} elements but POSITION has {}", read.where, name, values.size(),
+                               read.vertex_count));
+        }
+        return values;
+    }
+
+    std::vector<std::uint32_t> read_primitive_indices(const tinygltf::Primitive& source,
+                                                      const std::string& where, std::size_t vertex_count) {
+        if (source.indices < 0) {  // non-indexed: the vertices in order
+            std::vector<std::uint32_t> indices(vertex_count);
+            for (std::size_t i = 0; i < vertex_count; ++i) indices[i] = static_cast<std::uint32_t>(i);
+            return indices;
+        }
+        std::vector<std::uint32_t> indices = read_indices(
+            view_accessor(model_, source.indices, where + " indices", TINYGLTF_TYPE_SCALAR,
+                          {TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT,
+                           TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT},
+                          false));
+        for (std::size_t i = 0; i < indices.size(); ++i) {
+            if (indices[i] >= vertex_count) {
+                reject(fmt::format("{}: index {} at position {} is out of range ({} vertices)", where,
+                                   indices[i], i, vertex_count));
+            }
+        }
+        return indices;
+    }
+
+    void fill_normals(Primitive& primitive, const std::vector<glm::vec3>& file_normals,
+                      const std::string& where) {
+        if (file_normals.empty()) {
+            primitive.normals = vertex_normals(primitive);
+            return;
+        }
+        primitive.normals = file_normals;
+        std::vector<glm::vec3> generated;  // only when the file has unusable normals
+        std::size_t replaced = 0;
+        for (std::size_t v = 0; v < primitive.normals.size(); ++v) {
+            glm::vec3& normal = primitive.normals[v];
+            const float length = glm::length(normal);
+            if (length > 1e-12f && std::isfinite(length)) {
+                normal /= length;
+                continue;
+            }
+            if (generated.empty()) generated = vertex_normals(primitive);
+            normal = generated[v];
+            ++replaced;
+        }
+        if (replaced > 0) {
+            warnings_.add(
+                fmt::format("{}: {} zero or non-finite normals replaced by generated ones", where, replaced));
+        }
+    }
+
+    void fill_tangents(Primitive& primitive, const std::vector<glm::vec4>& file_tangents,
+                       const std::string& where) {
+        const std::size_t vertex_count = primitive.positions.size();
+        if (!file_tangents.empty()) {
+            // Made orthogonal to the (possibly repaired) normal; one along the normal gives no frame.
+            primitive.tangents.resize(vertex_count);
+            std::size_t replaced = 0;
+            for (std::size_t v = 0; v < vertex_count; ++v) {
+                const glm::vec3& normal = primitive.normals[v];
+                const glm::vec3 xyz(file_tangents[v]);
+                const glm::vec3 orthogonal = xyz - normal * glm::dot(normal, xyz);
+                const float length = glm::length(orthogonal);
+                if (length > 1e-6f * std::max(glm::length(xyz), 1e-30f) && std::isfinite(length)) {
+                    primitive.tangents[v] = {orthogonal / length, file_tangents[v].w < 0.0f ? -1.0f : 1.0f};
+                } else {
+                    primitive.tangents[v] = fallback_tangent(normal);
+                    ++replaced;
+                }
+            }
+            if (replaced > 0) {
+                warnings_.add(
+                    fmt::format("{}: {} tangents that are zero, non-finite or along the normal "
+                                "were replaced",
+                                where, replaced));
+            }
+            return;
+        }
+        const Material& material = scene_.material(primitive.material);
+        const std::vector<glm::vec2>& uvs =
+            material.normal_texture.uv_set == 1 ? primitive.uv1 : primitive.uv0;
+        if (material.normal_texture.valid() && uvs.size() == vertex_count) {
+            primitive.tangents = uv_tangents(primitive, uvs);
+            return;
+        }
+        primitive.tangents.resize(vertex_count);
+        for (std::size_t v = 0; v < vertex_count; ++v) {
+            primitive.tangents[v] = fallback_tangent(primitive.normals[v]);
+        }
+    }
+
+    // -- node hierarchy, lights and cameras
+
+    const std::string& node_label(std::size_t index) const { return model_.nodes[index].name; }
+
+    // Each node's parent (-1 for roots); a node with two parents or a cycle is refused, which also
+    // bounds the traversal below by the node count.
+    std::vector<int> parents() const {
+        const std::size_t node_count = model_.nodes.size();
+        std::vector<int> parent(node_count, -1);
+        for (std::size_t n = 0; n < node_count; ++n) {
+            for (const int child : model_.nodes[n].children) {
+                if (child < 0 || static_cast<std::size_t>(child) >= node_count) {
+                    reject(fmt::format("node {} ('{}') has child {} (there are {} nodes)", n, node_label(n),
+                                       child, node_count));
+                }
+                if (static_cast<std::size_t>(child) == n) {
+                    reject(fmt::format("node {} ('{}') is its own child: the node hierarchy has a cycle", n,
+                                       node_label(n)));
+                }
+                int& slot = parent[static_cast<std::size_t>(child)];
+                if (slot >= 0) {
+                    reject(fmt::format("node {} ('{}') has two parents, nodes {} and {}", child,
+                                       node_label(static_cast<std::size_t>(child)), slot, n));
+                }
+                slot = static_cast<int>(n);
+            }
+        }
+        // Walk up from each node; meeting a node of the current walk again means a cycle.
+        enum class State : std::uint8_t { unknown, walking, done };
+        std::vector<State> state(node_count, State::unknown);
+        std::vector<std::size_t> walk;
+        for (std::size_t start = 0; start < node_count; ++start) {
+            walk.clear();
+            int at = static_cast<int>(start);
+            while (at >= 0 && state[static_cast<std::size_t>(at)] == State::unknown) {
+                state[static_cast<std::size_t>(at)] = State::walking;
+                walk.push_back(static_cast<std::size_t>(at));
+                at = parent[static_cast<std::size_t>(at)];
+            }
+            if (at >= 0 && state[static_cast<std::size_t>(at)] == State::walking) {
+                reject(fmt::format("node {} ('{}') is its own ancestor: the node hierarchy has a cycle", at,
+                                   node_label(static_cast<std::size_t>(at))));
+            }
+            for (const std::size_t n : walk) state[n] = State::done;
+        }
+        return parent;
+    }
+
+    std::vector<int> root_nodes(const std::vector<int>& parent) {
+        const int scene_index =
+            model_.defaultScene >= 0 ? model_.defaultScene : (model_.scenes.empty() ? -1 : 0);
+        if (scene_index >= 0 && static_cast<std::size_t>(scene_index) < model_.scenes.size()) {
+            return model_.scenes[static_cast<std::size_t>(scene_index)].nodes;
+        }
+        if (scene_index >= 0 && !model_.scenes.empty()) {
+            reject(fmt::format("the default scene {} does not exist (there are {} scenes)", scene_index,
+                               model_.scenes.size()));
+        }
+        std::vector<int> roots;
+        for (std::size_t n = 0; n < parent.size(); ++n) {
+            if (parent[n] < 0) roots.push_back(static_cast<int>(n));
+        }
+        if (!model_.nodes.empty()) {
+            warnings_.add(fmt::format("the file has no scenes; all {} root nodes are used", roots.size()));
+        }
+        return roots;
+    }
+
+    void flatten_nodes() {
+        const std::vector<int> parent = parents();
+        const std::vector<int> roots = root_nodes(parent);
+        std::vector<bool> visited(model_.nodes.size(), false);
+        std::vector<std::pair<int, glm::mat4>> pending;  // explicit stack: deep hierarchies are fine
+        for (auto root = roots.rbegin(); root != roots.rend(); ++root) {
+            if (*root < 0 || static_cast<std::size_t>(*root) >= model_.nodes.size()) {
+                reject(
+                    fmt::format("the scene lists node {} (there are {} nodes)", *root, model_.nodes.size()));
+            }
+            pending.emplace_back(*root, glm::mat4(1.0f));
+        }
+        while (!pending.empty()) {
+            const auto [index, parent_world] = pending.back();
+            pending.pop_back();
+            if (visited[static_cast<std::size_t>(index)]) {
+                warnings_.add(
+                    fmt::format("node {} is reached twice from the scene; its second use is skipped", index));
+                continue;
+            }
+            visited[static_cast<std::size_t>(index)] = true;
+            const tinygltf::Node& node = model_.nodes[static_cast<std::size_t>(index)];
+            const glm::mat4 world = parent_world * local_transform(node);
+            add_node_contents(static_cast<std::size_t>(index), node, world);
+            for (auto child = node.children.rbegin(); child != node.children.rend(); ++child) {
+                pending.emplace_back(*child, world);
+            }
+        }
+    }
+
+    void add_node_contents(std::size_t index, const tinygltf::Node& node, const glm::mat4& world) {
+        if (node.mesh >= 0) {
+            if (static_cast<std::size_t>(node.mesh) >= scene_.meshes.size()) {
+                reject(fmt::format("node {} ('{}') refers to mesh {} (there are {})", index, node.name,
+                                   node.mesh, scene_.meshes.size()));
+            }
+            if (node.skin >= 0) warnings_.add(fmt::format("node {}: skinning is ignored (bind pose)", index));
+            Object object;
+            object.name = object_names_.claim(node.name, fmt::format("object_{}", scene_.objects.size()));
+            object.mesh = node.mesh;
+            object.initial_transform = object.transform = world;
+            scene_.objects.push_back(std::move(object));
+        }
+        if (node.camera >= 0) add_camera(index, node, world);
+        if (const tinygltf::Value* punctual = extension_object(node.extensions, "KHR_lights_punctual")) {
+            if (const std::optional<double> light = number_member(*punctual, "light")) {
+                add_light(index, node, static_cast<int>(*light), world);
+            }
+        }
+    }
+
+    void add_camera(std::size_t node_index, const tinygltf::Node& node, const glm::mat4& world) {
+        if (static_cast<std::size_t>(node.camera) >= model_.cameras.size()) {
+            reject(fmt::format("node {} ('{}') refers to camera {} (there are {})", node_index, node.name,
+                               node.camera, model_.cameras.size()));
+        }
+        const tinygltf::Camera& source = model_.cameras[static_cast<std::size_t>(node.camera)];
+        if (source.type != "perspective") {
+            warnings_.add(
+                fmt::format("camera {} ('{}') is {}; only perspective cameras are supported, skipped",
+                            node.camera, source.name, source.type));
+            return;
+        }
+        const double yfov = source.perspective.yfov;
+        if (!(yfov > 0.0 && yfov < 3.14159265358979)) {
+            reject(fmt::format("camera {} ('{}') has the vertical field of view {} (must be in (0, pi))",
+                               node.camera, source.name, yfov));
+        }
+        Camera camera;
+        camera.name = camera_names_.claim(!node.name.empty() ? node.name : source.name,
+                                          fmt::format("camera_{}", scene_.cameras.size()));
+        camera.position = glm::vec3(world[3]);
+        camera.orientation = rotation_of(world);
+        camera.vertical_fov = static_cast<float>(yfov);
+        camera.z_near = static_cast<float>(std::max(source.perspective.znear, 0.0));
+        camera.z_far = static_cast<float>(std::max(source.perspective.zfar, 0.0));  // 0 when absent: derived
+        scene_.cameras.push_back(std::move(camera));
+    }
+
+    void add_light(std::size_t node_index, const tinygltf::Node& node, int light_index,
+                   const glm::mat4& world) {
+        if (light_index < 0 || static_cast<std::size_t>(light_index) >= model_.lights.size()) {
+            reject(fmt::format("node {} ('{}') refers to light {} (there are {})", node_index, node.name,
+                               light_index, model_.lights.size()));
+        }
+        const tinygltf::Light& source = model_.lights[static_cast<std::size_t>(light_index)];
+        Light light;
+        if (source.type == "point") {
+            light.type = LightType::point;
+        } else if (source.type == "spot") {
+            light.type = LightType::spot;
+        } else if (source.type == "directional") {
+            light.type = LightType::directional;
+        } else {
+            warnings_.add(
+                fmt::format("light {} has the unknown type '{}'; skipped", light_index, source.type));
+            return;
+        }
+        light.name = light_names_.claim(!source.name.empty() ? source.name : node.name,
+                                        fmt::format("light_{}", scene_.lights.size()));
+        light.color = to_vec(source.color, glm::vec3(1.0f));
+        // The number is taken as is and read radiometrically: W/sr for point and spot lights,
+        // W/m^2 for directional ones (KHR_lights_punctual's photometric units are not converted).
+        light.intensity = static_cast<float>(source.intensity);
+        light.position = glm::vec3(world[3]);
+        // The light shines along the node's local -Z.
+        light.direction =
+            normalized_or(glm::mat3(world) * glm::vec3(0.0f, 0.0f, -1.0f), glm::vec3(0.0f, 0.0f, -1.0f));
+        if (light.type == LightType::spot) {
+            constexpr float half_pi = 1.57079633f;
+            light.outer_cone = std::clamp(static_cast<float>(source.spot.outerConeAngle), 1e-4f, half_pi);
+            light.inner_cone =
+                std::clamp(static_cast<float>(source.spot.innerConeAngle), 0.0f, light.outer_cone);
+        }
+        scene_.lights.push_back(std::move(light));
+    }
+
+    // Physically, a scene without lights or emission renders black; say so instead of leaving a
+    // user to wonder (light.set adds a light).
+    void warn_if_unlit() {
+        if (!scene_.lights.empty()) return;
+        for (const Material& material : scene_.materials) {
+            if (glm::any(glm::greaterThan(material.emissive, glm::vec3(0.0f)))) return;
+        }
+        warnings_.add("the scene has no lights and no emissive materials: frames will be black until "
+                      "a light is added (light.set)");
+    }
+
+    // A camera that sees the whole scene.
+    void add_default_camera() {
+        Camera camera = framing_camera(scene_.world_bounds());
+        camera.name = camera_names_.claim("default", "default");
+        scene_.cameras.push_back(std::move(camera));
+    }
+
+    const tinygltf::Model& model_;
+    const LoadContext& context_;
+    Warnings& warnings_;
+    Scene scene_;
+    std::map<std::pair<int, bool>, int> textures_made_;
+    std::set<int> images_warned_;
+    NameRegistry object_names_;
+    NameRegistry camera_names_;
+    NameRegistry light_names_;
+};
+
+}  // namespace
+
+Scene convert_model(const tinygltf::Model& model, const LoadContext& context, Warnings& warnings,
+                    std::string name) {
+    return Converter(model, context, warnings).convert(std::move(name));
+}
+
+}  // namespace bounce::scene::gltf

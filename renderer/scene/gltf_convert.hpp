@@ -1,0 +1,20 @@
+// The conversion from a loaded tinygltf model to the scene model. Internal to the importer.
+#pragma once
+
+#include "renderer/scene/gltf_detail.hpp"
+#include "renderer/scene/scene.hpp"
+
+#include <tiny_gltf.h>
+
+#include <string>
+
+namespace bounce::scene::gltf {
+
+// The scene `model` describes: accessors checked, then materials and textures, meshes (normals and
+// tangents generated where the file has none or unusable ones), the node hierarchy flattened into
+// objects, lights and cameras, and a default camera when there is none. Faults throw InputError;
+// what falls back adds to `warnings`.
+Scene convert_model(const tinygltf::Model& model, const LoadContext& context, Warnings& warnings,
+                    std::string name);
+
+}  // namespace bounce::scene::gltf

@@ -1,0 +1,50 @@
+// What the parts of the glTF importer share (renderer/scene/gltf_*.cpp; the API is gltf_import.hpp):
+// the limits on untrusted input, faults and warnings, and what tinygltf's callbacks record while it
+// loads.
+#pragma once
+
+#include "renderer/base/error.hpp"
+#include "renderer/base/log.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace bounce::scene::gltf {
+
+using Json = nlohmann::json;
+
+// Limits that keep a hostile file from asking for unbounded memory.
+inline constexpr std::uint64_t max_accessor_count = std::uint64_t{1} << 28;
+inline constexpr int max_image_side = 16384;
+inline constexpr std::uint64_t max_input_bytes = 0xFFFFFFFFull;  // tinygltf takes lengths as unsigned int
+
+// A fault in the input: throws InputError with `message`.
+[[noreturn]] inline void reject(const std::string& message) { throw InputError(message); }
+
+// Warnings go to the log and to Scene::warnings.
+class Warnings {
+public:
+    explicit Warnings(std::string source) : source_(std::move(source)) {}
+    void add(const std::string& message) {
+        log::warn("gltf", "{}: {}", source_, message);
+        list_.push_back(message);
+    }
+    std::vector<std::string> take() { return std::move(list_); }
+
+private:
+    std::string source_;
+    std::vector<std::string> list_;
+};
+
+// What the callbacks installed by install_callbacks (gltf_validation.hpp) record during a load.
+struct LoadContext {
+    std::map<int, std::string> image_failures;  // image index -> why it has no pixels
+    std::vector<std::string> refused_paths;     // file reads refused for an upload
+};
+
+}  // namespace bounce::scene::gltf

@@ -1,0 +1,29 @@
+// Vertex attributes derived from a triangle list: normals and tangent frames, for meshes whose
+// source has none (glTF files without NORMAL or TANGENT, the built-in scenes).
+#pragma once
+
+#include "renderer/scene/scene.hpp"
+
+#include <cmath>
+#include <span>
+#include <vector>
+
+namespace bounce::scene {
+
+// All three components finite.
+inline bool finite(const glm::vec3& v) {
+    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
+
+// Area-weighted vertex normals of `primitive`'s triangles (positions and indices). A vertex that
+// only zero-area or non-finite triangles touch gets +Y rather than NaN.
+std::vector<glm::vec3> vertex_normals(const Primitive& primitive);
+
+// A unit tangent orthogonal to `normal` (w = +1), for vertices without a UV parameterization.
+glm::vec4 fallback_tangent(const glm::vec3& normal);
+
+// Tangent frames from the UV derivatives of `primitive`'s triangles (`uvs` per vertex; the primitive's
+// normals must be set), orthogonal to the normal, with the handedness in w.
+std::vector<glm::vec4> uv_tangents(const Primitive& primitive, std::span<const glm::vec2> uvs);
+
+}  // namespace bounce::scene
