@@ -255,7 +255,9 @@ int main(int argc, char** argv) {
             };
             auto resources = renderer.upload(bench_scene.scene);
             for (const auto& method : registry.names()) {
-                if (registry.find(method).device != methods::MethodDevice::gpu) continue;  // measured below
+                if (plan_frame(linear_request(method, "medium", {}, options.size)).site != FrameSite::gpu) {
+                    continue;  // CPU methods (the reference) are measured below
+                }
                 for (const auto& preset : methods::preset_names()) {
                     const RenderRequest request = linear_request(method, preset, {}, options.size);
                     renderer.render(*resources, request);  // warm-up: shaders, structures

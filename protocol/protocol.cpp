@@ -47,7 +47,7 @@ struct ErrorEntry {
     bool retryable;
 };
 
-constexpr std::array<ErrorEntry, 12> kErrors{{
+constexpr std::array<ErrorEntry, 13> kErrors{{
     {ErrorCode::bad_request, "bad_request", false},
     {ErrorCode::broken_frame, "broken_frame", false},
     {ErrorCode::unsupported, "unsupported", false},
@@ -60,6 +60,7 @@ constexpr std::array<ErrorEntry, 12> kErrors{{
     {ErrorCode::cancelled, "cancelled", false},
     {ErrorCode::shutting_down, "shutting_down", true},
     {ErrorCode::internal, "internal", false},
+    {ErrorCode::resource_exhausted, "resource_exhausted", false},
 }};
 
 const ErrorEntry& error_entry(ErrorCode code) {

@@ -71,6 +71,7 @@ enum class ErrorCode {
     cancelled,
     shutting_down,
     internal,
+    resource_exhausted,
 };
 
 std::string_view error_code_name(ErrorCode code);

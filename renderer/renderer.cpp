@@ -47,11 +47,7 @@ std::vector<methods::ResidentStructure> SceneResources::resident() const {
 scene::Camera camera_for(const scene::Scene& scene, const RenderRequest& request) {
     if (request.camera) return *request.camera;
     if (!scene.cameras.empty()) return scene.cameras.front();
-    const scene::Aabb bounds = scene.world_bounds();
-    if (bounds.empty()) return scene::Camera::look_at({0, 0, 1}, {0, 0, 0}, {0, 1, 0}, 0.8f);
-    const float radius = std::max(0.5f * glm::length(bounds.extent()), 1e-6f);
-    const float distance = radius / std::sin(0.4f) * 1.1f;
-    return scene::Camera::look_at(bounds.center() + glm::vec3(0, 0, distance), bounds.center(), {0, 1, 0}, 0.8f);
+    return scene::framing_camera(scene.world_bounds());
 }
 
 Renderer::Renderer(const gpu::DeviceChoice& device) : context_(gpu::EglContext::create(device)) {}

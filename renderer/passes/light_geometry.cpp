@@ -23,10 +23,6 @@ bool has_power(const scene::Light& light) {
     return radiant.x > 0.0f || radiant.y > 0.0f || radiant.z > 0.0f;
 }
 
-float farthest_distance(const scene::Aabb& bounds, const glm::vec3& from) {
-    return std::max(bounds.farthest_distance(from) * 1.01f, 1e-6f);
-}
-
 glm::vec3 up_for(const glm::vec3& direction) {
     return std::abs(direction.y) > 0.99f ? glm::vec3(0.0f, 0.0f, 1.0f) : glm::vec3(0.0f, 1.0f, 0.0f);
 }

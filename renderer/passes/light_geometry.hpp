@@ -1,5 +1,5 @@
-// What passes that draw from the lights' point of view share: which lights have power, how far a
-// light's view must reach, a stable up vector, the fingerprints that decide when maps are redrawn,
+// What passes that draw from the lights' point of view share: which lights have power (how far a
+// light's view must reach is scene::far_plane_distance), a stable up vector, the fingerprints that decide when maps are redrawn,
 // and the light uniforms of common/lights.glsl.
 #pragma once
 
@@ -13,16 +13,13 @@ namespace bounce::passes {
 // A light without power sends nothing: no map, no photons.
 bool has_power(const scene::Light& light);
 
-// The distance from `from` to the farthest corner of `bounds`, with 1% margin (a far plane).
-float farthest_distance(const scene::Aabb& bounds, const glm::vec3& from);
-
 // An up vector that is not parallel to `direction`.
 glm::vec3 up_for(const glm::vec3& direction);
 
-// FNV-1a over every object's mesh and transform (geometry itself is immutable once uploaded).
+// The content hash (renderer/base/hash.hpp) of every object's mesh and transform (geometry itself is immutable once uploaded).
 std::uint64_t geometry_fingerprint(const scene::Scene& scene);
 
-// FNV-1a over what light-view and shadow maps depend on: the lights, the geometry and the map size.
+// The content hash of what light-view and shadow maps depend on: the lights, the geometry and the map size.
 std::uint64_t light_view_fingerprint(const scene::Scene& scene, int size);
 
 // Sets u_light_type, u_light_position, u_light_direction, u_light_radiant, u_light_cos_inner and

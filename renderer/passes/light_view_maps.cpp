@@ -15,7 +15,7 @@ std::vector<LightViewMaps::View> light_views(const scene::Light& light, std::siz
     std::vector<LightViewMaps::View> views;
     const float texels = static_cast<float>(size);
     if (light.type == scene::LightType::point) {
-        const float far = farthest_distance(bounds, light.position);
+        const float far = scene::far_plane_distance(bounds, light.position);
         const glm::mat4 projection = glm::perspective(glm::radians(90.0f), 1.0f, far * 1e-4f, far);
         static const glm::vec3 forward[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
         static const glm::vec3 up[6] = {{0, -1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}, {0, -1, 0}, {0, -1, 0}};
@@ -28,7 +28,7 @@ std::vector<LightViewMaps::View> light_views(const scene::Light& light, std::siz
     }
     const glm::vec3 direction = glm::normalize(light.direction);
     if (light.type == scene::LightType::spot) {
-        const float far = farthest_distance(bounds, light.position);
+        const float far = scene::far_plane_distance(bounds, light.position);
         const float half_angle = std::clamp(light.outer_cone, 0.001f, 1.5533f);  // < 89 degrees
         const float texel = 2.0f * std::tan(half_angle) / texels;
         views.push_back({index,

@@ -72,7 +72,7 @@ void ShadowMaps::render(const PassContext& context, int size) {
         }
         const float far_depth = 1.0f;
         if (light.type == scene::LightType::point) {
-            map.far = farthest_distance(bounds, light.position);
+            map.far = scene::far_plane_distance(bounds, light.position);
             map.texel_angle = 2.0f / static_cast<float>(size);  // 90-degree faces
             const glm::mat4 projection = glm::perspective(glm::radians(90.0f), 1.0f, map.far * 1e-4f, map.far);
             static const glm::vec3 forward[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
@@ -94,7 +94,7 @@ void ShadowMaps::render(const PassContext& context, int size) {
         glClearNamedFramebufferfv(framebuffer_.id(), GL_DEPTH, 0, &far_depth);
         const glm::vec3 direction = glm::normalize(light.direction);
         if (light.type == scene::LightType::spot) {
-            map.far = farthest_distance(bounds, light.position);
+            map.far = scene::far_plane_distance(bounds, light.position);
             const float half_angle = std::clamp(light.outer_cone, 0.001f, 1.5533f);  // < 89 degrees
             map.texel_angle = 2.0f * std::tan(half_angle) / static_cast<float>(size);
             map.view_projection = glm::perspective(2.0f * half_angle, 1.0f, map.far * 1e-4f, map.far) *

@@ -36,9 +36,11 @@ glm::mat4 Camera::projection(float aspect, float far) const {
 }
 
 float Camera::far_plane_for(const Aabb& bounds) const {
-    if (bounds.empty()) return 1.0f;
-    // A little margin so the farthest corner is not clipped; never zero.
-    return std::max(bounds.farthest_distance(position) * 1.05f, 1e-6f);
+    return bounds.empty() ? 1.0f : far_plane_distance(bounds, position);
+}
+
+float far_plane_distance(const Aabb& bounds, const glm::vec3& from) {
+    return std::max(bounds.farthest_distance(from) * 1.01f, 1e-6f);
 }
 
 Camera Camera::look_at(const glm::vec3& eye, const glm::vec3& target, const glm::vec3& up,

@@ -60,17 +60,6 @@ float default_cone_aperture(int count) {
 
 namespace {
 
-// Whether any primitive's material (the default one included) reflects specularly.
-bool has_specular_lobe(const scene::Scene& scene) {
-    for (const scene::Mesh& mesh : scene.meshes) {
-        for (const scene::Primitive& primitive : mesh.primitives) {
-            const scene::Material& material = scene.material(primitive.material);
-            if (material.metallic > 0.0f || material.specular > 0.0f) return true;
-        }
-    }
-    return false;
-}
-
 class VctMethod final : public Method {
 public:
     std::string_view name() const override { return "vct"; }
@@ -210,7 +199,7 @@ private:
         gpu::GpuTimers::Scope timing(frame.timers, "vct_cone_trace");
         std::vector<std::string> defines = octree_.program_defines();
         // No specular cone, and no albedo table, where no material has a specular lobe.
-        const bool specular = frame.knob_int("specular") != 0 && has_specular_lobe(frame.scene);
+        const bool specular = frame.knob_int("specular") != 0 && frame.scene.has_glossy_material();
         if (specular) {
             defines.push_back("SPECULAR_CONE");
             if (!specular_albedo_) {
