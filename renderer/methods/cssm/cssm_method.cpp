@@ -1,6 +1,7 @@
 #include "renderer/methods/cssm/cssm_method.hpp"
 
 #include "renderer/base/log.hpp"
+#include "renderer/gpu/counter_buffer.hpp"
 #include "renderer/methods/cssm/bake_cache.hpp"
 #include "renderer/methods/cssm/hull_overlap.hpp"
 #include "renderer/passes/direct_light_pass.hpp"
@@ -375,7 +376,7 @@ private:
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CSSM_BINDING_RUN_DEPTH, run_depth_.id());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CSSM_BINDING_ROOTS, roots_.id());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CSSM_BINDING_LEVEL_NODES, level_nodes_.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CSSM_BINDING_COUNTERS, counters_.id());
+        counters_.bind(CSSM_BINDING_COUNTERS);
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CSSM_BINDING_GROUPS, groups_.id());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CSSM_BINDING_CSMS, csms_.id());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CSSM_BINDING_CSM_DIRECTIONS, csm_directions_.id());
@@ -555,20 +556,15 @@ private:
     }
 
     void reset_counters() {
-        if (!counters_) counters_ = gpu::Buffer(CSSM_COUNTERS * sizeof(std::uint32_t), nullptr, GL_DYNAMIC_STORAGE_BIT);
-        const std::array<std::uint32_t, CSSM_COUNTERS> zero{};
-        counters_.upload(0, sizeof(zero), zero.data());
-        glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+        if (!counters_) counters_ = gpu::CounterBuffer(CSSM_COUNTERS);
+        counters_.reset();
     }
 
     // receivers, nodes gathered, nodes visited
     void read_counters(std::array<std::uint64_t, 3>& out) const {
-        glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
-        std::array<std::uint32_t, CSSM_COUNTERS> c{};
-        glGetNamedBufferSubData(counters_.id(), 0, sizeof(c), c.data());
-        out = {c[CSSM_COUNTER_RECEIVERS],
-               (static_cast<std::uint64_t>(c[CSSM_COUNTER_NODES_HIGH]) << 32) | c[CSSM_COUNTER_NODES_LOW],
-               (static_cast<std::uint64_t>(c[CSSM_COUNTER_VISITED_HIGH]) << 32) | c[CSSM_COUNTER_VISITED_LOW]};
+        const gpu::CounterValues c = counters_.read();
+        out = {c[CSSM_COUNTER_RECEIVERS], c.wide(CSSM_COUNTER_NODES_LOW, CSSM_COUNTER_NODES_HIGH),
+               c.wide(CSSM_COUNTER_VISITED_LOW, CSSM_COUNTER_VISITED_HIGH)};
     }
 
     struct Batch {
@@ -583,7 +579,8 @@ private:
     std::uint64_t bake_generation_ = 0;
     std::uint64_t lighting_ = 0;
     std::size_t bakes_ = 0, bakes_loaded_ = 0, atlas_solutions_ = 0;
-    gpu::Buffer texels_, nodes_, node_radiance_, pixel_runs_, run_start_, run_depth_, level_nodes_, roots_, counters_;
+    gpu::Buffer texels_, nodes_, node_radiance_, pixel_runs_, run_start_, run_depth_, level_nodes_, roots_;
+    gpu::CounterBuffer counters_;
     gpu::Buffer groups_, csms_, csm_directions_, csm_nearest_;
     std::vector<std::uint32_t> group_run_base_;
     unsigned csm_count_ = 0;
