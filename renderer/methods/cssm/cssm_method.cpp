@@ -49,11 +49,6 @@ struct GpuCsm {
     glm::uvec4 group;
 };
 
-void dispatch_1d(std::size_t items) {
-    const auto groups = static_cast<GLuint>(std::max<std::size_t>(1, (items + 63) / 64));
-    glDispatchCompute(groups, 1, 1);
-}
-
 template <typename T>
 gpu::Buffer storage(const std::vector<T>& data, GLbitfield flags = 0) {
     return gpu::Buffer(std::max<std::size_t>(sizeof(T), data.size() * sizeof(T)), data.empty() ? nullptr : data.data(), flags);
@@ -402,14 +397,14 @@ private:
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CSSM_BINDING_TEXEL_OUT, direct_.id());
             program.set("u_texel_count", texel_count);
             program.set("u_emission_only", 1);
-            dispatch_1d(texel_count);
+            program.dispatch_threads(texel_count);
             program.set("u_emission_only", 0);
             for (std::size_t l = 0; l < frame.scene.lights.size(); ++l) {
                 if (!shadows_.has_map(l)) continue;
                 glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
                 passes::set_light_uniforms(program, frame.scene.lights[l]);
                 shadows_.bind(program, l);
-                dispatch_1d(texel_count);
+                program.dispatch_threads(texel_count);
             }
             glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
         }
@@ -429,7 +424,7 @@ private:
                 gather.set("u_first_root", batches_[b].first);
                 gather.set("u_root_count", batches_[b].count);
                 gather.set("u_first_batch", b == 0 ? 1 : 0);
-                dispatch_1d(texel_count);
+                gather.dispatch_threads(texel_count);
                 glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
             }
             const gpu::ShaderProgram& finish = frame.shaders.get(gpu::ProgramSource::compute_shader("cssm/bounce.comp"));
@@ -439,7 +434,7 @@ private:
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CSSM_BINDING_TEXEL_OUT, total_.id());
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CSSM_BINDING_TEXEL_INDIRECT, indirect_.id());
             finish.set("u_texel_count", texel_count);
-            dispatch_1d(texel_count);
+            finish.dispatch_threads(texel_count);
             glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
             std::swap(bounce_, irradiance_);  // this bounce's exitance is the next one's source
         }
@@ -458,14 +453,14 @@ private:
         program.set("u_leaves", 1);
         program.set("u_first", 0u);
         program.set("u_count", node_count);
-        dispatch_1d(node_count);
+        program.dispatch_threads(node_count);
         program.set("u_leaves", 0);
         const auto& first = bake_->tree.level_first;
         for (std::size_t level = 0; level + 1 < first.size(); ++level) {
             glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
             program.set("u_first", first[level]);
             program.set("u_count", first[level + 1] - first[level]);
-            dispatch_1d(first[level + 1] - first[level]);
+            program.dispatch_threads(first[level + 1] - first[level]);
         }
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
     }
@@ -528,7 +523,7 @@ private:
             glBindImageTexture(0, jitter_mean_.id(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
             accumulate.set("u_size", glm::ivec2(frame.width, frame.height));
             accumulate.set("u_weight", 1.0f / static_cast<float>(jittered_frames_));
-            glDispatchCompute(static_cast<GLuint>((frame.width + 7) / 8), static_cast<GLuint>((frame.height + 7) / 8), 1);
+            accumulate.dispatch_grid({frame.width, frame.height}, {8, 8});
             glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
         }
         const gpu::ShaderProgram& composite = frame.shaders.get({"common/fullscreen.vert", "cssm/composite.frag", {}});
