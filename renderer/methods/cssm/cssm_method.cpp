@@ -26,29 +26,6 @@ namespace {
 // so traversals run over batches of subtrees whose node counts fit this budget.
 constexpr double kStepsPerBatch = 40000.0;
 
-struct GpuNode {
-    glm::vec4 centre_radius;
-    glm::vec4 normal_cone;
-    glm::vec4 area;
-    glm::uvec4 links;
-};
-struct GpuTexel {
-    glm::vec4 position_area;
-    glm::vec4 normal_map;
-    glm::vec4 albedo;
-    glm::vec4 emission;
-};
-struct GpuGroup {
-    glm::mat4 world_to_frame;
-    glm::uvec4 info;
-    glm::vec4 planes;
-};
-struct GpuCsm {
-    glm::vec4 centre_radius;
-    glm::uvec4 info;
-    glm::uvec4 group;
-};
-
 template <typename T>
 gpu::Buffer storage(const std::vector<T>& data, GLbitfield flags = 0) {
     return gpu::Buffer(std::max<std::size_t>(sizeof(T), data.size() * sizeof(T)), data.empty() ? nullptr : data.data(), flags);
@@ -262,7 +239,7 @@ private:
             return first_entry;
         };
         group_run_base_.clear();
-        std::vector<GpuCsm> csms;
+        std::vector<glsl::CssmCsm> csms;
         std::vector<glm::vec4> directions;
         std::vector<std::uint32_t> nearest;
         for (std::uint32_t g = 0; g < bake.groups.size(); ++g) {
@@ -271,7 +248,7 @@ private:
             if (group.csm) {
                 const std::uint32_t runs = append(group.csm->depth);
                 csms.push_back({glm::vec4(group.csm->centre, group.csm->radius),
-                                glm::uvec4(directions.size(), nearest.size(), runs, group.csm->face_size), glm::uvec4(g, 0, 0, 0)});
+                                glm::uvec4(directions.size(), nearest.size(), runs, group.csm->face_size), g, 0, 0, 0});
                 directions.insert(directions.end(), group.csm->directions.begin(), group.csm->directions.end());
                 nearest.insert(nearest.end(), group.csm->nearest_map.begin(), group.csm->nearest_map.end());
             }
@@ -298,7 +275,7 @@ private:
     void upload_placement(const scene::Scene& scene) {
         const CssmBake& bake = *bake_;
         const std::size_t texel_count = bake.texel_count();
-        std::vector<GpuTexel> texels(texel_count);
+        std::vector<glsl::CssmTexel> texels(texel_count);
         for (std::size_t t = 0; t < texel_count; ++t) {
             const std::uint32_t g = bake.texel_group[t];
             const std::uint32_t local = static_cast<std::uint32_t>(t - bake.group_first_texel[g]);
@@ -306,7 +283,7 @@ private:
                          glm::vec4(bake.normals[t], static_cast<float>(bake.groups[g].maps.map_of_texel[local])),
                          glm::vec4(bake.albedo[t], static_cast<float>(g)), glm::vec4(bake.emission[t], 0.0f)};
         }
-        std::vector<GpuGroup> groups(bake.groups.size());
+        std::vector<glsl::CssmGroup> groups(bake.groups.size());
         for (std::size_t g = 0; g < groups.size(); ++g) {
             const BakeGroup& group = bake.groups[g];
             std::uint32_t csm = kNoNode;
@@ -318,7 +295,7 @@ private:
             groups[g] = {world_to_group(scene, group), glm::uvec4(group_run_base_[g], csm, 0, 0),
                          glm::vec4(group.maps.settings.near_plane, group.maps.settings.far_plane, 0.0f, 0.0f)};
         }
-        std::vector<GpuNode> nodes(bake.tree.nodes.size());
+        std::vector<glsl::CssmNode> nodes(bake.tree.nodes.size());
         for (std::size_t n = 0; n < nodes.size(); ++n) {
             const RadiosityNode& node = bake.tree.nodes[n];
             nodes[n] = {glm::vec4(node.centre, node.radius), glm::vec4(node.normal, node.cone_cos),
