@@ -196,6 +196,14 @@ void ShaderProgram::dispatch_threads(std::size_t invocations, unsigned local_siz
     glDispatchCompute(x, y, 1);
 }
 
+void ShaderProgram::dispatch_grid(glm::ivec2 size, glm::uvec2 local_size) const {
+    if (size.x <= 0 || size.y <= 0) return;
+    use();
+    const glm::uvec2 groups = (glm::uvec2(size) + local_size - 1u) / local_size;
+    BOUNCE_CHECK(groups.x <= 65535u && groups.y <= 65535u, "dispatch over {}x{} threads is too large", size.x, size.y);
+    glDispatchCompute(groups.x, groups.y, 1);
+}
+
 const ShaderProgram& ShaderCache::get(const ProgramSource& source) {
     const std::string key = source.key();
     auto it = programs_.find(key);

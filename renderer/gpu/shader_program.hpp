@@ -64,6 +64,9 @@ public:
     // Compute programs: enough work groups of the declared local size for `invocations` threads
     // along x (the shader checks its bound), followed by nothing: callers place the barriers.
     void dispatch_threads(std::size_t invocations, unsigned local_size = 64) const;
+    // Compute programs over a 2D grid of threads (an image's pixels, say): enough work groups of
+    // the declared local size (x by y) to cover `size`; the shader checks its bounds.
+    void dispatch_grid(glm::ivec2 size, glm::uvec2 local_size = {8, 8}) const;
 
 private:
     GLint location(std::string_view name) const;

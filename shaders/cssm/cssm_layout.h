@@ -1,4 +1,4 @@
-// Bindings and constants of `cssm`, shared by C++ and GLSL.
+// Bindings, constants and buffer structs of `cssm`, shared by C++ and GLSL: this file compiles as both.
 #ifndef BOUNCE_CSSM_LAYOUT_H
 #define BOUNCE_CSSM_LAYOUT_H
 
@@ -30,5 +30,67 @@
 #define CSSM_COUNTER_VISITED_LOW 3    // nodes the traversals visited (refined or gathered)
 #define CSSM_COUNTER_VISITED_HIGH 4
 #define CSSM_COUNTERS 5
+
+// The std430 structs of the buffers above. GLSL reads them as written; C++ reads the same lines
+// with GLSL's type names taken from glm, in namespace bounce::methods::cssm::glsl, and checks at
+// compile time that each member sits where std430 puts it (vec4, uvec4 and mat4 columns on 16
+// bytes), so the two sides cannot drift apart.
+#ifdef __cplusplus
+#include <glm/glm.hpp>
+
+#include <cstddef>
+#include <cstdint>
+
+namespace bounce::methods::cssm::glsl {
+using uint = std::uint32_t;
+using vec4 = glm::vec4;
+using uvec4 = glm::uvec4;
+using mat4 = glm::mat4;
+#endif
+
+struct CssmNode {
+    vec4 centre_radius;
+    vec4 normal_cone;  // xyz: mean normal, w: cosine of the cone holding every normal below
+    vec4 area;         // x: area, y: leaves below
+    uvec4 links;       // child, skip, representative texel, leaf texel (CSSM_NONE for internal nodes)
+};
+
+struct CssmTexel {
+    vec4 position_area;  // world position (where its object is now), area
+    vec4 normal_map;     // world normal, w: the texel's map in its group's bake sequence
+    vec4 albedo;         // diffuse albedo, w: its group
+    vec4 emission;       // emitted radiance
+};
+
+struct CssmGroup {
+    mat4 world_to_frame;  // into the frame the group was baked in
+    uvec4 info;           // x: its cube maps' first pixel-run entry, y: its CSM (CSSM_NONE: static)
+    vec4 planes;          // x: near, y: far
+};
+
+struct CssmCsm {
+    vec4 centre_radius;  // object space
+    uvec4 info;          // x: first direction, y: first table entry, z: first pixel-run entry, w: face size
+    uint group;
+    uint pad0;
+    uint pad1;
+    uint pad2;
+};
+
+#ifdef __cplusplus
+static_assert(sizeof(CssmNode) == 64);
+static_assert(offsetof(CssmNode, centre_radius) == 0 && offsetof(CssmNode, normal_cone) == 16 &&
+              offsetof(CssmNode, area) == 32 && offsetof(CssmNode, links) == 48);
+static_assert(sizeof(CssmTexel) == 64);
+static_assert(offsetof(CssmTexel, position_area) == 0 && offsetof(CssmTexel, normal_map) == 16 &&
+              offsetof(CssmTexel, albedo) == 32 && offsetof(CssmTexel, emission) == 48);
+static_assert(sizeof(CssmGroup) == 96);
+static_assert(offsetof(CssmGroup, world_to_frame) == 0 && offsetof(CssmGroup, info) == 64 &&
+              offsetof(CssmGroup, planes) == 80);
+static_assert(sizeof(CssmCsm) == 48);
+static_assert(offsetof(CssmCsm, centre_radius) == 0 && offsetof(CssmCsm, info) == 16 && offsetof(CssmCsm, group) == 32 &&
+              offsetof(CssmCsm, pad2) == 44);
+}  // namespace bounce::methods::cssm::glsl
+#endif
 
 #endif

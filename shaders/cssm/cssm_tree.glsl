@@ -1,35 +1,9 @@
 // The radiosity hierarchy, the CSSM visibility query and the stackless cut traversal that gathers
 // light at one receiver (§3.2.2, §4.3 of ../shared/papers/cssm-ritschel-2008.md). Used by the atlas
-// gather (receiver: a texel) and the final gather (receiver: a pixel).
+// gather (receiver: a texel) and the final gather (receiver: a pixel). The buffers' structs are in
+// cssm/cssm_layout.h, shared with C++.
 #include "cssm/cssm_layout.h"
 #include "common/math.glsl"
-
-struct CssmNode {
-    vec4 centre_radius;
-    vec4 normal_cone;  // xyz: mean normal, w: cosine of the cone holding every normal below
-    vec4 area;         // x: area
-    uvec4 links;       // child, skip, representative texel, leaf texel (CSSM_NONE for internal nodes)
-};
-
-struct CssmTexel {
-    vec4 position_area;  // world position (where its object is now), area
-    vec4 normal_map;     // world normal, w: the texel's map in its group's bake sequence
-    vec4 albedo;         // diffuse albedo, w: its group
-    vec4 emission;       // emitted radiance
-};
-
-struct CssmGroup {
-    mat4 world_to_frame;  // into the frame the group was baked in
-    uvec4 info;           // x: its cube maps' first pixel-run entry, y: its CSM (CSSM_NONE: static)
-    vec4 planes;          // x: near, y: far
-};
-
-struct CssmCsm {
-    vec4 centre_radius;  // object space
-    uvec4 info;          // x: first direction, y: first table entry, z: first pixel-run entry, w: face size
-    uint group;
-    uint pad0, pad1, pad2;
-};
 
 layout(std430, binding = CSSM_BINDING_NODES) readonly buffer CssmNodes { CssmNode nodes[]; };
 layout(std430, binding = CSSM_BINDING_NODE_RADIANCE) buffer CssmNodeRadiance { vec4 node_radiance[]; };

@@ -15,6 +15,7 @@
 #include <numeric>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <random>
 #include <unistd.h>
 
@@ -257,7 +258,7 @@ TEST(CssmBakeCache, GroupsRoundTripAMovedObjectKeepsItsBakeAndDamagedFilesAreReb
     const auto path = bake_path(dir, first.groups[0].key);
     const auto size = std::filesystem::file_size(path);
     std::filesystem::resize_file(path, size - 5);
-    EXPECT_FALSE(load_cached_group(dir, first.groups[0].key).has_value());
+    EXPECT_FALSE(load_cached_group(dir, first.groups[0].key, first.groups[0].objects).has_value());
     const CssmBake third = bake_scene(scene, parameters, moving, options);
     EXPECT_FALSE(third.groups[0].loaded);
     EXPECT_TRUE(third.groups[1].loaded);
@@ -270,7 +271,68 @@ TEST(CssmBakeCache, GroupsRoundTripAMovedObjectKeepsItsBakeAndDamagedFilesAreReb
         byte = static_cast<char>(byte ^ 0x40);
         file.write(&byte, 1);
     }
-    EXPECT_FALSE(load_cached_group(dir, first.groups[0].key).has_value());
+    EXPECT_FALSE(load_cached_group(dir, first.groups[0].key, first.groups[0].objects).has_value());
+    std::filesystem::remove_all(dir);
+}
+
+TEST(CssmBakeCache, WellFormedFilesWithAnIndexOutOfRangeOrAnotherFormatAreRejected) {
+    const scene::Scene scene = scene::make_cornell_box();
+    const BakeParameters parameters{8.0f, 4, Traversal::spiral, 16};
+    const auto dir = std::filesystem::temp_directory_path() / ("bounce-cssm-index-test-" + std::to_string(::getpid()));
+    std::filesystem::remove_all(dir);
+    const CssmBake bake = bake_scene(scene, parameters, {2});
+    ASSERT_EQ(bake.groups.size(), 2u);
+    const BakeGroup& fixed = bake.groups[0];
+    const BakeGroup& block = bake.groups[1];
+    ASSERT_TRUE(block.csm.has_value());
+    const auto texels = static_cast<std::uint32_t>(fixed.atlas.texels.size());
+    ASSERT_GT(texels, 1u);
+    auto loads = [&](const BakeGroup& group) {
+        store_cached_group(dir, group);  // length, checksum and format as a good file has them
+        return load_cached_group(dir, group.key, group.objects).has_value();
+    };
+    EXPECT_TRUE(loads(fixed));
+    EXPECT_TRUE(loads(block));
+    std::vector<std::uint32_t> fewer = fixed.objects;
+    fewer.pop_back();
+    EXPECT_FALSE(load_cached_group(dir, fixed.key, fewer).has_value());  // baked for other objects
+
+    const std::vector<std::pair<const char*, std::function<void(BakeGroup&)>>> damages = {
+        {"texel_at", [&](BakeGroup& g) { g.atlas.texel_at.back() = static_cast<std::int32_t>(texels); }},
+        {"texel object", [](BakeGroup& g) { g.atlas.texels[0].object = 1000; }},
+        {"texel chart", [](BakeGroup& g) { g.atlas.texels[0].chart = static_cast<std::uint32_t>(g.atlas.charts.size()); }},
+        {"texel position", [](BakeGroup& g) { g.atlas.texels[0].x = g.atlas.width; }},
+        {"traversal order", [&](BakeGroup& g) { g.maps.order[0] = texels; }},
+        {"repeated order", [](BakeGroup& g) { g.maps.order[0] = g.maps.order[1]; }},
+        {"map of texel", [&](BakeGroup& g) { g.maps.map_of_texel[0] = texels; }},
+        {"run start", [&](BakeGroup& g) { g.maps.depth.run_start.back() = texels; }},
+        {"pixel runs", [](BakeGroup& g) { g.maps.depth.pixel_runs.back() += 1; }},
+        {"face size", [](BakeGroup& g) { g.maps.settings.face_size = 1 << 20; }},
+    };
+    for (const auto& [what, damage] : damages) {
+        BakeGroup damaged = fixed;
+        damage(damaged);
+        EXPECT_FALSE(loads(damaged)) << what;
+    }
+    const std::vector<std::pair<const char*, std::function<void(BakeGroup&)>>> csm_damages = {
+        {"csm direction", [](BakeGroup& g) { g.csm->nearest_map[0] = static_cast<std::uint32_t>(g.csm->directions.size()); }},
+        {"csm run start", [](BakeGroup& g) { g.csm->depth.run_start.back() = g.csm->depth.maps; }},
+        {"csm face size", [](BakeGroup& g) { g.csm->face_size = -g.csm->face_size; }},
+    };
+    for (const auto& [what, damage] : csm_damages) {
+        BakeGroup damaged = block;
+        damage(damaged);
+        EXPECT_FALSE(loads(damaged)) << what;
+    }
+
+    // A file of the previous format (its magic "BNCSSM03") is stale, not read.
+    EXPECT_TRUE(loads(fixed));
+    {
+        std::fstream file(bake_path(dir, fixed.key), std::ios::in | std::ios::out | std::ios::binary);
+        file.seekp(6);
+        file.write("03", 2);
+    }
+    EXPECT_FALSE(load_cached_group(dir, fixed.key, fixed.objects).has_value());
     std::filesystem::remove_all(dir);
 }
 

@@ -1,10 +1,12 @@
 #include "renderer/methods/cssm/bake_cache.hpp"
 
 #include "renderer/base/error.hpp"
+#include "renderer/base/hash.hpp"
 #include "renderer/base/log.hpp"
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cstdio>
 #include <cstring>
@@ -15,21 +17,8 @@
 namespace bounce::methods::cssm {
 namespace {
 
-constexpr char kMagic[8] = {'B', 'N', 'C', 'S', 'S', 'M', '0', '3'};
-
-struct Fnv {
-    std::uint64_t hash = 1469598103934665603ull;
-    void add(const void* data, std::size_t bytes) {
-        const auto* p = static_cast<const unsigned char*>(data);
-        for (std::size_t i = 0; i < bytes; ++i) hash = (hash ^ p[i]) * 1099511628211ull;
-    }
-    template <typename T>
-    void add(const std::vector<T>& values) {
-        const std::uint64_t count = values.size();
-        add(&count, sizeof(count));
-        if (!values.empty()) add(values.data(), values.size() * sizeof(T));
-    }
-};
+// Format 04: XXH3 checksums and keys (03 had FNV-1a); files of another format are stale.
+constexpr char kMagic[8] = {'B', 'N', 'C', 'S', 'S', 'M', '0', '4'};
 
 class Writer {
 public:
@@ -109,6 +98,47 @@ CompressedDepthMaps read_depth(Reader& r) {
     return depth;
 }
 
+// Face sides the bake knobs allow, with room: their pixel counts fit 32 bits.
+bool valid_face_size(int face_size) { return face_size > 0 && face_size <= 4096; }
+
+std::uint32_t face_pixels(int face_size, std::uint32_t faces) {
+    return faces * static_cast<std::uint32_t>(face_size) * static_cast<std::uint32_t>(face_size);
+}
+
+// Every index the atlas holds names something in it, and its texels only the group's `objects`.
+void check_atlas(const SurfaceAtlas& atlas, const std::vector<std::uint32_t>& objects) {
+    if (atlas.objects != objects) throw Error("written for other objects");
+    if (atlas.width < 0 || atlas.height < 0 ||
+        atlas.texel_at.size() != static_cast<std::size_t>(atlas.width) * static_cast<std::size_t>(atlas.height)) {
+        throw Error("inconsistent atlas size");
+    }
+    const std::size_t texels = atlas.texels.size();
+    for (std::int32_t t : atlas.texel_at)
+        if (t < -1 || (t >= 0 && static_cast<std::size_t>(t) >= texels)) throw Error("atlas texel index out of range");
+    for (std::size_t t = 0; t < texels; ++t) {
+        const AtlasTexel& texel = atlas.texels[t];
+        if (!std::binary_search(objects.begin(), objects.end(), texel.object)) throw Error("texel object out of range");
+        if (texel.chart >= atlas.charts.size() || atlas.charts[texel.chart].object != texel.object) {
+            throw Error("texel chart out of range");
+        }
+        if (atlas.at(texel.x, texel.y) != static_cast<std::int32_t>(t)) throw Error("texel position out of range");
+    }
+}
+
+void check_maps(const SurfaceShadowMaps& maps, std::size_t texels) {
+    if (!valid_face_size(maps.settings.face_size) || maps.order.size() != texels || maps.map_of_texel.size() != texels ||
+        maps.origins.size() != texels || maps.depth.maps != texels || maps.depth.pixels != face_pixels(maps.settings.face_size, 6)) {
+        throw Error("inconsistent sizes");
+    }
+    std::vector<std::uint8_t> ordered(texels, 0);
+    for (std::uint32_t t : maps.order) {
+        if (t >= texels || ordered[t] != 0) throw Error("traversal order index out of range");
+        ordered[t] = 1;
+    }
+    for (std::uint32_t m : maps.map_of_texel)
+        if (m >= texels) throw Error("map index out of range");
+}
+
 std::vector<char> serialize(const BakeGroup& group) {
     Writer w;
     w.text(group.key);
@@ -142,7 +172,7 @@ std::vector<char> serialize(const BakeGroup& group) {
     return std::move(w.bytes);
 }
 
-BakeGroup deserialize(const std::vector<char>& payload, const std::string& key) {
+BakeGroup deserialize(const std::vector<char>& payload, const std::string& key, const std::vector<std::uint32_t>& objects) {
     Reader r(payload);
     BakeGroup group;
     group.key = r.text();
@@ -173,8 +203,8 @@ BakeGroup deserialize(const std::vector<char>& payload, const std::string& key) 
         csm.nearest_map = r.array<std::uint32_t>();
         csm.bake_seconds = r.value<double>();
         csm.depth = read_depth(r);
-        if (csm.depth.maps != csm.directions.size() || csm.depth.pixels != static_cast<std::uint32_t>(csm.face_size * csm.face_size) ||
-            csm.nearest_map.size() != 6u * kCsmTableFace * kCsmTableFace) {
+        if (!valid_face_size(csm.face_size) || csm.depth.maps != csm.directions.size() ||
+            csm.depth.pixels != face_pixels(csm.face_size, 1) || csm.nearest_map.size() != face_pixels(kCsmTableFace, 6)) {
             throw Error("inconsistent coherent shadow maps");
         }
         for (std::uint32_t k : csm.nearest_map)
@@ -182,13 +212,8 @@ BakeGroup deserialize(const std::vector<char>& payload, const std::string& key) 
         group.csm = std::move(csm);
     }
     if (!r.at_end()) throw Error("trailing bytes");
-    const std::size_t texels = atlas.texels.size();
-    if (maps.order.size() != texels || maps.map_of_texel.size() != texels || maps.origins.size() != texels ||
-        maps.depth.maps != texels || maps.depth.pixels != static_cast<std::uint32_t>(6 * maps.settings.face_size * maps.settings.face_size)) {
-        throw Error("inconsistent sizes");
-    }
-    for (std::uint32_t m : maps.map_of_texel)
-        if (m >= texels) throw Error("map index out of range");
+    check_atlas(atlas, objects);
+    check_maps(maps, atlas.texels.size());
     return group;
 }
 
@@ -196,35 +221,34 @@ BakeGroup deserialize(const std::vector<char>& payload, const std::string& key) 
 
 std::string group_key(const scene::Scene& scene, const std::vector<std::uint32_t>& objects, bool moving,
                       const BakeParameters& parameters, float texel_size) {
-    Fnv fnv;
-    fnv.add(kMagic, sizeof(kMagic));
-    fnv.add(&parameters.face_size, sizeof(int));
-    const int traversal = static_cast<int>(parameters.traversal);
-    fnv.add(&traversal, sizeof(int));
-    fnv.add(&texel_size, sizeof(float));
-    const std::uint8_t kind = moving ? 1 : 0;
-    fnv.add(&kind, 1);
-    if (moving) fnv.add(&parameters.csm_directions, sizeof(int));
+    Hasher hash;
+    hash.add_bytes(kMagic, sizeof(kMagic));
+    hash.add(parameters.face_size);
+    hash.add(static_cast<int>(parameters.traversal));
+    hash.add(texel_size);
+    hash.add(static_cast<std::uint8_t>(moving ? 1 : 0));
+    if (moving) hash.add(parameters.csm_directions);
     for (std::uint32_t o : objects) {
         const scene::Object& object = scene.objects[o];
-        if (!moving) fnv.add(&object.transform, sizeof(glm::mat4));  // a moving group is baked in its own space
+        if (!moving) hash.add(object.transform);  // a moving group is baked in its own space
         for (const scene::Primitive& primitive : scene.meshes[object.mesh].primitives) {
-            fnv.add(primitive.positions);
-            fnv.add(primitive.normals);
-            fnv.add(primitive.uv0);
-            fnv.add(primitive.uv1);
-            fnv.add(primitive.indices);
-            fnv.add(&primitive.material, sizeof(int));
+            hash.add_span<glm::vec3>(primitive.positions);
+            hash.add_span<glm::vec3>(primitive.normals);
+            hash.add_span<glm::vec2>(primitive.uv0);
+            hash.add_span<glm::vec2>(primitive.uv1);
+            hash.add_span<std::uint32_t>(primitive.indices);
+            hash.add(primitive.material);
         }
     }
-    return fmt::format("{:016x}", fnv.hash);
+    return fmt::format("{:016x}", hash.value());
 }
 
 std::filesystem::path bake_path(const std::filesystem::path& dir, const std::string& key) {
     return dir / fmt::format("cssm-{}.bake", key);
 }
 
-std::optional<BakeGroup> load_cached_group(const std::filesystem::path& dir, const std::string& key) {
+std::optional<BakeGroup> load_cached_group(const std::filesystem::path& dir, const std::string& key,
+                                          const std::vector<std::uint32_t>& objects) {
     const std::filesystem::path path = bake_path(dir, key);
     std::ifstream file(path, std::ios::binary);
     if (!file) return std::nullopt;
@@ -240,10 +264,8 @@ std::optional<BakeGroup> load_cached_group(const std::filesystem::path& dir, con
         std::vector<char> payload(size);
         file.read(payload.data(), static_cast<std::streamsize>(size));
         if (!file) throw Error("file ends early");
-        Fnv fnv;
-        fnv.add(payload.data(), payload.size());
-        if (fnv.hash != checksum) throw Error("checksum does not match");
-        return deserialize(payload, key);
+        if (hash_bytes(payload.data(), payload.size()) != checksum) throw Error("checksum does not match");
+        return deserialize(payload, key, objects);
     } catch (const std::exception& error) {
         log::warn("cssm", "ignoring cached bake {}: {}", path.string(), error.what());
         return std::nullopt;
@@ -255,8 +277,7 @@ void store_cached_group(const std::filesystem::path& dir, const BakeGroup& group
     std::error_code ignored;
     std::filesystem::create_directories(dir, ignored);
     const std::vector<char> payload = serialize(group);
-    Fnv fnv;
-    fnv.add(payload.data(), payload.size());
+    const std::uint64_t checksum = hash_bytes(payload.data(), payload.size());
     const std::filesystem::path final_path = bake_path(dir, group.key);
     const std::filesystem::path temporary =
         dir / fmt::format(".{}.tmp-{}-{}", final_path.filename().string(), ::getpid(), counter.fetch_add(1));
@@ -264,7 +285,7 @@ void store_cached_group(const std::filesystem::path& dir, const BakeGroup& group
     if (!file) BOUNCE_FAIL("cssm: cannot write the bake cache {}: {}", temporary.string(), std::strerror(errno));
     const std::uint64_t size = payload.size();
     bool ok = std::fwrite(kMagic, 1, sizeof(kMagic), file) == sizeof(kMagic) &&
-              std::fwrite(&size, sizeof(size), 1, file) == 1 && std::fwrite(&fnv.hash, sizeof(fnv.hash), 1, file) == 1 &&
+              std::fwrite(&size, sizeof(size), 1, file) == 1 && std::fwrite(&checksum, sizeof(checksum), 1, file) == 1 &&
               std::fwrite(payload.data(), 1, payload.size(), file) == payload.size();
     ok = std::fflush(file) == 0 && ok;
     ok = ::fsync(::fileno(file)) == 0 && ok;

@@ -19,8 +19,11 @@ std::string group_key(const scene::Scene& scene, const std::vector<std::uint32_t
                       const BakeParameters& parameters, float texel_size);
 std::filesystem::path bake_path(const std::filesystem::path& dir, const std::string& key);
 
-// The cached group for `key`; nullopt when there is none or it is damaged (logged).
-std::optional<BakeGroup> load_cached_group(const std::filesystem::path& dir, const std::string& key);
+// The cached group for `key`, baked for `objects` (sorted indices into the scene); nullopt when
+// there is none, it is of another format, or it is damaged: a wrong length or checksum, or any
+// index out of range (logged).
+std::optional<BakeGroup> load_cached_group(const std::filesystem::path& dir, const std::string& key,
+                                           const std::vector<std::uint32_t>& objects);
 // Writes atomically; throws Error naming the path when the directory cannot be written.
 void store_cached_group(const std::filesystem::path& dir, const BakeGroup& group);
 

@@ -132,7 +132,7 @@ CssmBake bake_scene(const scene::Scene& scene, const BakeParameters& parameters,
     for (BakeGroup& group : bake.groups) {
         group.key = group_key(scene, group.objects, group.moving, parameters, bake.texel_size);
         if (options.cache_dir) {
-            if (auto cached = load_cached_group(*options.cache_dir, group.key)) {
+            if (auto cached = load_cached_group(*options.cache_dir, group.key, group.objects)) {
                 cached->objects = group.objects;
                 cached->moving = group.moving;
                 cached->loaded = true;

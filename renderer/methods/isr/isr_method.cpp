@@ -1,5 +1,6 @@
 #include "renderer/methods/isr/isr_method.hpp"
 
+#include "renderer/gpu/counter_buffer.hpp"
 #include "renderer/methods/isr/multires_buffer.hpp"
 #include "renderer/methods/isr/vpl_tree.hpp"
 #include "renderer/passes/direct_light_pass.hpp"
@@ -54,11 +55,9 @@ public:
             cached_vpls_ = tree_.cached_vpls();
         }
 
-        if (!counters_) counters_ = gpu::Buffer(ISR_COUNTERS * sizeof(std::uint32_t), nullptr, GL_DYNAMIC_STORAGE_BIT);
-        const std::array<std::uint32_t, ISR_COUNTERS> zero{};
-        counters_.upload(0, sizeof(zero), zero.data());
-        glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ISR_BINDING_COUNTERS, counters_.id());
+        if (!counters_) counters_ = gpu::CounterBuffer(ISR_COUNTERS);
+        counters_.reset();
+        counters_.bind(ISR_BINDING_COUNTERS);
 
         multires_.refine(frame, gbuffer_,
                          {frame.knob_int("levels"), static_cast<float>(frame.knob("depth_threshold")),
@@ -156,15 +155,13 @@ private:
     }
 
     void read_counters() {
-        std::array<std::uint32_t, ISR_COUNTERS> counters{};
-        glGetNamedBufferSubData(counters_.id(), 0, sizeof(counters), counters.data());
+        const gpu::CounterValues counters = counters_.read();
         fragments_ = 0;
         for (int level = 0; level < ISR_MAX_LEVELS; ++level) {
             level_fragments_[level] = counters[ISR_COUNTER_LEVEL_FRAGMENTS + level];
             fragments_ += counters[ISR_COUNTER_LEVEL_FRAGMENTS + level];
         }
-        vpls_gathered_ = (static_cast<std::uint64_t>(counters[ISR_COUNTER_VPLS_HIGH]) << 32) |
-                         counters[ISR_COUNTER_VPLS_LOW];
+        vpls_gathered_ = counters.wide(ISR_COUNTER_VPLS_LOW, ISR_COUNTER_VPLS_HIGH);
         vpls_max_ = counters[ISR_COUNTER_VPLS_MAX];
         gathered_texels_ = counters[ISR_COUNTER_GATHERED];
     }
@@ -176,7 +173,7 @@ private:
     VplTree tree_;
     MultiresolutionBuffer multires_;
     passes::FullscreenTriangle triangle_;
-    gpu::Buffer counters_;
+    gpu::CounterBuffer counters_;
     int mode_ = ISR_MODE_HIERARCHICAL;
     int finest_level_ = 0;
     int cache_mode_ = -1, cache_level_ = -1;

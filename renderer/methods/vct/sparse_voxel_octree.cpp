@@ -7,8 +7,8 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
-#include <cstring>
 
 namespace bounce::methods::vct {
 namespace {
@@ -79,7 +79,7 @@ void SparseVoxelOctree::build(const passes::PassContext& context, int resolution
                                      resolution, grid_.lattice_max() + 1, (2 << kMaxDenseLeafLevel) - 4,
                                      (2 << kMaxDenseLeafLevel) + 1));
     }
-    if (!counters_) counters_ = gpu::Buffer(VCT_COUNTERS * sizeof(std::uint32_t), nullptr, GL_DYNAMIC_STORAGE_BIT);
+    if (!counters_) counters_ = gpu::CounterBuffer(VCT_COUNTERS);
     voxelize(context, include);
     if (dense) {
         node_children_ = gpu::Buffer();
@@ -227,8 +227,8 @@ void SparseVoxelOctree::voxelize(const passes::PassContext& context, const Objec
         if (!fragments_ || fragments_.bytes() < fragment_capacity_ * VCT_FRAGMENT_WORDS * 4) {
             fragments_ = gpu::Buffer(fragment_capacity_ * VCT_FRAGMENT_WORDS * 4, nullptr);
         }
-        write_counters({});
-        bind_storage(VCT_BINDING_COUNTERS, counters_);
+        counters_.reset();
+        counters_.bind(VCT_BINDING_COUNTERS);
         bind_storage(VCT_BINDING_FRAGMENTS, fragments_);
         program.set("u_fragment_capacity", static_cast<unsigned>(fragment_capacity_));
         context.gpu_scene.for_each_primitive([&](const scene::Object& object, const gpu::GpuPrimitive& primitive) {
@@ -238,7 +238,7 @@ void SparseVoxelOctree::voxelize(const passes::PassContext& context, const Objec
             gpu::GpuScene::draw(primitive);
         });
         storage_barrier();
-        counts_.fragments = read_counters()[VCT_COUNTER_FRAGMENTS];
+        counts_.fragments = counters_.read()[VCT_COUNTER_FRAGMENTS];
         if (counts_.fragments <= fragment_capacity_) return;
         fragment_capacity_ = grown(counts_.fragments);  // the list overflowed: voxelize again, once
     }
@@ -255,14 +255,14 @@ void SparseVoxelOctree::subdivide(const passes::PassContext& context) {
     flag.set("u_fragment_count", static_cast<unsigned>(counts_.fragments));
     const bool appending = levels_.size() > 1;  // a static tree is there: new nodes go after it
     for (int level = 0; level < grid_.leaf_level; ++level) {
-        std::array<std::uint32_t, 8> counters{};
+        std::array<std::uint32_t, VCT_COUNTERS> counters{};
         counters[VCT_COUNTER_NODES] = static_cast<std::uint32_t>(node_count_);
-        write_counters(counters);
+        counters_.write(counters);
         bind_buffers();
         flag.set("u_level", static_cast<unsigned>(level));
         flag.dispatch_threads(counts_.fragments);
         storage_barrier();
-        const std::size_t flagged = read_counters()[VCT_COUNTER_FLAGGED];
+        const std::size_t flagged = counters_.read()[VCT_COUNTER_FLAGGED];
         ensure_node_capacity(node_count_ + 8 * flagged);
         bind_buffers();
         for (const LevelRange& range : levels_[static_cast<std::size_t>(level)]) {
@@ -278,7 +278,7 @@ void SparseVoxelOctree::subdivide(const passes::PassContext& context) {
             levels_[static_cast<std::size_t>(level) + 1].push_back(children);
         }
         node_count_ += 8 * flagged;
-        const std::size_t allocated = read_counters()[VCT_COUNTER_NODES];
+        const std::size_t allocated = counters_.read()[VCT_COUNTER_NODES];
         BOUNCE_CHECK(allocated == node_count_, "vct octree level {}: {} nodes allocated, {} expected", level + 1,
                      allocated, node_count_);
     }
@@ -311,7 +311,7 @@ void SparseVoxelOctree::inject(const passes::PassContext& context, const passes:
     {
         gpu::GpuTimers::Scope timing(context.timers, "vct_inject");
         clear_buffer(leaf_light_);
-        write_counters({});
+        counters_.reset();
         bind_buffers();
         const gpu::ShaderProgram& program = context.shaders.get(gpu::ProgramSource::compute_shader("vct/inject.comp", program_defines()));
         set_octree_uniforms(program);
@@ -335,7 +335,7 @@ void SparseVoxelOctree::inject(const passes::PassContext& context, const passes:
         radiance.dispatch_threads(slots);
         storage_barrier();
     }
-    const auto counters = read_counters();
+    const gpu::CounterValues counters = counters_.read();
     counts_.injected_photons = counters[VCT_COUNTER_INJECTED_PHOTONS];
     counts_.dropped_photons = counters[VCT_COUNTER_DROPPED_PHOTONS];
     counts_.stray_slots = counters[VCT_COUNTER_STRAY_SLOTS];
@@ -358,8 +358,8 @@ void SparseVoxelOctree::inject(const passes::PassContext& context, const passes:
 
 void SparseVoxelOctree::resolve_and_mipmap(const passes::PassContext& context) {
     const bool anisotropic = anisotropic_;
-    const auto counters = read_counters();
-    std::memcpy(&counts_.max_radiance, &counters[VCT_COUNTER_MAX_RADIANCE], sizeof(float));
+    const gpu::CounterValues counters = counters_.read();
+    counts_.max_radiance = std::bit_cast<float>(counters[VCT_COUNTER_MAX_RADIANCE]);
     // Half floats hold up to 65504: the pool stores radiance relative to the brightest voxel.
     radiance_scale_ = counts_.max_radiance > 0.0f && std::isfinite(counts_.max_radiance) ? 1.0f / counts_.max_radiance
                                                                                           : 1.0f;
@@ -462,21 +462,11 @@ void SparseVoxelOctree::set_octree_uniforms(const gpu::ShaderProgram& program) c
 }
 
 void SparseVoxelOctree::bind_buffers() const {
-    bind_storage(VCT_BINDING_COUNTERS, counters_);
+    if (counters_) counters_.bind(VCT_BINDING_COUNTERS);
     bind_storage(VCT_BINDING_NODES, node_children_);
     bind_storage(VCT_BINDING_NODE_COORDS, node_coords_);
     bind_storage(VCT_BINDING_LEAF_SUMS, leaf_sums_);
     bind_storage(VCT_BINDING_LEAF_LIGHT, leaf_light_);
-}
-
-std::array<std::uint32_t, 8> SparseVoxelOctree::read_counters() const {
-    std::array<std::uint32_t, 8> values{};
-    glGetNamedBufferSubData(counters_.id(), 0, VCT_COUNTERS * sizeof(std::uint32_t), values.data());
-    return values;
-}
-
-void SparseVoxelOctree::write_counters(const std::array<std::uint32_t, 8>& values) {
-    counters_.upload(0, VCT_COUNTERS * sizeof(std::uint32_t), values.data());
 }
 
 }  // namespace bounce::methods::vct

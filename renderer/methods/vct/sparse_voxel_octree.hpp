@@ -16,6 +16,7 @@
 //   a copy before each update and never rebuilt.
 #pragma once
 
+#include "renderer/gpu/counter_buffer.hpp"
 #include "renderer/passes/light_view_maps.hpp"
 #include "renderer/passes/pass_context.hpp"
 
@@ -113,8 +114,6 @@ private:
     void ensure_node_capacity(std::size_t nodes);
     void set_octree_uniforms(const gpu::ShaderProgram& program) const;
     void bind_buffers() const;
-    std::array<std::uint32_t, 8> read_counters() const;
-    void write_counters(const std::array<std::uint32_t, 8>& values);
 
     struct LevelRange {
         std::size_t first = 0;
@@ -141,7 +140,8 @@ private:
     int bounces_ = 1;
     float radiance_scale_ = 1.0f;
     Counts counts_;
-    gpu::Buffer counters_, fragments_, node_children_, node_coords_, leaf_sums_, leaf_light_;
+    gpu::CounterBuffer counters_;
+    gpu::Buffer fragments_, node_children_, node_coords_, leaf_sums_, leaf_light_;
     gpu::Buffer static_children_, static_leaf_sums_;  // the static part as built, restored per update
     gpu::Texture pool_, directional_pool_;
     gpu::Framebuffer voxelize_target_;

@@ -1,0 +1,108 @@
+#include "renderer/methods/cssm/radiosity_solve.hpp"
+
+#include "renderer/passes/light_geometry.hpp"
+
+#include "cssm/cssm_layout.h"
+
+#include <utility>
+
+namespace bounce::methods::cssm {
+namespace {
+
+const gpu::ShaderProgram& compute(const FrameContext& frame, const char* path, const GatherTree& tree,
+                                  const GatherSettings& settings) {
+    const gpu::ShaderProgram& program = frame.shaders.get(gpu::ProgramSource::compute_shader(path));
+    program.use();
+    tree.bind(program, settings.pcf, settings.threshold);
+    program.set("u_texel_count", static_cast<unsigned>(tree.bake.bake().texel_count()));
+    return program;
+}
+
+void bind_texels(GLuint binding, const gpu::Buffer& buffer) {
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, binding, buffer.id());
+}
+
+}  // namespace
+
+void RadiositySolve::allocate(std::size_t texels) {
+    for (gpu::Buffer* buffer : {&direct_, &bounce_, &total_, &irradiance_, &indirect_})
+        *buffer = gpu::Buffer(std::max<std::size_t>(1, texels) * sizeof(glm::vec4), nullptr, 0);
+}
+
+void RadiositySolve::solve(const FrameContext& frame, const GatherTree& tree, const passes::ShadowMaps& shadows,
+                           const GatherSettings& settings) {
+    direct_light(frame, tree, shadows, settings);
+    glCopyNamedBufferSubData(direct_.id(), total_.id(), 0, 0, static_cast<GLsizeiptr>(direct_.bytes()));
+    glCopyNamedBufferSubData(direct_.id(), bounce_.id(), 0, 0, static_cast<GLsizeiptr>(direct_.bytes()));
+    glClearNamedBufferData(indirect_.id(), GL_RGBA32F, GL_RGBA, GL_FLOAT, nullptr);
+    const int atlas_bounces = settings.per_texel ? settings.bounces : settings.bounces - 1;
+    for (int b = 1; b <= atlas_bounces; ++b) bounce(frame, tree, settings);
+    pull(frame, tree, total_);
+}
+
+void RadiositySolve::direct_light(const FrameContext& frame, const GatherTree& tree, const passes::ShadowMaps& shadows,
+                                  const GatherSettings& settings) const {
+    gpu::GpuTimers::Scope timing(frame.timers, "cssm_atlas_direct");
+    const gpu::ShaderProgram& program = compute(frame, "cssm/atlas_direct.comp", tree, settings);
+    const std::size_t texel_count = tree.bake.bake().texel_count();
+    bind_texels(CSSM_BINDING_TEXEL_OUT, direct_);
+    program.set("u_emission_only", 1);
+    program.dispatch_threads(texel_count);
+    program.set("u_emission_only", 0);
+    for (std::size_t l = 0; l < frame.scene.lights.size(); ++l) {
+        if (!shadows.has_map(l)) continue;
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        passes::set_light_uniforms(program, frame.scene.lights[l]);
+        shadows.bind(program, l);
+        program.dispatch_threads(texel_count);
+    }
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+}
+
+void RadiositySolve::bounce(const FrameContext& frame, const GatherTree& tree, const GatherSettings& settings) {
+    pull(frame, tree, bounce_);
+    gpu::GpuTimers::Scope timing(frame.timers, "cssm_atlas_gather");
+    const std::size_t texel_count = tree.bake.bake().texel_count();
+    const gpu::ShaderProgram& gather = compute(frame, "cssm/gather.comp", tree, settings);
+    bind_texels(CSSM_BINDING_TEXEL_OUT, irradiance_);
+    const auto& batches = tree.batches.batches();
+    for (std::size_t b = 0; b < batches.size(); ++b) {
+        gather.set("u_first_root", batches[b].first);
+        gather.set("u_root_count", batches[b].count);
+        gather.set("u_first_batch", b == 0 ? 1 : 0);
+        gather.dispatch_threads(texel_count);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    }
+    const gpu::ShaderProgram& finish = compute(frame, "cssm/bounce.comp", tree, settings);
+    bind_texels(CSSM_BINDING_TEXEL_IN, irradiance_);
+    bind_texels(CSSM_BINDING_TEXEL_OUT, total_);
+    bind_texels(CSSM_BINDING_TEXEL_INDIRECT, indirect_);
+    finish.dispatch_threads(texel_count);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    std::swap(bounce_, irradiance_);  // this bounce's exitance is the next one's source
+}
+
+void RadiositySolve::pull(const FrameContext& frame, const GatherTree& tree, const gpu::Buffer& source) const {
+    gpu::GpuTimers::Scope timing(frame.timers, "cssm_pull");
+    const gpu::ShaderProgram& program = frame.shaders.get(gpu::ProgramSource::compute_shader("cssm/pull.comp"));
+    program.use();
+    tree.placement.bind();
+    bind_texels(CSSM_BINDING_TEXEL_IN, source);
+    const RadiosityTree& hierarchy = tree.bake.bake().tree;
+    const auto node_count = static_cast<unsigned>(hierarchy.nodes.size());
+    program.set("u_leaves", 1);
+    program.set("u_first", 0u);
+    program.set("u_count", node_count);
+    program.dispatch_threads(node_count);
+    program.set("u_leaves", 0);
+    const auto& first = hierarchy.level_first;
+    for (std::size_t level = 0; level + 1 < first.size(); ++level) {
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        program.set("u_first", first[level]);
+        program.set("u_count", first[level + 1] - first[level]);
+        program.dispatch_threads(first[level + 1] - first[level]);
+    }
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+}
+
+}  // namespace bounce::methods::cssm
