@@ -8,6 +8,7 @@
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
 
+#include <cstdlib>
 #include <fstream>
 #include <thread>
 
@@ -48,31 +49,39 @@ std::string read_token(const std::filesystem::path& path) {
     return token;
 }
 
-// One HTTP exchange on the ops port: /healthz, /readyz, /metrics.
+// One HTTP exchange on the ops port: /healthz, /readyz, /metrics. Reading the request and writing
+// the answer together must finish within the ops timeout; `on_end` runs when the exchange is done.
 struct OpsExchange : std::enable_shared_from_this<OpsExchange> {
-    OpsExchange(tcp::socket s, std::function<std::pair<unsigned, std::string>(const std::string&)> router)
-        : socket(std::move(s)), route(std::move(router)) {}
-    void start() {
-        http::async_read(socket, buffer, request, [self = shared_from_this()](boost::system::error_code error, std::size_t) {
+    using Router = std::function<std::pair<unsigned, std::string>(const http::request<http::string_body>&)>;
+    OpsExchange(tcp::socket s, Router router, std::function<void()> ended)
+        : stream(std::move(s)), route(std::move(router)), on_end(std::move(ended)) {}
+    ~OpsExchange() { on_end(); }
+    void start(std::chrono::milliseconds timeout) {
+        stream.expires_after(timeout);
+        parser.body_limit(0);
+        parser.header_limit(8192);
+        http::async_read(stream, buffer, parser, [self = shared_from_this()](boost::system::error_code error, std::size_t) {
             if (error) return;
-            const auto [status, body] = self->route(std::string(self->request.target()));
+            const auto& request = self->parser.get();
+            const auto [status, body] = self->route(request);
             self->response.result(status);
-            self->response.version(self->request.version());
+            self->response.version(request.version());
             self->response.set(http::field::content_type, "text/plain; version=0.0.4");
             self->response.body() = body;
             self->response.keep_alive(false);
             self->response.prepare_payload();
-            http::async_write(self->socket, self->response, [self](boost::system::error_code, std::size_t) {
+            http::async_write(self->stream, self->response, [self](boost::system::error_code, std::size_t) {
                 boost::system::error_code ignored;
-                self->socket.shutdown(tcp::socket::shutdown_both, ignored);
+                self->stream.socket().shutdown(tcp::socket::shutdown_both, ignored);
             });
         });
     }
-    tcp::socket socket;
+    boost::beast::tcp_stream stream;
     boost::beast::flat_buffer buffer;
-    http::request<http::string_body> request;
+    http::request_parser<http::string_body> parser;
     http::response<http::string_body> response;
-    std::function<std::pair<unsigned, std::string>(const std::string&)> route;
+    Router route;
+    std::function<void()> on_end;
 };
 
 }  // namespace
@@ -153,7 +162,20 @@ void Daemon::forget(Session* session) {
             break;
         }
     }
+    std::erase_if(unauthenticated_, [&](const std::weak_ptr<Session>& weak) {
+        const auto held = weak.lock();
+        return !held || held.get() == session;
+    });
     metrics_.set_connections(sessions_.size());
+}
+
+bool Daemon::authenticated(Session* session) {
+    std::lock_guard lock(sessions_mutex_);
+    std::erase_if(unauthenticated_, [&](const std::weak_ptr<Session>& weak) {
+        const auto held = weak.lock();
+        return !held || held.get() == session;
+    });
+    return sessions_.size() - unauthenticated_.size() <= config_.max_clients;
 }
 
 void Daemon::accept() {
@@ -164,17 +186,34 @@ void Daemon::accept() {
             return;
         }
         std::shared_ptr<Session> session;
+        std::shared_ptr<Session> evicted;
         {
             std::lock_guard lock(sessions_mutex_);
-            if (sessions_.size() >= config_.max_clients) {
+            if (token_) {
+                // Unauthenticated connections have their own cap; the oldest makes way, so a flood
+                // of connections that never authenticate cannot keep a real client out.
+                if (unauthenticated_.size() >= config_.max_unauthenticated) {
+                    evicted = unauthenticated_.front().lock();
+                    unauthenticated_.pop_front();
+                }
+                session = std::make_shared<Session>(*this, std::move(socket));
+                unauthenticated_.push_back(session);
+            } else if (sessions_.size() >= config_.max_clients) {
                 log::warn("daemon", "refusing a client: {} connected (--max-clients)", sessions_.size());
                 boost::system::error_code ignored;
                 socket.close(ignored);
             } else {
                 session = std::make_shared<Session>(*this, std::move(socket));
+            }
+            if (session) {
                 sessions_.insert(session);
                 metrics_.set_connections(sessions_.size());
             }
+        }
+        if (evicted) {
+            log::info("daemon", "closing the oldest unauthenticated connection (--max-unauthenticated {})",
+                      config_.max_unauthenticated);
+            evicted->close();
         }
         if (session) session->start();
         accept();
@@ -184,9 +223,20 @@ void Daemon::accept() {
 void Daemon::start_metrics_server() {
     if (!config_.metrics_listen) return;
     const auto [host, port] = split_host_port(*config_.metrics_listen, "--metrics-listen");
+    const bool needs_token = !is_loopback(host);
+    if (needs_token && !token_) {
+        throw InputError(fmt::format("--metrics-listen on {} (not loopback) needs --token-file", host));
+    }
     metrics_acceptor_.emplace(io_, tcp::endpoint(asio::ip::make_address(host == "localhost" ? "127.0.0.1" : host), port));
-    log::info("daemon", "ops HTTP on {}:{} (/healthz /readyz /metrics)", host, metrics_acceptor_->local_endpoint().port());
-    auto route = [this](const std::string& target) -> std::pair<unsigned, std::string> {
+    log::info("daemon", "ops HTTP on {}:{} (/healthz /readyz /metrics){}", host, metrics_acceptor_->local_endpoint().port(),
+              needs_token ? ", bearer token required" : "");
+    auto route = [this, needs_token](const http::request<http::string_body>& request) -> std::pair<unsigned, std::string> {
+        if (needs_token) {
+            const auto header = request[http::field::authorization];
+            const std::string given = header.starts_with("Bearer ") ? std::string(header.substr(7)) : std::string();
+            if (!protocol::same_token(given, *token_)) return {401, "unauthorized\n"};
+        }
+        const std::string target(request.target());
         if (target == "/healthz") return {200, "ok\n"};
         if (target == "/readyz") return ready_ ? std::pair<unsigned, std::string>{200, "ready\n"}
                                                : std::pair<unsigned, std::string>{503, "not ready\n"};
@@ -201,7 +251,14 @@ void Daemon::start_metrics_server() {
         metrics_acceptor_->async_accept(asio::make_strand(io_), [this, route, serve](boost::system::error_code error,
                                                                                      tcp::socket socket) {
             if (error) return;
-            std::make_shared<OpsExchange>(std::move(socket), route)->start();
+            if (ops_connections_.fetch_add(1) >= config_.max_ops_connections) {
+                --ops_connections_;
+                boost::system::error_code ignored;
+                socket.close(ignored);  // over the cap: refused, not queued
+            } else {
+                std::make_shared<OpsExchange>(std::move(socket), route, [this] { --ops_connections_; })
+                    ->start(config_.ops_timeout);
+            }
             (*serve)();
         });
     };
@@ -257,10 +314,15 @@ int Daemon::run() {
     }
     start_metrics_server();
     signals_.async_wait([this](boost::system::error_code error, int signal) {
-        if (!error) {
-            log::info("daemon", "signal {} received", signal);
-            begin_shutdown();
-        }
+        if (error) return;
+        log::info("daemon", "signal {} received: draining for at most {} ms", signal, config_.drain_timeout.count());
+        begin_shutdown();
+        // A second signal means now: no drain, no cleanup.
+        signals_.async_wait([](boost::system::error_code again, int second) {
+            if (again) return;
+            log::warn("daemon", "signal {} received again: exiting at once", second);
+            std::_Exit(128 + second);
+        });
     });
     accept();
     ready_ = true;

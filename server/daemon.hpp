@@ -3,6 +3,7 @@
 #pragma once
 
 #include "protocol/protocol.hpp"
+#include "server/byte_budget.hpp"
 #include "server/metrics.hpp"
 #include "server/render_service.hpp"
 #include "server/request_handlers.hpp"
@@ -12,6 +13,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <deque>
 #include <filesystem>
 #include <memory>
 #include <mutex>
@@ -38,6 +40,14 @@ struct DaemonConfig {
     std::chrono::milliseconds heartbeat{15000};
     std::chrono::milliseconds drain_timeout{10000};
     std::size_t max_output_bytes = 512u << 20;  // a reader slower than this much queued output is dropped
+    // Request bodies held across all clients, as their bytes arrive (--max-inflight-bytes).
+    std::size_t max_inflight_bytes = std::size_t{1} << 30;
+    // Connections that have not authenticated yet (only with a token): their own cap, apart from
+    // max_clients, the oldest closed to admit a new one; and how long they have to say hello.
+    std::size_t max_unauthenticated = 16;
+    std::chrono::milliseconds auth_timeout{10000};
+    std::size_t max_ops_connections = 16;  // ops HTTP connections at once
+    std::chrono::milliseconds ops_timeout{10000};  // to read an ops request and write its answer
     int network_threads = 2;
 };
 
@@ -55,6 +65,12 @@ public:
     const DaemonConfig& config() const { return config_; }
     const std::optional<std::string>& token() const { return token_; }
     protocol::Limits limits() const;
+    // What a frame may carry before its connection has authenticated: a `hello`, no more.
+    static protocol::Limits unauthenticated_limits() { return {4096, 0}; }
+    ByteBudget& inflight_bytes() { return inflight_bytes_; }
+    // A session's hello succeeded: it leaves the unauthenticated count; false when max_clients
+    // authenticated clients are already connected.
+    bool authenticated(Session* session);
     RenderService& render_service() { return *render_; }
     Metrics& metrics() { return metrics_; }
     RequestHandlers& handlers() { return handlers_; }
@@ -81,6 +97,7 @@ private:
     SceneRoot scene_root_;
     std::unique_ptr<RenderService> render_;
     Metrics metrics_;
+    ByteBudget inflight_bytes_{config_.max_inflight_bytes};
     RequestHandlers handlers_{*this};
     boost::asio::io_context io_;
     boost::asio::thread_pool encode_pool_{2};
@@ -95,6 +112,8 @@ private:
     std::atomic<std::size_t> in_flight_{0};
     std::mutex sessions_mutex_;
     std::set<std::shared_ptr<Session>> sessions_;
+    std::deque<std::weak_ptr<Session>> unauthenticated_;  // oldest first
+    std::atomic<std::size_t> ops_connections_{0};
     std::chrono::steady_clock::time_point drain_deadline_;
 };
 

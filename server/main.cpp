@@ -47,6 +47,11 @@ Daemon options:
   --queue N                 render jobs waiting across all clients          [64]
   --metrics-listen HOST:PORT  ops HTTP: /healthz /readyz /metrics           [off]
   --heartbeat-ms N          ping idle clients; drop them after 3 intervals  [15000]
+  --max-inflight-bytes N    request bodies held across all clients          [1073741824]
+  --max-unauthenticated N   connections yet to authenticate (with a token)  [16]
+  --auth-timeout-ms N       time a connection has to authenticate           [10000]
+  --drain-seconds N         on SIGTERM, finish in-flight work for at most N s, then cancel it;
+                            a second signal exits at once                   [10]
   --device D                auto, software or an EGL device index           [auto, or $BOUNCE_DEVICE]
   --log-level L             debug, info, warn, error                        [info]
 
@@ -151,6 +156,14 @@ Options parse(int argc, char** argv) {
             options.daemon.queue_capacity = number(flag, value(), 1, 100000);
         } else if (flag == "--metrics-listen") {
             options.daemon.metrics_listen = value();
+        } else if (flag == "--max-inflight-bytes") {
+            options.daemon.max_inflight_bytes = number(flag, value(), 1u << 20, 1ull << 40);
+        } else if (flag == "--max-unauthenticated") {
+            options.daemon.max_unauthenticated = number(flag, value(), 1, 100000);
+        } else if (flag == "--auth-timeout-ms") {
+            options.daemon.auth_timeout = std::chrono::milliseconds(number(flag, value(), 10, 3600000));
+        } else if (flag == "--drain-seconds") {
+            options.daemon.drain_timeout = std::chrono::seconds(number(flag, value(), 0, 3600));
         } else if (flag == "--heartbeat-ms") {
             options.daemon.heartbeat = std::chrono::milliseconds(number(flag, value(), 10, 3600000));
         } else {

@@ -3,6 +3,23 @@
 #include <fmt/format.h>
 
 namespace bounce::server {
+namespace {
+
+// A label value as the Prometheus text format writes it: backslash, double quote and newline
+// escaped, so a client-chosen name (a scene's) can never end the label or the line.
+std::string escape_label(std::string_view value) {
+    std::string escaped;
+    escaped.reserve(value.size());
+    for (const char c : value) {
+        if (c == '\\') escaped += "\\\\";
+        else if (c == '"') escaped += "\\\"";
+        else if (c == '\n') escaped += "\\n";
+        else escaped += c;
+    }
+    return escaped;
+}
+
+}  // namespace
 
 void Metrics::Histogram::observe(double value) {
     for (std::size_t i = 0; i < kBucketsMs.size(); ++i) {
@@ -74,16 +91,16 @@ std::string Metrics::prometheus_text() const {
     out += "# HELP bounce_frames_total Frames rendered and sent.\n# TYPE bounce_frames_total counter\n";
     out += fmt::format("bounce_frames_total {}\n", frames_);
     out += "# HELP bounce_requests_total Requests received, by message type.\n# TYPE bounce_requests_total counter\n";
-    for (const auto& [type, count] : requests_) out += fmt::format("bounce_requests_total{{type=\"{}\"}} {}\n", type, count);
+    for (const auto& [type, count] : requests_) out += fmt::format("bounce_requests_total{{type=\"{}\"}} {}\n", escape_label(type), count);
     out += "# HELP bounce_errors_total Error replies, by code.\n# TYPE bounce_errors_total counter\n";
-    for (const auto& [code, count] : errors_) out += fmt::format("bounce_errors_total{{code=\"{}\"}} {}\n", code, count);
+    for (const auto& [code, count] : errors_) out += fmt::format("bounce_errors_total{{code=\"{}\"}} {}\n", escape_label(code), count);
     out += "# HELP bounce_queue_depth Jobs waiting for the render thread.\n# TYPE bounce_queue_depth gauge\n";
     out += fmt::format("bounce_queue_depth {}\n", queue_depth_);
     out += "# HELP bounce_connections Open client connections.\n# TYPE bounce_connections gauge\n";
     out += fmt::format("bounce_connections {}\n", connections_);
     out += "# HELP bounce_resident_bytes GPU bytes a scene holds.\n# TYPE bounce_resident_bytes gauge\n";
     for (const auto& [scene, bytes] : resident_bytes_) {
-        out += fmt::format("bounce_resident_bytes{{scene=\"{}\"}} {}\n", scene, bytes);
+        out += fmt::format("bounce_resident_bytes{{scene=\"{}\"}} {}\n", escape_label(scene), bytes);
     }
     write_histogram(out, "bounce_render_ms", "Render-thread time per frame, milliseconds.", render_ms_);
     write_histogram(out, "bounce_frame_total_ms", "Receipt to reply per frame, milliseconds.", total_ms_);

@@ -15,16 +15,30 @@ using protocol::ErrorCode;
 using protocol::FieldError;
 using protocol::MessageType;
 
+// The documented ranges of client numbers (docs/protocol.md, "Numbers"): wide enough for any scene
+// the stability tests cover (1e-3 to 1e4 m), narrow enough that products of them stay finite in float.
+constexpr double kMaxCoordinate = 1e7;   // positions, translations, look_at, matrix entries
+constexpr double kMaxAngleDeg = 1e6;     // rotations
+constexpr double kMaxColor = 1e6;        // light colour components
+
 float finite_float(double value, const char* field) {
     const auto f = static_cast<float>(value);
     if (!std::isfinite(f)) throw FieldError(field, fmt::format("field '{}' does not fit a finite float", field));
     return f;
 }
 
-std::optional<glm::vec3> optional_vec3(const json& body, const char* field) {
+float bounded_float(double value, const char* field, double max_abs) {
+    if (!(std::abs(value) <= max_abs)) {
+        throw FieldError(field, fmt::format("field '{}' has {}, outside [-{:g}, {:g}]", field, value, max_abs, max_abs));
+    }
+    return finite_float(value, field);
+}
+
+std::optional<glm::vec3> optional_vec3(const json& body, const char* field, double max_abs) {
     const auto v = protocol::get_optional_numbers(body, field, 3);
     if (!v) return std::nullopt;
-    return glm::vec3(finite_float((*v)[0], field), finite_float((*v)[1], field), finite_float((*v)[2], field));
+    return glm::vec3(bounded_float((*v)[0], field, max_abs), bounded_float((*v)[1], field, max_abs),
+                     bounded_float((*v)[2], field, max_abs));
 }
 
 std::optional<float> optional_in_range(const json& body, const char* field, double min, double max) {
@@ -79,12 +93,12 @@ TransformOrder parse_transform(const json& body) {
     order.object = parse_object(body);
     if (const auto matrix = protocol::get_optional_numbers(body, "matrix", 16)) {
         glm::mat4 m(1.0f);
-        for (int i = 0; i < 16; ++i) glm::value_ptr(m)[i] = finite_float((*matrix)[i], "matrix");
+        for (int i = 0; i < 16; ++i) glm::value_ptr(m)[i] = bounded_float((*matrix)[i], "matrix", kMaxCoordinate);
         order.matrix = m;
         return order;
     }
-    order.translation = optional_vec3(body, "translation");
-    order.rotation_deg = optional_vec3(body, "rotation_deg");
+    order.translation = optional_vec3(body, "translation", kMaxCoordinate);
+    order.rotation_deg = optional_vec3(body, "rotation_deg", kMaxAngleDeg);
     if (const auto scale = protocol::get_optional_number(body, "scale")) {
         if (!(*scale > 0.0 && *scale <= 1e6)) {
             throw FieldError("scale", fmt::format("field 'scale' is {}, outside (0, 1e6]", *scale));
@@ -102,12 +116,12 @@ LightOrder parse_light(const json& body) {
     order.scene = protocol::get_string(body, "scene");
     order.light = protocol::get_string(body, "light");
     if (const auto type = protocol::get_optional_string(body, "type")) order.type = parse_light_type(*type);
-    order.position = optional_vec3(body, "position");
-    if (const auto direction = optional_vec3(body, "direction")) {
+    order.position = optional_vec3(body, "position", kMaxCoordinate);
+    if (const auto direction = optional_vec3(body, "direction", kMaxCoordinate)) {
         if (!(glm::length(*direction) > 1e-12f)) throw FieldError("direction", "field 'direction' is zero");
         order.direction = glm::normalize(*direction);
     }
-    order.color = optional_vec3(body, "color");
+    order.color = optional_vec3(body, "color", kMaxColor);
     if (order.color && glm::any(glm::lessThan(*order.color, glm::vec3(0.0f)))) {
         throw FieldError("color", "field 'color' has a negative component");
     }
@@ -122,12 +136,12 @@ CameraOrder parse_camera(const json& body) {
     order.scene = protocol::get_string(body, "scene");
     order.camera = protocol::get_optional_string(body, "camera");
     if (order.camera) return order;
-    order.position = optional_vec3(body, "position");
-    order.look_at = optional_vec3(body, "look_at");
+    order.position = optional_vec3(body, "position", kMaxCoordinate);
+    order.look_at = optional_vec3(body, "look_at", kMaxCoordinate);
     if (!order.look_at) {
         if (const auto q = protocol::get_optional_numbers(body, "orientation", 4)) {
-            const glm::quat orientation(finite_float((*q)[3], "orientation"), finite_float((*q)[0], "orientation"),
-                                        finite_float((*q)[1], "orientation"), finite_float((*q)[2], "orientation"));
+            const glm::quat orientation(bounded_float((*q)[3], "orientation", kMaxCoordinate), bounded_float((*q)[0], "orientation", kMaxCoordinate),
+                                        bounded_float((*q)[1], "orientation", kMaxCoordinate), bounded_float((*q)[2], "orientation", kMaxCoordinate));
             if (!(glm::length(orientation) > 1e-6f)) throw FieldError("orientation", "field 'orientation' is zero");
             order.orientation = glm::normalize(orientation);
         }

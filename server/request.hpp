@@ -4,6 +4,7 @@
 #pragma once
 
 #include "protocol/protocol.hpp"
+#include "server/byte_budget.hpp"
 #include "server/orders.hpp"
 #include "server/request_error.hpp"
 
@@ -46,6 +47,8 @@ public:
     const Clock::time_point received = Clock::now();
     Clock::time_point deadline = Clock::time_point::max();
     const std::shared_ptr<std::atomic<bool>> cancelled = std::make_shared<std::atomic<bool>>(false);
+    // The bytes of its body in the daemon's ByteBudget, held until the request ends.
+    ByteBudget::Reservation memory;
 
     bool is_cancelled() const { return cancelled->load(); }
     // Throws RequestError `cancelled` or `timeout` when the request should not start.

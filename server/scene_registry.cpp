@@ -30,10 +30,8 @@ SceneEntry& SceneRegistry::put(const std::string& name, scene::Scene scene, std:
 SceneEntry& SceneRegistry::get(const std::string& name) {
     const auto it = scenes_.find(name);
     if (it == scenes_.end()) {
-        std::string known;
-        for (const auto& [n, e] : scenes_) known += (known.empty() ? "" : ", ") + n;
-        throw RequestError(protocol::ErrorCode::not_found,
-                           fmt::format("no scene '{}' (loaded: {})", name, known.empty() ? "none" : known), "scene");
+        // Other clients' scene names are not for this one to read in an error.
+        throw RequestError(protocol::ErrorCode::not_found, fmt::format("no scene '{}'", name), "scene");
     }
     return it->second;
 }

@@ -27,7 +27,7 @@ public:
 
     // Adds or replaces `name`; uploads its geometry to the GPU.
     SceneEntry& put(const std::string& name, scene::Scene scene, std::string source);
-    // Throws NotFound naming the scene and the scenes there are.
+    // Throws RequestError not_found naming the scene (and no other).
     SceneEntry& get(const std::string& name);
     bool remove(const std::string& name);
     std::vector<std::string> names() const;

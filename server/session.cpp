@@ -18,7 +18,11 @@ using protocol::MessageType;
 }  // namespace
 
 Session::Session(Daemon& daemon, asio::ip::tcp::socket socket)
-    : daemon_(daemon), socket_(std::move(socket)), heartbeat_(socket_.get_executor()) {
+    : daemon_(daemon),
+      socket_(std::move(socket)),
+      heartbeat_(socket_.get_executor()),
+      auth_deadline_(socket_.get_executor()),
+      body_memory_(daemon.inflight_bytes()) {
     authorized_ = !daemon_.token().has_value();
 }
 
@@ -26,7 +30,20 @@ void Session::start() {
     boost::system::error_code ignored;
     socket_.set_option(asio::ip::tcp::no_delay(true), ignored);
     arm_heartbeat();
+    if (!authorized_) arm_auth_deadline();
     read_header();
+}
+
+// A connection that has not authenticated in time is closed, whatever else it sends (pings do not
+// keep it alive).
+void Session::arm_auth_deadline() {
+    auth_deadline_.expires_after(daemon_.config().auth_timeout);
+    auth_deadline_.async_wait([self = shared_from_this()](boost::system::error_code error) {
+        if (error || self->closed_ || self->authorized_) return;
+        log::info("session", "closing a connection that did not authenticate within {} ms",
+                  self->daemon_.config().auth_timeout.count());
+        self->close();
+    });
 }
 
 void Session::read_header() {
@@ -38,7 +55,9 @@ void Session::read_header() {
         }
         self->last_heard_ = Clock::now();
         try {
-            self->read_body(protocol::decode_header(self->header_, self->daemon_.limits()));
+            // Before authentication a frame may hold no more than a `hello` needs.
+            const auto limits = self->authorized_ ? self->daemon_.limits() : Daemon::unauthenticated_limits();
+            self->read_body(protocol::decode_header(self->header_, limits));
         } catch (const protocol::ProtocolError& broken) {
             self->broken_frame(broken);
         }
@@ -46,33 +65,82 @@ void Session::read_header() {
 }
 
 void Session::read_body(const protocol::Header& header) {
-    body_.resize(static_cast<std::size_t>(header.json_length) + header.attachment_length);
-    asio::async_read(socket_, asio::buffer(body_), [self = shared_from_this(), header](boost::system::error_code error,
-                                                                                       std::size_t) {
-        if (error) {
-            self->close();
-            return;
-        }
-        self->last_heard_ = Clock::now();
-        protocol::Message message;
-        message.type = header.type;
-        message.request_id = header.request_id;
-        try {
-            message.body = protocol::parse_body(std::span(self->body_).first(header.json_length), header.request_id);
-        } catch (const protocol::ProtocolError& broken) {
-            self->broken_frame(broken);
-            return;
-        }
-        message.attachment.assign(self->body_.begin() + header.json_length, self->body_.end());
-        self->body_.clear();
-        self->body_.shrink_to_fit();
-        self->dispatch(std::move(message));
-        if (self->pending_.size() >= self->daemon_.config().max_in_flight) {
-            self->reading_paused_ = true;  // resumes in finish()
-        } else {
-            self->read_header();
-        }
-    });
+    body_.clear();
+    read_body_chunk(header);
+}
+
+// Reads the body in chunks, each reserved in the daemon's byte budget before it is allocated, so
+// memory follows the bytes that really arrive, never a header's announcement alone.
+void Session::read_body_chunk(const protocol::Header& header) {
+    const std::size_t total = static_cast<std::size_t>(header.json_length) + header.attachment_length;
+    const std::size_t have = body_.size();
+    if (have == total) {
+        body_complete(header);
+        return;
+    }
+    constexpr std::size_t kChunk = 256u << 10;
+    const std::size_t chunk = std::min(kChunk, total - have);
+    if (!body_memory_.grow(chunk)) {
+        // Refused, but the connection stays usable: the rest of the frame is read and dropped.
+        fail(header.request_id, ErrorCode::resource_exhausted,
+             fmt::format("the daemon holds {} of its {} bytes for request bodies in flight (--max-inflight-bytes); "
+                         "this frame's {} bytes do not fit now",
+                         daemon_.inflight_bytes().used(), daemon_.inflight_bytes().limit(), total));
+        body_.clear();
+        body_.shrink_to_fit();
+        body_memory_.release();
+        skip_body(total - have);
+        return;
+    }
+    body_.resize(have + chunk);
+    asio::async_read(socket_, asio::buffer(body_.data() + have, chunk),
+                     [self = shared_from_this(), header](boost::system::error_code error, std::size_t) {
+                         if (error) {
+                             self->close();
+                             return;
+                         }
+                         self->last_heard_ = Clock::now();
+                         self->read_body_chunk(header);
+                     });
+}
+
+// Reads and drops `remaining` bytes through a small scratch buffer, then the next frame.
+void Session::skip_body(std::size_t remaining) {
+    if (remaining == 0) {
+        read_header();
+        return;
+    }
+    const std::size_t chunk = std::min(remaining, skip_scratch_.size());
+    asio::async_read(socket_, asio::buffer(skip_scratch_.data(), chunk),
+                     [self = shared_from_this(), remaining, chunk](boost::system::error_code error, std::size_t) {
+                         if (error) {
+                             self->close();
+                             return;
+                         }
+                         self->skip_body(remaining - chunk);
+                     });
+}
+
+void Session::body_complete(const protocol::Header& header) {
+    protocol::Message message;
+    message.type = header.type;
+    message.request_id = header.request_id;
+    try {
+        message.body = protocol::parse_body(std::span(body_).first(header.json_length), header.request_id);
+    } catch (const protocol::ProtocolError& broken) {
+        broken_frame(broken);
+        return;
+    }
+    message.attachment.assign(body_.begin() + header.json_length, body_.end());
+    body_.clear();
+    body_.shrink_to_fit();
+    dispatch(std::move(message));
+    body_memory_.release();  // a request that keeps its attachment took its own reservation
+    if (pending_.size() >= daemon_.config().max_in_flight) {
+        reading_paused_ = true;  // resumes in finish()
+    } else {
+        read_header();
+    }
 }
 
 // The one boundary of the connection's own requests: whatever a handler throws is answered as
@@ -134,11 +202,19 @@ void Session::hello(const protocol::Message& message) {
     }
     if (daemon_.token()) {
         const auto token = protocol::get_optional_string(message.body, "token").value_or("");
+        const bool was_authorized = authorized_;
         authorized_ = protocol::same_token(token, *daemon_.token());
         if (!authorized_) {
+            if (was_authorized) arm_auth_deadline();  // revoked: authenticate again in time, or go
             fail(id, ErrorCode::unauthorized, "hello: missing or wrong token", "token");
             return;
         }
+        if (!was_authorized && !daemon_.authenticated(this)) {
+            fail(id, ErrorCode::busy, fmt::format("{} clients are connected (--max-clients)", daemon_.config().max_clients));
+            close_after_write_ = true;
+            return;
+        }
+        auth_deadline_.cancel();
     }
     send({static_cast<std::uint16_t>(MessageType::hello), id, daemon_.hello_body(), {}});
 }
@@ -157,6 +233,8 @@ void Session::submit(protocol::Message message) {
         return;
     }
     auto request = std::make_shared<Request>(shared_from_this(), std::move(message));
+    if (!request->message().attachment.empty()) request->memory = std::move(body_memory_);  // held while it runs
+    body_memory_ = ByteBudget::Reservation(daemon_.inflight_bytes());
     pending_[id] = {request->cancelled};
     daemon_.request_started();
     daemon_.handlers().admit(request);
@@ -256,6 +334,7 @@ void Session::close() {
         self->closed_ = true;
         boost::system::error_code ignored;
         self->heartbeat_.cancel();
+        self->auth_deadline_.cancel();
         self->socket_.shutdown(asio::ip::tcp::socket::shutdown_both, ignored);
         self->socket_.close(ignored);
         for (auto& [id, pending] : self->pending_) pending.cancelled->store(true);

@@ -5,6 +5,7 @@
 #pragma once
 
 #include "protocol/protocol.hpp"
+#include "server/byte_budget.hpp"
 #include "server/request.hpp"
 
 #include <boost/asio.hpp>
@@ -40,6 +41,9 @@ private:
 
     void read_header();
     void read_body(const protocol::Header& header);
+    void read_body_chunk(const protocol::Header& header);
+    void body_complete(const protocol::Header& header);
+    void skip_body(std::size_t remaining);
     void dispatch(protocol::Message message);
     void hello(const protocol::Message& message);
     void cancel(const protocol::Message& message);
@@ -51,12 +55,16 @@ private:
     void enqueue(std::vector<std::uint8_t> bytes);
     void write_next();
     void arm_heartbeat();
+    void arm_auth_deadline();
 
     Daemon& daemon_;
     boost::asio::ip::tcp::socket socket_;
     boost::asio::steady_timer heartbeat_;
+    boost::asio::steady_timer auth_deadline_;
     std::array<std::uint8_t, protocol::kHeaderSize> header_{};
-    std::vector<std::uint8_t> body_;
+    std::vector<std::uint8_t> body_;  // grows as its bytes arrive, each chunk reserved first
+    ByteBudget::Reservation body_memory_;
+    std::array<std::uint8_t, 16384> skip_scratch_{};
     std::deque<std::vector<std::uint8_t>> output_;
     std::size_t output_bytes_ = 0;
     bool writing_ = false;

@@ -40,7 +40,7 @@ float Camera::far_plane_for(const Aabb& bounds) const {
 }
 
 float far_plane_distance(const Aabb& bounds, const glm::vec3& from) {
-    return std::max(bounds.farthest_distance(from) * 1.01f, 1e-6f);
+    return std::max(bounds.farthest_distance(from) * 1.05f, 1e-6f);
 }
 
 Camera Camera::look_at(const glm::vec3& eye, const glm::vec3& target, const glm::vec3& up,

@@ -153,7 +153,7 @@ struct Camera {
 };
 
 // The far-plane distance of a view from `from` that must hold all of `bounds`: the farthest corner
-// plus 1%, so rounding never clips it; never zero. Cameras and light views share it.
+// plus 5%, so rounding never clips it; never zero. Cameras and light views share it.
 float far_plane_distance(const Aabb& bounds, const glm::vec3& from);
 
 // The view of a scene that has no camera: from +Z towards the centre of `bounds`, all of them in view.

@@ -1,5 +1,5 @@
 // The radiosity hierarchy, the CSSM visibility query and the stackless cut traversal that gathers
-// light at one receiver (§3.2.2, §4.3 of ../shared/papers/cssm-ritschel-2008.md). Used by the atlas
+// light at one receiver (§3.2.2, §4.3 of [cssm] in docs/references.md). Used by the atlas
 // gather (receiver: a texel) and the final gather (receiver: a pixel). The buffers' structs are in
 // cssm/cssm_layout.h, shared with C++.
 #include "cssm/cssm_layout.h"

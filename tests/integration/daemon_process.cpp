@@ -55,9 +55,18 @@ bool DaemonProcess::running() const {
 
 int DaemonProcess::terminate_and_wait() {
     if (pid_ <= 0) return -1;
-    kill(pid_, SIGTERM);
+    send_signal(SIGTERM);
+    return wait_for_exit(std::chrono::seconds(20));
+}
+
+void DaemonProcess::send_signal(int signal) const {
+    if (pid_ > 0) kill(pid_, signal);
+}
+
+int DaemonProcess::wait_for_exit(std::chrono::seconds limit) {
+    if (pid_ <= 0) return -1;
     int status = 0;
-    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+    const auto deadline = std::chrono::steady_clock::now() + limit;
     while (waitpid(pid_, &status, WNOHANG) == 0) {
         if (std::chrono::steady_clock::now() > deadline) {
             kill(pid_, SIGKILL);
@@ -68,6 +77,15 @@ int DaemonProcess::terminate_and_wait() {
     }
     pid_ = -1;
     return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+long DaemonProcess::resident_kb() const {
+    std::ifstream status("/proc/" + std::to_string(pid_) + "/status");
+    std::string line;
+    while (std::getline(status, line)) {
+        if (line.rfind("VmRSS:", 0) == 0) return std::stol(line.substr(6));
+    }
+    return -1;
 }
 
 void DaemonProcess::kill_hard() {

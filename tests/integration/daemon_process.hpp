@@ -3,6 +3,7 @@
 
 #include "client/client.hpp"
 
+#include <chrono>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -19,6 +20,13 @@ public:
     client::Endpoint endpoint() const { return {"127.0.0.1", port_}; }
     // Sends SIGTERM and returns the exit status (the process's exit code, or 128 + signal).
     int terminate_and_wait();
+    void send_signal(int signal) const;
+    // Waits for the process to exit, at most `limit` (then SIGKILL, so the status says 128 + 9);
+    // returns the exit status as terminate_and_wait does.
+    int wait_for_exit(std::chrono::seconds limit);
+    int pid() const { return pid_; }
+    // The process's resident set size now, from /proc (kB).
+    long resident_kb() const;
     // SIGKILL: the daemon gets no chance to clean up (a crash, or a machine going down).
     void kill_hard();
     bool running() const;

@@ -1,9 +1,10 @@
 #include "renderer/methods/cssm/cssm_display.hpp"
 
+#include "renderer/base/hash.hpp"
+
 #include "cssm/cssm_layout.h"
 #include "common/shared_layout.h"
 
-#include <functional>
 
 namespace bounce::methods::cssm {
 
@@ -44,11 +45,11 @@ void CssmDisplay::final_gather(const FrameContext& frame, const GatherTree& tree
 
 void CssmDisplay::jittered_final_gather(const FrameContext& frame, const GatherTree& tree, const GatherSettings& settings,
                                         std::uint64_t lighting) {
-    const float threshold = settings.final_threshold;
-    std::uint64_t view = lighting ^ std::hash<float>{}(threshold) ^ (static_cast<std::uint64_t>(settings.pcf) << 32) ^
-                         (static_cast<std::uint64_t>(frame.width) << 16) ^ static_cast<std::uint64_t>(frame.height);
-    for (int c = 0; c < 4; ++c)
-        for (int r = 0; r < 4; ++r) view = view * 1099511628211ull ^ std::hash<float>{}(frame.view_projection[c][r]);
+    // What the accumulated mean depends on: a change of any of it starts the mean anew.
+    Hasher hash;
+    hash.add(lighting).add(settings.final_threshold).add(settings.pcf).add(frame.width).add(frame.height);
+    hash.add(frame.view_projection);
+    const std::uint64_t view = hash.value();
     if (!jitter_mean_ || jitter_mean_.width() != frame.width || jitter_mean_.height() != frame.height) {
         jitter_mean_ = gpu::Texture({GL_TEXTURE_2D, GL_RGBA32F, frame.width, frame.height});
         jitter_frame_ = gpu::Texture({GL_TEXTURE_2D, GL_RGBA32F, frame.width, frame.height});
@@ -68,7 +69,8 @@ void CssmDisplay::jittered_final_gather(const FrameContext& frame, const GatherT
     if (jittered_frames_ < settings.jitter_frames) {
         ++jittered_frames_;
         glClearTexImage(jitter_frame_.id(), 0, GL_RGBA, GL_FLOAT, nullptr);
-        final_gather(frame, tree, jitter_target_, threshold, settings.pcf, static_cast<unsigned>(jittered_frames_));
+        final_gather(frame, tree, jitter_target_, settings.final_threshold, settings.pcf,
+                     static_cast<unsigned>(jittered_frames_));
         gpu::GpuTimers::Scope timing(frame.timers, "cssm_accumulate");
         const gpu::ShaderProgram& accumulate = frame.shaders.get(gpu::ProgramSource::compute_shader("cssm/accumulate.comp"));
         accumulate.use();

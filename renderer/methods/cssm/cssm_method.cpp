@@ -1,5 +1,6 @@
 #include "renderer/methods/cssm/cssm_method.hpp"
 
+#include "renderer/base/hash.hpp"
 #include "renderer/gpu/counter_buffer.hpp"
 #include "renderer/methods/cssm/cssm_display.hpp"
 #include "renderer/methods/cssm/gather_tree.hpp"
@@ -15,7 +16,6 @@
 
 #include <fmt/format.h>
 
-#include <functional>
 
 namespace bounce::methods::cssm {
 namespace {
@@ -36,11 +36,12 @@ public:
         ensure_bake(frame);
         if (!bake_ || bake_.bake().texel_count() == 0) return;
         settings_ = GatherSettings::of(frame);
-        const std::uint64_t lighting =
-            passes::light_view_fingerprint(frame.scene, frame.knob_int("shadow_map_size")) ^
-            (static_cast<std::uint64_t>(settings_.bounces) << 56) ^ (settings_.per_texel ? 1ull << 40 : 0ull) ^
-            (static_cast<std::uint64_t>(settings_.pcf) << 48) ^ std::hash<float>{}(settings_.threshold) ^
-            bake_.generation();
+        // What the atlas solution depends on: a change of any of it solves again.
+        Hasher hash;
+        hash.add(passes::light_view_fingerprint(frame.scene, frame.knob_int("shadow_map_size")));
+        hash.add(settings_.bounces).add(settings_.per_texel).add(settings_.pcf).add(settings_.threshold);
+        hash.add(bake_.generation());
+        const std::uint64_t lighting = hash.value();
         batches_.update(settings_.pcf, bake_, placement_);
         const GatherTree tree{bake_, placement_, batches_, counters_};
         if (lighting != lighting_) {

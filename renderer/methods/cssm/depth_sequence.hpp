@@ -1,5 +1,5 @@
 // A long sequence of depth maps of equal size, compressed per pixel (§3.2 of
-// ../shared/papers/cssm-ritschel-2008.md and its CSM predecessor): each pixel's depths along the
+// [cssm] in docs/references.md and its CSM predecessor): each pixel's depths along the
 // sequence become a piecewise-constant run list. A map need not store its first hit exactly: any
 // value between the first and the second hit answers a shadow test the same way (dual depth
 // layers), and pixels that no query reads are "don't care". So a run continues while the

@@ -1,5 +1,5 @@
 // The hierarchy of `cssm`'s GPU hierarchical radiosity (§4.2 of
-// ../shared/papers/cssm-ritschel-2008.md): a binary median-cut tree over the atlas texels with a
+// [cssm] in docs/references.md): a binary median-cut tree over the atlas texels with a
 // bounding sphere, a normal cone and the area of each node, stored depth-first as a linear array
 // with child and skip pointers, so a traversal needs no stack: follow the child to refine, the skip
 // to move past a subtree.

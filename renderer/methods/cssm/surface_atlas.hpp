@@ -1,4 +1,4 @@
-// The surface atlas of `cssm` (§3.2.3 of ../shared/papers/cssm-ritschel-2008.md): the surfaces of
+// The surface atlas of `cssm` (§3.2.3 of [cssm] in docs/references.md): the surfaces of
 // a set of rigid objects cut into charts and packed into one texel grid, each texel a small patch
 // with position, normal, area and material. Texels are the senders and receivers of the radiosity
 // solution and the points where depth cube maps are baked.

@@ -1,5 +1,6 @@
 #include "renderer/methods/vct/vct_method.hpp"
 
+#include "renderer/base/hash.hpp"
 #include "renderer/methods/vct/sparse_voxel_octree.hpp"
 #include "renderer/passes/direct_light_pass.hpp"
 #include "renderer/passes/light_view_maps.hpp"
@@ -165,12 +166,11 @@ private:
             changed = true;
         }
         if (std::find(dynamic_.begin(), dynamic_.end(), true) != dynamic_.end()) {
-            std::uint64_t fingerprint = 1469598103934665603ull;
+            Hasher hash;
             for (std::size_t i = 0; i < scene.objects.size(); ++i) {
-                if (!dynamic_[i]) continue;
-                const auto* bytes = reinterpret_cast<const unsigned char*>(&scene.objects[i].transform);
-                for (std::size_t b = 0; b < sizeof(glm::mat4); ++b) fingerprint = (fingerprint ^ bytes[b]) * 1099511628211ull;
+                if (dynamic_[i]) hash.add(i).add(scene.objects[i].transform);
             }
+            const std::uint64_t fingerprint = hash.value();
             if (changed || fingerprint != dynamic_fingerprint_) {
                 octree_.update_dynamic(frame, is_dynamic);
                 dynamic_fingerprint_ = fingerprint;
