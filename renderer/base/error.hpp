@@ -23,6 +23,14 @@ public:
     using Error::Error;
 };
 
+// Input that is well formed but would take more memory than a budget allows (a scene whose decoded
+// size is past its limit): the message names the largest part and the budget. It is an InputError,
+// so a caller that catches both must catch this one first.
+class ResourceExhausted : public InputError {
+public:
+    using InputError::InputError;
+};
+
 // Thrown when long work stops because its caller asked it to (a progress callback returned false).
 class Cancelled : public Error {
 public:

@@ -117,7 +117,6 @@ public:
 
     Scene convert(std::string name) {
         scene_.name = std::move(name);
-        check_accessor_bounds(model_);
         convert_materials();
         convert_meshes();
         flatten_nodes();

@@ -10,10 +10,11 @@
 
 namespace bounce::scene::gltf {
 
-// The scene `model` describes: accessors checked, then materials and textures, meshes (normals and
-// tangents generated where the file has none or unusable ones), the node hierarchy flattened into
-// objects, lights and cameras, and a default camera when there is none. Faults throw InputError;
-// what falls back adds to `warnings`.
+// The scene `model` describes, its accessors already checked (check_accessor_bounds) and its images
+// decoded (decode_images): materials and textures, meshes (normals and tangents generated where the
+// file has none or unusable ones), the node hierarchy flattened into objects, lights and cameras,
+// and a default camera when there is none. Faults throw InputError; what falls back adds to
+// `warnings`.
 Scene convert_model(const tinygltf::Model& model, const LoadContext& context, Warnings& warnings,
                     std::string name);
 

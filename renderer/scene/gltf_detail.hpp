@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cstdint>
+#include <filesystem>
 #include <map>
 #include <string>
 #include <utility>
@@ -22,6 +23,8 @@ using Json = nlohmann::json;
 inline constexpr std::uint64_t max_accessor_count = std::uint64_t{1} << 28;
 inline constexpr int max_image_side = 16384;
 inline constexpr std::uint64_t max_input_bytes = 0xFFFFFFFFull;  // tinygltf takes lengths as unsigned int
+// JSON nested deeper than this is refused before any parser sees it: nlohmann and tinygltf recurse.
+inline constexpr int max_json_depth = 128;
 
 // A fault in the input: throws InputError with `message`.
 [[noreturn]] inline void reject(const std::string& message) { throw InputError(message); }
@@ -41,10 +44,20 @@ private:
     std::vector<std::string> list_;
 };
 
+// An image's size as its header declares it, read before anything is decoded.
+struct ImageHeader {
+    std::uint64_t width = 0;
+    std::uint64_t height = 0;
+};
+
 // What the callbacks installed by install_callbacks (gltf_validation.hpp) record during a load.
+// tinygltf decodes no image: its image callback only reads headers, and the images a material uses
+// are decoded after the scene's size was checked (gltf_images.hpp).
 struct LoadContext {
-    std::map<int, std::string> image_failures;  // image index -> why it has no pixels
-    std::vector<std::string> refused_paths;     // file reads refused for an upload
+    std::filesystem::path folder;                // a file's canonical folder: file access stays inside
+    std::map<int, ImageHeader> image_headers;    // image index -> its header, for those to decode
+    std::map<int, std::string> image_failures;   // image index -> why it has no pixels
+    std::vector<std::string> refused_paths;      // file reads refused for an upload
 };
 
 }  // namespace bounce::scene::gltf

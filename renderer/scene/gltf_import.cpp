@@ -1,13 +1,19 @@
 // glTF 2.0 import through tinygltf.
 //
 // The input is untrusted (uploads reach import_glb_memory), so the importer does not rely on
-// tinygltf's own validation: before tinygltf sees the document, the JSON is type-checked and every
-// bufferView is checked against its buffer (gltf_validation); after loading, every accessor is
-// checked against its bufferView and every index against the vertex count before anything is read
-// (gltf_accessors, gltf_convert). This file runs those steps in order for both entry points.
+// tinygltf's own validation: before tinygltf sees the document, the JSON's nesting depth is bounded,
+// it is type-checked, every bufferView is checked against its buffer and every URI against where
+// files may be read (gltf_validation). tinygltf then loads without decoding images, only reading
+// their headers (gltf_images). Every accessor is checked against its bufferView (gltf_accessors) and
+// the scene's size against its budget (gltf_budget); only then are the images decoded and the model
+// converted, every index checked against the vertex count before anything is read (gltf_convert).
+// This file runs those steps in order for both entry points.
 #include "renderer/scene/gltf_import.hpp"
 
+#include "renderer/scene/gltf_accessors.hpp"
+#include "renderer/scene/gltf_budget.hpp"
 #include "renderer/scene/gltf_convert.hpp"
+#include "renderer/scene/gltf_images.hpp"
 #include "renderer/scene/gltf_validation.hpp"
 
 #include <algorithm>
@@ -23,8 +29,9 @@ namespace {
 struct Source {
     std::span<const std::uint8_t> bytes;
     std::string scene_name;
-    std::string base_dir;        // where external files are looked up (files only)
-    bool embedded_only = false;  // an upload: no file access at all
+    std::filesystem::path folder;  // the file's canonical folder: external files lie inside (files only)
+    bool embedded_only = false;    // an upload: no file access at all
+    ImportLimits limits;
 };
 
 void log_tinygltf_warnings(const std::string& label, const std::string& text) {
@@ -54,19 +61,25 @@ Scene import_bytes(const Source& source, const std::string& label) {
     const Json document = parse_json(json_text);
     check_structure(document, warnings);
     check_extensions(document, warnings);
-    if (source.embedded_only) refuse_external_uris(document);
+    if (source.embedded_only) {
+        refuse_external_uris(document);
+    } else {
+        confine_uris(document, source.folder);
+    }
 
     LoadContext context;
+    context.folder = source.folder;
     tinygltf::TinyGLTF loader;
     install_callbacks(loader, context, source.embedded_only);
     tinygltf::Model model;
     std::string error;
     std::string warning;
     const auto length = static_cast<unsigned int>(source.bytes.size());
+    const std::string base_dir = source.folder.string();
     const bool loaded = binary ? loader.LoadBinaryFromMemory(&model, &error, &warning, source.bytes.data(),
-                                                             length, source.base_dir)
+                                                             length, base_dir)
                                : loader.LoadASCIIFromString(&model, &error, &warning, json_text.data(),
-                                                            length, source.base_dir);
+                                                            length, base_dir);
     if (!context.refused_paths.empty()) {
         reject(fmt::format("refers to the external file '{}'; an uploaded GLB must embed all its data",
                            context.refused_paths.front()));
@@ -78,17 +91,22 @@ Scene import_bytes(const Source& source, const std::string& label) {
     log_tinygltf_warnings(label, warning);
     if (!error.empty()) log_tinygltf_warnings(label, error);  // non-fatal complaints
 
+    check_accessor_bounds(model);
+    check_scene_size(model, context, source.limits.max_scene_bytes);
+    decode_images(model, document, context);
     Scene scene = convert_model(model, context, warnings, source.scene_name);
     scene.warnings = warnings.take();
     validate_finite(scene);
     return scene;
 }
 
-// Runs `import` and prefixes every InputError with the name of what was loaded.
+// Runs `import` and prefixes every InputError with the name of what was loaded, keeping its type.
 template <typename Import>
 Scene naming_faults(const std::string& label, Import&& import) {
     try {
         return import();
+    } catch (const ResourceExhausted& error) {
+        throw ResourceExhausted(fmt::format("{}: {}", label, error.what()));
     } catch (const InputError& error) {
         throw InputError(fmt::format("{}: {}", label, error.what()));
     }
@@ -101,7 +119,7 @@ namespace bounce::scene {
 
 using namespace gltf;
 
-Scene import_gltf_file(const std::filesystem::path& path) {
+Scene import_gltf_file(const std::filesystem::path& path, const ImportLimits& limits) {
     const std::string label = path.filename().string();
     return naming_faults(label, [&] {
         std::error_code code;
@@ -123,18 +141,23 @@ Scene import_gltf_file(const std::filesystem::path& path) {
         Source source;
         source.bytes = bytes;
         source.scene_name = path.stem().string();
-        source.base_dir = path.parent_path().string();
+        const std::filesystem::path folder = path.parent_path().empty() ? "." : path.parent_path();
+        source.folder = std::filesystem::canonical(folder, code);
+        if (code) reject(fmt::format("cannot resolve the folder of {}: {}", path.string(), code.message()));
+        source.limits = limits;
         return import_bytes(source, label);
     });
 }
 
-Scene import_glb_memory(std::span<const std::uint8_t> bytes, const std::string& name) {
+Scene import_glb_memory(std::span<const std::uint8_t> bytes, const std::string& name,
+                        const ImportLimits& limits) {
     return naming_faults(name, [&] {
         if (!has_glb_magic(bytes)) reject("not a binary glTF: bad magic");
         Source source;
         source.bytes = bytes;
         source.scene_name = name;
         source.embedded_only = true;
+        source.limits = limits;
         return import_bytes(source, name);
     });
 }

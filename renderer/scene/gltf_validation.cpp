@@ -1,5 +1,9 @@
 #include "renderer/scene/gltf_validation.hpp"
 
+#include "renderer/scene/gltf_images.hpp"
+
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -368,73 +372,89 @@ private:
 };
 
 // ------------------------------------------------------------------------------------------------
-// tinygltf callbacks: image decoding that never fails the load, and file access.
+// JSON nesting, counted on the raw text: nlohmann and tinygltf both recurse into nested containers,
+// so a file of a few hundred kilobytes of brackets would exhaust the stack of whatever parses it.
 
-// Width and height from a PNG or JPEG header, so that oversized images are refused before decoding.
-std::optional<std::pair<std::uint64_t, std::uint64_t>> peek_image_size(const unsigned char* bytes,
-                                                                       std::size_t size) {
-    static constexpr unsigned char png_signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
-    auto be16 = [&](std::size_t at) { return std::uint64_t{bytes[at]} << 8 | bytes[at + 1]; };
-    auto be32 = [&](std::size_t at) { return be16(at) << 16 | be16(at + 2); };
-    if (size >= 24 && std::memcmp(bytes, png_signature, 8) == 0) return std::pair{be32(16), be32(20)};
-    if (size >= 4 && bytes[0] == 0xFF && bytes[1] == 0xD8) {
-        std::size_t at = 2;
-        while (at + 9 < size) {
-            if (bytes[at] != 0xFF) return std::nullopt;
-            const unsigned char marker = bytes[at + 1];
-            if (marker == 0xFF) {
-                ++at;  // fill byte
-                continue;
+void check_json_depth(std::string_view text) {
+    int depth = 0;
+    bool in_string = false;
+    for (std::size_t i = 0; i < text.size(); ++i) {
+        const char c = text[i];
+        if (in_string) {
+            if (c == '\\') {
+                ++i;  // an escaped character never ends the string
+            } else if (c == '"') {
+                in_string = false;
             }
-            const bool start_of_frame =
-                marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 && marker != 0xCC;
-            if (start_of_frame) return std::pair{be16(at + 7), be16(at + 5)};
-            at += 2 + be16(at + 2);
+            continue;
+        }
+        if (c == '"') {
+            in_string = true;
+        } else if (c == '[' || c == '{') {
+            if (++depth > max_json_depth) {
+                reject(fmt::format("the JSON nests arrays and objects more than {} levels deep (at byte {})",
+                                   max_json_depth, i));
+            }
+        } else if (c == ']' || c == '}') {
+            depth = std::max(depth - 1, 0);  // an unbalanced close is the parser's to report
         }
     }
-    return std::nullopt;
 }
 
-bool decode_image(tinygltf::Image* image, const int image_index, std::string* /*err*/, std::string* warn,
-                  int required_width, int required_height, const unsigned char* bytes, int size,
-                  void* user_data) {
-    auto& context = *static_cast<LoadContext*>(user_data);
-    // A failed image must not fail the scene: record why, leave the pixels empty and carry on.
-    auto give_up = [&](std::string reason) {
-        image->image.clear();
-        image->width = image->height = 0;
-        context.image_failures[image_index] = std::move(reason);
-        return true;
-    };
-    if (const auto dimensions = peek_image_size(bytes, static_cast<std::size_t>(size))) {
-        if (dimensions->first > max_image_side || dimensions->second > max_image_side) {
-            return give_up(fmt::format("{}x{} pixels exceeds the limit of {} per side", dimensions->first,
-                                       dimensions->second, max_image_side));
+// ------------------------------------------------------------------------------------------------
+// URIs and file access. A file import reads only inside the glTF file's folder (context.folder,
+// canonical); an upload reads no file at all.
+
+// Calls `visit(key, index, uri)` for each buffer and image that has a URI.
+template <typename Visit>
+void for_each_uri(const Json& root, Visit&& visit) {
+    for (const char* key : {"buffers", "images"}) {
+        const auto array = root.find(key);
+        if (array == root.end()) continue;
+        for (std::size_t i = 0; i < array->size(); ++i) {
+            const auto uri = (*array)[i].find("uri");
+            if (uri != (*array)[i].end()) visit(key, i, uri->get_ref<const std::string&>());
         }
     }
-    std::string decode_error;
-    // No user data: tinygltf's defaults, which expand every image to four channels.
-    if (!tinygltf::LoadImageData(image, image_index, &decode_error, warn, required_width, required_height,
-                                 bytes, size, nullptr)) {
-        while (!decode_error.empty() && decode_error.back() == '\n') decode_error.pop_back();
-        return give_up(decode_error.empty() ? "it could not be decoded" : decode_error);
-    }
-    if (image->width > max_image_side || image->height > max_image_side) {
-        return give_up(fmt::format("{}x{} pixels exceeds the limit of {} per side", image->width,
-                                   image->height, max_image_side));
-    }
-    return true;
 }
 
-bool file_exists(const std::string& path, void*) {
+// A URI's %XX escapes decoded, and '+' read as a space, as tinygltf does before it opens the file.
+std::string percent_decoded(std::string_view uri) {
+    std::string out;
+    out.reserve(uri.size());
+    for (std::size_t i = 0; i < uri.size(); ++i) {
+        const bool escape = uri[i] == '%' && i + 2 < uri.size() &&
+                            std::isxdigit(static_cast<unsigned char>(uri[i + 1])) &&
+                            std::isxdigit(static_cast<unsigned char>(uri[i + 2]));
+        if (escape) {
+            out += static_cast<char>(std::stoi(std::string(uri.substr(i + 1, 2)), nullptr, 16));
+            i += 2;
+        } else {
+            out += uri[i] == '+' ? ' ' : uri[i];
+        }
+    }
+    return out;
+}
+
+// Whether `path` lies inside `folder` (canonical) once `..` and symlinks are resolved.
+bool inside_folder(const std::filesystem::path& path, const std::filesystem::path& folder) {
     std::error_code error;
-    return std::filesystem::is_regular_file(path, error);
+    const std::filesystem::path resolved = std::filesystem::weakly_canonical(path, error);
+    if (error) return false;
+    const auto [folder_end, unused] =
+        std::mismatch(folder.begin(), folder.end(), resolved.begin(), resolved.end());
+    return folder_end == folder.end();
 }
 
-// Paths are used as given: no shell-style expansion.
-std::string path_as_is(const std::string& path, void*) { return path; }
+// tinygltf looks a file up next to the glTF file and then in the working directory; only the first
+// counts, and only inside the folder.
+bool confined(const std::string& path, const LoadContext& context) {
+    std::string prefix = context.folder.string();
+    if (!prefix.ends_with('/')) prefix += '/';
+    return path.starts_with(prefix) && inside_folder(path, context.folder);
+}
 
-bool read_file(std::vector<unsigned char>* out, std::string* err, const std::string& path, void*) {
+bool read_whole_file(std::vector<unsigned char>* out, std::string* err, const std::string& path) {
     std::error_code code;
     const std::uintmax_t size = std::filesystem::file_size(path, code);
     std::ifstream stream(path, std::ios::binary);
@@ -449,6 +469,24 @@ bool read_file(std::vector<unsigned char>* out, std::string* err, const std::str
     }
     return true;
 }
+
+bool confined_file_exists(const std::string& path, void* user_data) {
+    std::error_code error;
+    return confined(path, *static_cast<const LoadContext*>(user_data)) &&
+           std::filesystem::is_regular_file(path, error);
+}
+
+bool confined_read(std::vector<unsigned char>* out, std::string* err, const std::string& path,
+                   void* user_data) {
+    if (!confined(path, *static_cast<const LoadContext*>(user_data))) {
+        if (err) *err = "outside the folder of the glTF file";
+        return false;
+    }
+    return read_whole_file(out, err, path);
+}
+
+// Paths are used as given: no shell-style expansion.
+std::string path_as_is(const std::string& path, void*) { return path; }
 
 bool refuse_write(std::string* err, const std::string&, const std::vector<unsigned char>&, void*) {
     if (err) *err = "the importer does not write files";
@@ -494,6 +532,7 @@ std::string_view glb_json_chunk(std::span<const std::uint8_t> bytes) {
 }
 
 Json parse_json(std::string_view text) {
+    check_json_depth(text);
     try {
         return Json::parse(text.begin(), text.end());
     } catch (const Json::exception& error) {
@@ -525,29 +564,42 @@ void check_extensions(const Json& root, Warnings& warnings) {
 }
 
 void refuse_external_uris(const Json& root) {
-    for (const char* key : {"buffers", "images"}) {
-        const auto array = root.find(key);
-        if (array == root.end()) continue;
-        for (std::size_t i = 0; i < array->size(); ++i) {
-            const auto uri = (*array)[i].find("uri");
-            if (uri == (*array)[i].end()) continue;
-            const std::string& text = uri->get_ref<const std::string&>();
-            if (!text.starts_with("data:")) {
-                reject(
-                    fmt::format("{}[{}] refers to the external file '{}'; an uploaded GLB must embed all "
-                                "its data",
-                                key, i, text));
-            }
+    for_each_uri(root, [](const char* key, std::size_t index, const std::string& uri) {
+        if (uri.starts_with("data:")) return;
+        reject(fmt::format("{}[{}] refers to the external file '{}'; an uploaded GLB must embed all its data",
+                           key, index, uri));
+    });
+}
+
+void confine_uris(const Json& root, const std::filesystem::path& folder) {
+    for_each_uri(root, [&](const char* key, std::size_t index, const std::string& uri) {
+        if (tinygltf::IsDataURI(uri)) return;  // what tinygltf does not take for data, it reads as a file
+        const std::string decoded = percent_decoded(uri);
+        const std::filesystem::path relative(decoded);
+        if (decoded.find('\0') != std::string::npos || relative.has_root_path()) {
+            reject(fmt::format("{}[{}].uri '{}' is not a relative path; files must lie in the folder of the "
+                               "glTF file",
+                               key, index, uri));
         }
-    }
+        if (!inside_folder(folder / relative, folder)) {
+            reject(fmt::format("{}[{}].uri '{}' leads outside the folder of the glTF file", key, index, uri));
+        }
+    });
+}
+
+std::optional<std::vector<unsigned char>> read_uri_file(const std::string& uri, const LoadContext& context) {
+    const std::string path = (context.folder / percent_decoded(uri)).string();
+    std::vector<unsigned char> bytes;
+    if (!confined(path, context) || !read_whole_file(&bytes, nullptr, path)) return std::nullopt;
+    return bytes;
 }
 
 void install_callbacks(tinygltf::TinyGLTF& loader, LoadContext& context, bool embedded_only) {
-    loader.SetImageLoader(&decode_image, &context);
+    loader.SetImageLoader(&record_image_header, &context);
     if (embedded_only) {
         loader.SetFsCallbacks({&refuse_file_exists, &path_as_is, &refuse_read, &refuse_write, &context});
     } else {
-        loader.SetFsCallbacks({&file_exists, &path_as_is, &read_file, &refuse_write, nullptr});
+        loader.SetFsCallbacks({&confined_file_exists, &path_as_is, &confined_read, &refuse_write, &context});
     }
 }
 

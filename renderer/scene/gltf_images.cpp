@@ -1,0 +1,141 @@
+#include "renderer/scene/gltf_images.hpp"
+
+#include "renderer/scene/gltf_validation.hpp"
+
+#include <cstring>
+#include <span>
+
+namespace bounce::scene::gltf {
+namespace {
+
+// The bytes of image `index` as tinygltf had them: its bufferView's, or its URI's decoded again.
+// Empty when they cannot be had again.
+struct EncodedImage {
+    std::span<const unsigned char> bytes;
+    std::vector<unsigned char> owned;
+};
+
+EncodedImage encoded_image(const tinygltf::Model& model, const Json& document, int index,
+                           const LoadContext& context) {
+    EncodedImage encoded;
+    const tinygltf::Image& image = model.images[static_cast<std::size_t>(index)];
+    if (image.bufferView >= 0) {
+        const tinygltf::BufferView& view = model.bufferViews.at(static_cast<std::size_t>(image.bufferView));
+        const std::vector<unsigned char>& data = model.buffers.at(static_cast<std::size_t>(view.buffer)).data;
+        if (view.byteOffset <= data.size() && view.byteLength <= data.size() - view.byteOffset) {
+            encoded.bytes = std::span(data).subspan(view.byteOffset, view.byteLength);
+        }
+        return encoded;
+    }
+    const std::string& uri =
+        document.at("images").at(static_cast<std::size_t>(index)).at("uri").get_ref<const std::string&>();
+    if (tinygltf::IsDataURI(uri)) {
+        std::string mime_type;
+        if (!tinygltf::DecodeDataURI(&encoded.owned, mime_type, uri, 0, false)) encoded.owned.clear();
+    } else if (auto file = read_uri_file(uri, context)) {
+        encoded.owned = std::move(*file);
+    }
+    encoded.bytes = encoded.owned;
+    return encoded;
+}
+
+// Decodes one image into `image` (tinygltf's defaults: every image expanded to four channels); the
+// reason it has no pixels otherwise.
+std::optional<std::string> decode(tinygltf::Image& image, int index, const ImageHeader& header,
+                                  std::span<const unsigned char> bytes) {
+    if (bytes.empty()) return "the image file could not be read again";
+    std::string error;
+    std::string warning;
+    if (!tinygltf::LoadImageData(&image, index, &error, &warning, 0, 0, bytes.data(),
+                                 static_cast<int>(bytes.size()), nullptr)) {
+        while (!error.empty() && error.back() == '\n') error.pop_back();
+        return error.empty() ? "it could not be decoded" : error;
+    }
+    if (static_cast<std::uint64_t>(image.width) != header.width ||
+        static_cast<std::uint64_t>(image.height) != header.height) {
+        const std::string reason =
+            fmt::format("it decodes to {}x{} pixels, not the {}x{} its header declares", image.width,
+                        image.height, header.width, header.height);
+        image.image = {};
+        image.width = image.height = 0;
+        return reason;
+    }
+    return std::nullopt;
+}
+
+}  // namespace
+
+std::optional<ImageHeader> peek_image_size(const unsigned char* bytes, std::size_t size) {
+    static constexpr unsigned char png_signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
+    auto be16 = [&](std::size_t at) { return std::uint64_t{bytes[at]} << 8 | bytes[at + 1]; };
+    auto be32 = [&](std::size_t at) { return be16(at) << 16 | be16(at + 2); };
+    if (size >= 24 && std::memcmp(bytes, png_signature, 8) == 0) {
+        if (std::memcmp(bytes + 12, "IHDR", 4) != 0) return std::nullopt;  // the first chunk must be IHDR
+        return ImageHeader{be32(16), be32(20)};
+    }
+    if (size >= 4 && bytes[0] == 0xFF && bytes[1] == 0xD8) {
+        std::size_t at = 2;
+        while (at + 9 < size) {
+            if (bytes[at] != 0xFF) return std::nullopt;
+            const unsigned char marker = bytes[at + 1];
+            if (marker == 0xFF) {
+                ++at;  // fill byte
+                continue;
+            }
+            const bool start_of_frame =
+                marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 && marker != 0xCC;
+            if (start_of_frame) return ImageHeader{be16(at + 7), be16(at + 5)};
+            at += 2 + be16(at + 2);
+        }
+    }
+    return std::nullopt;
+}
+
+bool record_image_header(tinygltf::Image* /*image*/, int image_index, std::string* /*err*/,
+                         std::string* /*warn*/, int /*required_width*/, int /*required_height*/,
+                         const unsigned char* bytes, int size, void* user_data) {
+    auto& context = *static_cast<LoadContext*>(user_data);
+    const std::optional<ImageHeader> header = peek_image_size(bytes, static_cast<std::size_t>(size));
+    if (!header || header->width == 0 || header->height == 0) {
+        context.image_failures[image_index] = "cannot decode it: it is not a PNG or JPEG image";
+    } else if (header->width > max_image_side || header->height > max_image_side) {
+        context.image_failures[image_index] = fmt::format("{}x{} pixels exceeds the limit of {} per side",
+                                                          header->width, header->height, max_image_side);
+    } else {
+        context.image_headers[image_index] = *header;
+    }
+    return true;
+}
+
+std::vector<bool> images_in_use(const tinygltf::Model& model) {
+    std::vector<bool> used(model.images.size(), false);
+    auto use = [&](const auto& info) {
+        if (info.index < 0 || static_cast<std::size_t>(info.index) >= model.textures.size()) return;
+        if (info.texCoord > 1) return;  // the converter ignores it
+        const int source = model.textures[static_cast<std::size_t>(info.index)].source;
+        if (source >= 0 && static_cast<std::size_t>(source) < used.size()) {
+            used[static_cast<std::size_t>(source)] = true;
+        }
+    };
+    for (const tinygltf::Material& material : model.materials) {
+        use(material.pbrMetallicRoughness.baseColorTexture);
+        use(material.pbrMetallicRoughness.metallicRoughnessTexture);
+        use(material.normalTexture);
+        use(material.emissiveTexture);
+    }
+    return used;
+}
+
+void decode_images(tinygltf::Model& model, const Json& document, LoadContext& context) {
+    const std::vector<bool> used = images_in_use(model);
+    for (const auto& [index, header] : context.image_headers) {
+        if (!used.at(static_cast<std::size_t>(index))) continue;
+        tinygltf::Image& image = model.images[static_cast<std::size_t>(index)];
+        const EncodedImage encoded = encoded_image(model, document, index, context);
+        if (std::optional<std::string> failure = decode(image, index, header, encoded.bytes)) {
+            context.image_failures[index] = std::move(*failure);
+        }
+    }
+}
+
+}  // namespace bounce::scene::gltf
