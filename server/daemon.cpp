@@ -98,6 +98,8 @@ Daemon::Daemon(DaemonConfig config)
         }
         scene_root_.root = std::filesystem::canonical(*config_.scene_root);
     }
+    scene_root_.max_scene_bytes = config_.max_scene_bytes;
+    scene_root_.max_scenes = config_.max_scenes;
     render_ = std::make_unique<RenderService>(gpu::DeviceChoice::resolve(config_.device), config_.queue_capacity);
     // The built-in scene, and one tiny frame so every shader is compiled before we report ready.
     if (config_.cache_dir) {

@@ -46,6 +46,8 @@ struct DaemonConfig {
     // max_clients, the oldest closed to admit a new one; and how long they have to say hello.
     std::size_t max_unauthenticated = 16;
     std::chrono::milliseconds auth_timeout{10000};
+    std::uint64_t max_scene_bytes = std::uint64_t{2} << 30;  // a scene's decoded size (--max-scene-bytes)
+    std::size_t max_scenes = 64;                              // scenes resident at once (--max-scenes)
     std::size_t max_ops_connections = 16;  // ops HTTP connections at once
     std::chrono::milliseconds ops_timeout{10000};  // to read an ops request and write its answer
     int network_threads = 2;

@@ -48,6 +48,8 @@ Daemon options:
   --metrics-listen HOST:PORT  ops HTTP: /healthz /readyz /metrics           [off]
   --heartbeat-ms N          ping idle clients; drop them after 3 intervals  [15000]
   --max-inflight-bytes N    request bodies held across all clients          [1073741824]
+  --max-scene-bytes N       a scene's decoded size (geometry and images)    [2147483648]
+  --max-scenes N            scenes resident at once                         [64]
   --max-unauthenticated N   connections yet to authenticate (with a token)  [16]
   --auth-timeout-ms N       time a connection has to authenticate           [10000]
   --drain-seconds N         on SIGTERM, finish in-flight work for at most N s, then cancel it;
@@ -158,6 +160,10 @@ Options parse(int argc, char** argv) {
             options.daemon.metrics_listen = value();
         } else if (flag == "--max-inflight-bytes") {
             options.daemon.max_inflight_bytes = number(flag, value(), 1u << 20, 1ull << 40);
+        } else if (flag == "--max-scene-bytes") {
+            options.daemon.max_scene_bytes = number(flag, value(), 1024, 1ull << 40);
+        } else if (flag == "--max-scenes") {
+            options.daemon.max_scenes = number(flag, value(), 1, 100000);
         } else if (flag == "--max-unauthenticated") {
             options.daemon.max_unauthenticated = number(flag, value(), 1, 100000);
         } else if (flag == "--auth-timeout-ms") {

@@ -11,6 +11,8 @@ Failure describe_failure(std::exception_ptr error) {
         return {protocol::ErrorCode::bad_request, e.what(), e.field};
     } catch (const protocol::ProtocolError& e) {
         return {e.code, e.what(), std::nullopt};
+    } catch (const ResourceExhausted& e) {
+        return {protocol::ErrorCode::resource_exhausted, e.what(), std::nullopt};
     } catch (const Cancelled& e) {
         return {protocol::ErrorCode::cancelled, e.what(), std::nullopt};
     } catch (const InputError& e) {

@@ -72,16 +72,22 @@ std::filesystem::path resolve_in_root(const std::filesystem::path& root, const s
 
 json load_scene(SceneRegistry& registry, const SceneRoot& root, const LoadOrder& order,
                 std::span<const std::uint8_t> attachment) {
+    if (!registry.entries().count(order.name) && registry.entries().size() >= root.max_scenes) {
+        throw RequestError(ErrorCode::resource_exhausted,
+                           fmt::format("the daemon holds {} scenes, its limit (--max-scenes): unload one first",
+                                       registry.entries().size()), "name");
+    }
+    const scene::ImportLimits limits{root.max_scene_bytes};
     scene::Scene loaded;
     std::string source;
     if (order.path) {
         if (!root.root) {
             throw RequestError(ErrorCode::unsupported, "this daemon has no --scene-root: load by path is off", "path");
         }
-        loaded = scene::import_gltf_file(resolve_in_root(*root.root, *order.path));
+        loaded = scene::import_gltf_file(resolve_in_root(*root.root, *order.path), limits);
         source = *order.path;
     } else if (order.upload) {
-        loaded = scene::import_glb_memory(attachment, order.name);
+        loaded = scene::import_glb_memory(attachment, order.name, limits);
         source = "upload";
     } else {
         try {

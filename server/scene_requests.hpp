@@ -14,8 +14,11 @@
 
 namespace bounce::server {
 
+// Where scene.load may read and how much a scene may take.
 struct SceneRoot {
     std::optional<std::filesystem::path> root;  // scene.load by path is refused without one
+    std::uint64_t max_scene_bytes = std::uint64_t{2} << 30;
+    std::size_t max_scenes = 64;
 };
 
 // Resolves `relative` inside `root`; refuses absolute paths, '..' and symlinks leading outside.

@@ -733,6 +733,29 @@ TEST(DaemonHardening, DrainDeadlineCancelsRunningWorkAndASecondSignalExitsAtOnce
     }
 }
 
+// The import budget through the daemon: a scene past --max-scene-bytes is resource_exhausted
+// naming its largest part, scenes past --max-scenes are refused, and serving goes on.
+TEST(DaemonHardening, SceneBudgetsAreResourceExhausted) {
+    DaemonProcess daemon({"--max-scene-bytes", "100000", "--max-scenes", "2"});
+    const auto baseline = cornell_frame(daemon.endpoint());
+    Client client(daemon.endpoint());
+    std::ifstream in(kModels + "/BoxTextured-glTF-Binary/BoxTextured.glb", std::ios::binary);
+    const std::vector<std::uint8_t> glb{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+    ASSERT_FALSE(glb.empty());
+    try {
+        client.request(MessageType::scene_load, {{"name", "box"}}, glb);
+        ADD_FAILURE() << "expected resource_exhausted";
+    } catch (const ServerError& error) {
+        EXPECT_EQ(error.code(), ErrorCode::resource_exhausted) << error.what();
+        EXPECT_NE(std::string(error.what()).find("image 0"), std::string::npos) << error.what();
+    }
+    client.request(MessageType::scene_load, {{"name", "second"}, {"builtin", "cornell"}});  // cornell + second
+    expect_error([&] { client.request(MessageType::scene_load, {{"name", "third"}, {"builtin", "cornell"}}); },
+                 ErrorCode::resource_exhausted, "name");
+    client.request(MessageType::scene_load, {{"name", "second"}, {"builtin", "cornell_blob"}});  // a replacement fits
+    expect_still_serving(daemon.endpoint(), baseline);
+}
+
 // not_found names the scene asked for and no other client's.
 TEST(DaemonHardening, NotFoundDoesNotListOtherScenes) {
     DaemonProcess daemon;
