@@ -336,6 +336,32 @@ TEST(CssmBakeCache, WellFormedFilesWithAnIndexOutOfRangeOrAnotherFormatAreReject
     std::filesystem::remove_all(dir);
 }
 
+// A writer that died mid-write leaves a temporary file; the next writer in the directory removes
+// it, and leaves alone those of writers that still live (this process's own, here). New
+// temporaries are created exclusively, so none is left after a store.
+TEST(CssmBakeCache, LeftoversOfDeadWritersAreRemovedAndLiveOnesKept) {
+    const scene::Scene scene = scene::make_cornell_box();
+    const auto dir = std::filesystem::temp_directory_path() / ("bounce-cssm-leftover-test-" + std::to_string(::getpid()));
+    std::filesystem::remove_all(dir);
+    std::filesystem::create_directories(dir);
+    // pid 2^31-1 is beyond any kernel's pid_max: no such process.
+    const auto dead = dir / ".group.bin.tmp-2147483647-abcdef";
+    const auto live = dir / (".group.bin.tmp-" + std::to_string(::getpid()) + "-ghijkl");
+    std::ofstream(dead) << "half a bake";
+    std::ofstream(live) << "a bake being written";
+    const CssmBake bake = bake_scene(scene, BakeParameters{8.0f, 4, Traversal::spiral, 16}, {});
+    store_cached_group(dir, bake.groups[0]);
+    EXPECT_FALSE(std::filesystem::exists(dead));
+    EXPECT_TRUE(std::filesystem::exists(live));
+    std::size_t temporaries = 0;
+    for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+        temporaries += entry.path().filename().string().find(".tmp-") != std::string::npos;
+    }
+    EXPECT_EQ(temporaries, 1u);  // the live writer's only
+    EXPECT_TRUE(load_cached_group(dir, bake.groups[0].key, bake.groups[0].objects).has_value());
+    std::filesystem::remove_all(dir);
+}
+
 TEST(CssmMovingObjects, CoherentShadowMapsAgreeWithRayQueriesForSegmentsPastTheBlock) {
     const scene::Scene cornell = scene::make_cornell_box();
     // The tall block alone, in its own space, as a moving group bakes it.

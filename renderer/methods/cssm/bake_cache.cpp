@@ -7,10 +7,14 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <atomic>
+#include <cerrno>
+#include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <mutex>
+#include <set>
 #include <type_traits>
 #include <unistd.h>
 
@@ -272,17 +276,53 @@ std::optional<BakeGroup> load_cached_group(const std::filesystem::path& dir, con
     }
 }
 
+namespace {
+
+// Temporary files are named ".<final name>.tmp-<pid>-<random>": the pid says whether the writer
+// still lives, so a writer that died mid-write (killed, power lost) leaves nothing behind for long.
+constexpr std::string_view kTemporaryMark = ".tmp-";
+
+void remove_leftovers_once(const std::filesystem::path& dir) {
+    static std::mutex mutex;
+    static std::set<std::filesystem::path> cleaned;
+    std::lock_guard lock(mutex);
+    if (!cleaned.insert(dir).second) return;
+    std::error_code error;
+    for (const auto& entry : std::filesystem::directory_iterator(dir, error)) {
+        const std::string name = entry.path().filename().string();
+        const auto mark = name.find(kTemporaryMark);
+        if (name.empty() || name[0] != '.' || mark == std::string::npos) continue;
+        const long pid = std::strtol(name.c_str() + mark + kTemporaryMark.size(), nullptr, 10);
+        if (pid <= 0 || (::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH)) {
+            std::error_code ignored;
+            if (std::filesystem::remove(entry.path(), ignored)) {
+                log::info("cssm", "removed {}, left by a bake writer that is gone", entry.path().string());
+            }
+        }
+    }
+}
+
+}  // namespace
+
 void store_cached_group(const std::filesystem::path& dir, const BakeGroup& group) {
-    static std::atomic<std::uint64_t> counter{0};
     std::error_code ignored;
     std::filesystem::create_directories(dir, ignored);
+    remove_leftovers_once(dir);
     const std::vector<char> payload = serialize(group);
     const std::uint64_t checksum = hash_bytes(payload.data(), payload.size());
     const std::filesystem::path final_path = bake_path(dir, group.key);
-    const std::filesystem::path temporary =
-        dir / fmt::format(".{}.tmp-{}-{}", final_path.filename().string(), ::getpid(), counter.fetch_add(1));
-    std::FILE* file = std::fopen(temporary.c_str(), "wb");
-    if (!file) BOUNCE_FAIL("cssm: cannot write the bake cache {}: {}", temporary.string(), std::strerror(errno));
+    // Created exclusively with an unpredictable name (mkstemp), never opened over someone's file.
+    std::string name = (dir / fmt::format(".{}{}{}-XXXXXX", final_path.filename().string(), kTemporaryMark, ::getpid()))
+                           .string();
+    const int descriptor = ::mkstemp(name.data());
+    if (descriptor < 0) BOUNCE_FAIL("cssm: cannot create a file in the bake cache {}: {}", dir.string(), std::strerror(errno));
+    const std::filesystem::path temporary(name);
+    std::FILE* file = ::fdopen(descriptor, "wb");
+    if (!file) {
+        ::close(descriptor);
+        std::filesystem::remove(temporary, ignored);
+        BOUNCE_FAIL("cssm: cannot write the bake cache {}: {}", temporary.string(), std::strerror(errno));
+    }
     const std::uint64_t size = payload.size();
     bool ok = std::fwrite(kMagic, 1, sizeof(kMagic), file) == sizeof(kMagic) &&
               std::fwrite(&size, sizeof(size), 1, file) == 1 && std::fwrite(&checksum, sizeof(checksum), 1, file) == 1 &&

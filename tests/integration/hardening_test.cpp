@@ -1,0 +1,163 @@
+// bounced against hostile and careless clients: connections that never authenticate, bodies
+// announced but not sent, budgets, shutdown under load, what errors reveal.
+#include "daemon_support.hpp"
+
+#include <boost/asio.hpp>
+
+#include <array>
+#include <chrono>
+#include <csignal>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <thread>
+#include <unistd.h>
+
+namespace bounce::test {
+namespace {
+
+// A plain TCP connection that speaks raw frames, for clients that misbehave.
+struct RawConnection {
+    boost::asio::io_context io;
+    boost::asio::ip::tcp::socket socket{io};
+    explicit RawConnection(const client::Endpoint& endpoint) {
+        socket.connect({boost::asio::ip::make_address(endpoint.host), endpoint.port});
+    }
+    void send(const std::vector<std::uint8_t>& bytes) { boost::asio::write(socket, boost::asio::buffer(bytes)); }
+    // True when the daemon closed the connection (reads end) within `limit`.
+    bool closed_by_daemon(std::chrono::milliseconds limit) {
+        socket.non_blocking(true);
+        const auto deadline = std::chrono::steady_clock::now() + limit;
+        std::array<std::uint8_t, 4096> scratch{};
+        while (std::chrono::steady_clock::now() < deadline) {
+            boost::system::error_code error;
+            socket.read_some(boost::asio::buffer(scratch), error);
+            if (error == boost::asio::error::eof || error == boost::asio::error::connection_reset) return true;
+            if (error && error != boost::asio::error::would_block) return true;
+            std::this_thread::sleep_for(std::chrono::milliseconds(10));
+        }
+        return false;
+    }
+};
+
+// Before authentication: frames hold no more than a hello; connections that never authenticate
+// are closed at the auth deadline and have their own cap, the oldest making way, so a flood of
+// them that only ping cannot lock out a client with the token.
+TEST(DaemonHardening, UnauthenticatedConnectionsCannotLockOutAClient) {
+    const auto token_file = std::filesystem::temp_directory_path() / ("bounce-token-" + std::to_string(::getpid()));
+    std::ofstream(token_file) << "correct-horse-battery-staple\n";
+    DaemonProcess daemon({"--token-file", token_file.string(), "--max-unauthenticated", "4", "--auth-timeout-ms", "1500"});
+    std::vector<std::unique_ptr<RawConnection>> flood;
+    for (int i = 0; i < 20; ++i) {
+        flood.push_back(std::make_unique<RawConnection>(daemon.endpoint()));
+        flood.back()->send(frame_bytes(MessageType::ping, 1, json::object()));
+    }
+    Client client(daemon.endpoint(), "correct-horse-battery-staple");
+    EXPECT_EQ(render(client, {{"scene", "cornell"}, {"width", 16}, {"height", 16}}).width, 16);
+    // The first 16 of the flood were closed to make room (cap 4).
+    for (int i = 0; i < 16; ++i) EXPECT_TRUE(flood[i]->closed_by_daemon(std::chrono::milliseconds(2000))) << i;
+    // The newest ones are closed at the auth deadline, pings notwithstanding.
+    flood[19]->send(frame_bytes(MessageType::ping, 2, json::object()));
+    EXPECT_TRUE(flood[19]->closed_by_daemon(std::chrono::milliseconds(5000)));
+    // A frame larger than a hello before authentication: too_large, and the connection closes.
+    RawConnection big(daemon.endpoint());
+    big.send(frame_bytes(MessageType::scene_list, 3, {{"padding", std::string(5000, 'x')}}));
+    EXPECT_TRUE(big.closed_by_daemon(std::chrono::milliseconds(2000)));
+    std::filesystem::remove(token_file);
+}
+
+// Memory follows arrival: headers announcing 200 MiB bodies that never come cost the daemon
+// nothing like it, and an upload past --max-inflight-bytes is refused with resource_exhausted
+// while other clients are served.
+TEST(DaemonHardening, AnnouncedBodiesCostNothingUntilTheyArrive) {
+    DaemonProcess daemon({"--max-inflight-bytes", "4194304"});
+    const auto baseline = cornell_frame(daemon.endpoint());
+    const long before_kb = daemon.resident_kb();
+    std::vector<std::unique_ptr<RawConnection>> announcers;
+    for (int i = 0; i < 8; ++i) {
+        announcers.push_back(std::make_unique<RawConnection>(daemon.endpoint()));
+        protocol::Header header;
+        header.type = static_cast<std::uint16_t>(MessageType::scene_load);
+        header.request_id = 1;
+        header.json_length = 2;
+        header.attachment_length = 200u << 20;
+        const auto bytes = protocol::encode_header(header);
+        announcers.back()->send(std::vector<std::uint8_t>(bytes.begin(), bytes.end()));
+        announcers.back()->send({'{', '}'});
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(500));
+    // Each announcer holds at most its first 256 KiB chunk: 2 MiB in all, against the 1.6 GiB
+    // announced; 64 MiB leaves room for the allocator's own bookkeeping.
+    EXPECT_LT(daemon.resident_kb() - before_kb, 64 * 1024);
+    // 8 x 256 KiB of the 4 MiB budget are held; a 6 MiB upload cannot fit.
+    Client client(daemon.endpoint());
+    expect_error([&] { client.request(MessageType::scene_load, {{"name", "big"}}, std::vector<std::uint8_t>(6u << 20, 0)); },
+                 ErrorCode::resource_exhausted);
+    expect_still_serving(daemon.endpoint(), baseline);
+}
+
+// A second SIGTERM exits at once; after the first, in-flight work is cancelled at the drain
+// deadline, an hours-long reference trace included, and the daemon exits 0.
+TEST(DaemonHardening, DrainDeadlineCancelsRunningWorkAndASecondSignalExitsAtOnce) {
+    const json hours = {{"scene", "cornell"}, {"method", "reference"}, {"width", 128}, {"height", 128},
+                        {"knobs", {{"spp", 65536}}}};
+    {
+        DaemonProcess daemon({"--drain-seconds", "1"});
+        Client client(daemon.endpoint());
+        client.send_raw(frame_bytes(MessageType::render, 5, hours));
+        std::this_thread::sleep_for(std::chrono::milliseconds(300));  // the trace is running
+        daemon.send_signal(SIGTERM);
+        // Drained for one second, then cancelled: exit 0, long before the SIGKILL at 15 s.
+        EXPECT_EQ(daemon.wait_for_exit(std::chrono::seconds(15)), 0);
+    }
+    {
+        DaemonProcess daemon({"--drain-seconds", "600"});
+        Client client(daemon.endpoint());
+        client.send_raw(frame_bytes(MessageType::render, 5, hours));
+        std::this_thread::sleep_for(std::chrono::milliseconds(300));
+        daemon.send_signal(SIGTERM);
+        std::this_thread::sleep_for(std::chrono::milliseconds(200));
+        daemon.send_signal(SIGTERM);
+        EXPECT_EQ(daemon.wait_for_exit(std::chrono::seconds(15)), 128 + SIGTERM);
+    }
+}
+
+// The import budget through the daemon: a scene past --max-scene-bytes is resource_exhausted
+// naming its largest part, scenes past --max-scenes are refused, and serving goes on.
+TEST(DaemonHardening, SceneBudgetsAreResourceExhausted) {
+    DaemonProcess daemon({"--max-scene-bytes", "100000", "--max-scenes", "2"});
+    const auto baseline = cornell_frame(daemon.endpoint());
+    Client client(daemon.endpoint());
+    std::ifstream in(kModels + "/BoxTextured-glTF-Binary/BoxTextured.glb", std::ios::binary);
+    const std::vector<std::uint8_t> glb{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+    ASSERT_FALSE(glb.empty());
+    try {
+        client.request(MessageType::scene_load, {{"name", "box"}}, glb);
+        ADD_FAILURE() << "expected resource_exhausted";
+    } catch (const ServerError& error) {
+        EXPECT_EQ(error.code(), ErrorCode::resource_exhausted) << error.what();
+        EXPECT_NE(std::string(error.what()).find("image 0"), std::string::npos) << error.what();
+    }
+    client.request(MessageType::scene_load, {{"name", "second"}, {"builtin", "cornell"}});  // cornell + second
+    expect_error([&] { client.request(MessageType::scene_load, {{"name", "third"}, {"builtin", "cornell"}}); },
+                 ErrorCode::resource_exhausted, "name");
+    client.request(MessageType::scene_load, {{"name", "second"}, {"builtin", "cornell_blob"}});  // a replacement fits
+    expect_still_serving(daemon.endpoint(), baseline);
+}
+
+// not_found names the scene asked for and no other client's.
+TEST(DaemonHardening, NotFoundDoesNotListOtherScenes) {
+    DaemonProcess daemon;
+    Client client(daemon.endpoint());
+    client.request(MessageType::scene_load, {{"name", "secret-project-x"}, {"builtin", "cornell"}});
+    try {
+        client.request(MessageType::scene_describe, {{"name", "nope"}});
+        ADD_FAILURE() << "expected not_found";
+    } catch (const ServerError& error) {
+        EXPECT_EQ(error.code(), ErrorCode::not_found);
+        EXPECT_EQ(std::string(error.what()).find("secret-project-x"), std::string::npos) << error.what();
+    }
+}
+
+}  // namespace
+}  // namespace bounce::test
