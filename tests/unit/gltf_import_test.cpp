@@ -474,6 +474,20 @@ TEST(GltfImportMemory, RefusesGarbage) {
     }
 }
 
+TEST(GltfImportMemory, RefusesALengthShorterThanItsHeaders) {
+    // A total length under the 20 bytes of headers once let a JSON chunk length past the input through.
+    std::vector<std::uint8_t> glb = {'g', 'l', 'T', 'F', 2, 0, 0, 0, 0, 0, 0, 0,  // total length 0
+                                     0, 0, 4, 0, 'J', 'S', 'O', 'N'};             // 262144 bytes of JSON
+    glb.resize(64, ' ');
+    try {
+        import_glb_memory(glb, "upload");
+        ADD_FAILURE() << "a GLB shorter than its headers loaded";
+    } catch (const InputError& error) {
+        EXPECT_NE(std::string(error.what()).find("truncated GLB: header says 0 bytes"), std::string::npos)
+            << error.what();
+    }
+}
+
 TEST(GltfImportAccepts, UnlitSceneEarnsOneWarning) {
     const Scene scene = import_gltf_file(assimp_dir / "BoxTextured-glTF/BoxTextured.gltf");
     EXPECT_EQ(warnings_mentioning(scene, "no lights and no emissive"), 1u);
