@@ -265,6 +265,14 @@ TEST(GltfImportOwn, MissingTextureFallsBackToTheFactor) {
     EXPECT_TRUE(scene.textures.empty());
 }
 
+TEST(GltfImportOwn, PngChunkPastTheEndIsNotDecoded) {
+    // Its IDAT chunk declares 512 MiB in a file of a hundred bytes: the decoder would allocate it all.
+    const Scene scene = import_gltf_file(own_dir / "oversized_png_chunk.gltf");
+    ASSERT_EQ(scene.objects.size(), 1u);
+    EXPECT_EQ(warnings_mentioning(scene, "a PNG chunk runs past the end of the image"), 1u);
+    EXPECT_TRUE(scene.textures.empty());
+}
+
 TEST(GltfImportOwn, RequiredUnsupportedExtensionIsRefused) {
     const std::string message = import_error(own_dir / "required_unsupported_extension.gltf");
     EXPECT_NE(message.find("required_unsupported_extension.gltf: requires the unsupported extension "
