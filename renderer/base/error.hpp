@@ -6,7 +6,6 @@
 
 #include <fmt/format.h>
 
-#include <source_location>
 #include <stdexcept>
 #include <string>
 
@@ -37,24 +36,33 @@ public:
     using Error::Error;
 };
 
+// Where a failure was raised. Filled from __FILE__ and __LINE__ rather than std::source_location,
+// which clang before 15 cannot compile with libstdc++ (the fuzz build uses clang-14).
+struct SourceLine {
+    const char* file;
+    unsigned line;
+};
+
 namespace detail {
-[[noreturn]] void throw_error(const std::string& message, const std::source_location& where);
+[[noreturn]] void throw_error(const std::string& message, const SourceLine& where);
 }
 
 template <typename... Args>
-[[noreturn]] void fail(const std::source_location& where, fmt::format_string<Args...> format,
+[[noreturn]] void fail(const SourceLine& where, fmt::format_string<Args...> format,
                        Args&&... args) {
     detail::throw_error(fmt::format(format, std::forward<Args>(args)...), where);
 }
 
 }  // namespace bounce
 
-#define BOUNCE_FAIL(...) ::bounce::fail(std::source_location::current(), __VA_ARGS__)
+#define BOUNCE_HERE (::bounce::SourceLine{__FILE__, __LINE__})
+
+#define BOUNCE_FAIL(...) ::bounce::fail(BOUNCE_HERE, __VA_ARGS__)
 
 #define BOUNCE_CHECK(condition, ...)                                                          \
     do {                                                                                      \
         if (!(condition)) {                                                                   \
-            ::bounce::fail(std::source_location::current(), "check failed: {}: {}", #condition, \
+            ::bounce::fail(BOUNCE_HERE, "check failed: {}: {}", #condition,                   \
                            fmt::format(__VA_ARGS__));                                         \
         }                                                                                     \
     } while (false)

@@ -76,8 +76,10 @@ KnobValues MethodRegistry::resolve(const std::string& method, const std::string&
     }
     KnobValues values = preset_it->second;
     for (const auto& [name, value] : overrides) {
+        // Compared by a named reference: clang before 16 does not capture structured bindings.
+        const std::string& knob = name;
         const auto spec = std::find_if(info.knobs.begin(), info.knobs.end(),
-                                       [&](const KnobSpec& k) { return k.name == name; });
+                                       [&](const KnobSpec& k) { return k.name == knob; });
         if (spec == info.knobs.end()) {
             std::vector<std::string> known;
             for (const auto& k : info.knobs) known.push_back(k.name);

@@ -39,11 +39,28 @@ EncodedImage encoded_image(const tinygltf::Model& model, const Json& document, i
     return encoded;
 }
 
+// Whether every chunk of a PNG lies inside its bytes. stb_image grows its buffer for the image data
+// to each chunk's declared length before reading the chunk, so a few bytes declaring a chunk of
+// 1 GiB would allocate that much, outside any budget.
+bool png_chunks_inside(std::span<const unsigned char> bytes) {
+    if (bytes.size() < 8 || bytes[0] != 0x89) return true;  // not a PNG
+    std::size_t at = 8;                                       // past the signature
+    while (bytes.size() - at >= 8) {
+        const std::uint64_t length = std::uint64_t{bytes[at]} << 24 | std::uint64_t{bytes[at + 1]} << 16 |
+                                     std::uint64_t{bytes[at + 2]} << 8 | bytes[at + 3];
+        if (length + 4 > bytes.size() - at - 8) return false;  // data and CRC
+        if (std::memcmp(bytes.data() + at + 4, "IEND", 4) == 0) return true;
+        at += 12 + length;
+    }
+    return true;  // a cut-off chunk header: the decoder fails on it without allocating
+}
+
 // Decodes one image into `image` (tinygltf's defaults: every image expanded to four channels); the
 // reason it has no pixels otherwise.
 std::optional<std::string> decode(tinygltf::Image& image, int index, const ImageHeader& header,
                                   std::span<const unsigned char> bytes) {
     if (bytes.empty()) return "the image file could not be read again";
+    if (!png_chunks_inside(bytes)) return "a PNG chunk runs past the end of the image";
     std::string error;
     std::string warning;
     if (!tinygltf::LoadImageData(&image, index, &error, &warning, 0, 0, bytes.data(),

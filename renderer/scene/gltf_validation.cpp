@@ -522,6 +522,9 @@ std::string_view glb_json_chunk(std::span<const std::uint8_t> bytes) {
     if (total_length > bytes.size()) {
         reject(fmt::format("truncated GLB: header says {} bytes, got {}", total_length, bytes.size()));
     }
+    if (total_length < 20) {  // and total_length - 20 below would wrap around
+        reject(fmt::format("truncated GLB: header says {} bytes, its headers alone take 20", total_length));
+    }
     const std::uint32_t json_length = read_u32_le(bytes.data() + 12);
     const std::uint32_t chunk_type = read_u32_le(bytes.data() + 16);
     if (chunk_type != 0x4E4F534Au) reject("GLB: the first chunk is not JSON");

@@ -265,6 +265,14 @@ TEST(GltfImportOwn, MissingTextureFallsBackToTheFactor) {
     EXPECT_TRUE(scene.textures.empty());
 }
 
+TEST(GltfImportOwn, PngChunkPastTheEndIsNotDecoded) {
+    // Its IDAT chunk declares 512 MiB in a file of a hundred bytes: the decoder would allocate it all.
+    const Scene scene = import_gltf_file(own_dir / "oversized_png_chunk.gltf");
+    ASSERT_EQ(scene.objects.size(), 1u);
+    EXPECT_EQ(warnings_mentioning(scene, "a PNG chunk runs past the end of the image"), 1u);
+    EXPECT_TRUE(scene.textures.empty());
+}
+
 TEST(GltfImportOwn, RequiredUnsupportedExtensionIsRefused) {
     const std::string message = import_error(own_dir / "required_unsupported_extension.gltf");
     EXPECT_NE(message.find("required_unsupported_extension.gltf: requires the unsupported extension "
@@ -471,6 +479,20 @@ TEST(GltfImportMemory, RefusesGarbage) {
         ADD_FAILURE() << "a truncated GLB loaded";
     } catch (const InputError& error) {
         EXPECT_NE(std::string(error.what()).find("truncated GLB"), std::string::npos) << error.what();
+    }
+}
+
+TEST(GltfImportMemory, RefusesALengthShorterThanItsHeaders) {
+    // A total length under the 20 bytes of headers once let a JSON chunk length past the input through.
+    std::vector<std::uint8_t> glb = {'g', 'l', 'T', 'F', 2, 0, 0, 0, 0, 0, 0, 0,  // total length 0
+                                     0, 0, 4, 0, 'J', 'S', 'O', 'N'};             // 262144 bytes of JSON
+    glb.resize(64, ' ');
+    try {
+        import_glb_memory(glb, "upload");
+        ADD_FAILURE() << "a GLB shorter than its headers loaded";
+    } catch (const InputError& error) {
+        EXPECT_NE(std::string(error.what()).find("truncated GLB: header says 0 bytes"), std::string::npos)
+            << error.what();
     }
 }
 
