@@ -309,12 +309,17 @@ int Daemon::run() {
     acceptor_.bind(endpoint);
     acceptor_.listen();
     const auto port = acceptor_.local_endpoint().port();
+    start_metrics_server();
     if (config_.port_file) {
+        // The protocol port, then the ops HTTP port when there is one (either may be asked as :0).
         const auto temporary = config_.port_file->string() + ".tmp";
-        std::ofstream(temporary) << port << "\n";
+        {
+            std::ofstream out(temporary);
+            out << port << "\n";
+            if (metrics_acceptor_) out << metrics_acceptor_->local_endpoint().port() << "\n";
+        }
         std::filesystem::rename(temporary, *config_.port_file);
     }
-    start_metrics_server();
     signals_.async_wait([this](boost::system::error_code error, int signal) {
         if (error) return;
         log::info("daemon", "signal {} received: draining for at most {} ms", signal, config_.drain_timeout.count());

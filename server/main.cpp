@@ -36,7 +36,7 @@ constexpr const char* kUsage = R"(usage: bounced [daemon options]
 
 Daemon options:
   --listen HOST:PORT        address to serve on (port 0: any free port)   [127.0.0.1:7878]
-  --port-file F             write the bound port to F once listening
+  --port-file F             write the bound port (and the ops port) to F once listening
   --scene-root DIR          scene.load paths resolve inside DIR             [loading by path is off]
   --cache-dir DIR           where baked structures are cached
   --token-file F            clients must send this token (required off loopback)

@@ -100,8 +100,9 @@ TransformOrder parse_transform(const json& body) {
     order.translation = optional_vec3(body, "translation", kMaxCoordinate);
     order.rotation_deg = optional_vec3(body, "rotation_deg", kMaxAngleDeg);
     if (const auto scale = protocol::get_optional_number(body, "scale")) {
-        if (!(*scale > 0.0 && *scale <= 1e6)) {
-            throw FieldError("scale", fmt::format("field 'scale' is {}, outside (0, 1e6]", *scale));
+        // A scale that rounds to float 0 (1e-300) would collapse the object: the floor is 1e-6.
+        if (!(*scale >= 1e-6 && *scale <= 1e6)) {
+            throw FieldError("scale", fmt::format("field 'scale' is {}, outside [1e-6, 1e6]", *scale));
         }
         order.scale = finite_float(*scale, "scale");
     }

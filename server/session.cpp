@@ -80,7 +80,11 @@ void Session::read_body_chunk(const protocol::Header& header) {
     }
     constexpr std::size_t kChunk = 256u << 10;
     const std::size_t chunk = std::min(kChunk, total - have);
-    if (!body_memory_.grow(chunk)) {
+    // The budget holds what is allocated, so growth is explicit: double the capacity (amortized
+    // copies), never past the frame's size, each step reserved before it is allocated.
+    const std::size_t capacity =
+        have + chunk <= body_.capacity() ? body_.capacity() : std::min(total, std::max(have + chunk, 2 * body_.capacity()));
+    if (!body_memory_.grow(capacity - body_.capacity())) {
         // Refused, but the connection stays usable: the rest of the frame is read and dropped.
         fail(header.request_id, ErrorCode::resource_exhausted,
              fmt::format("the daemon holds {} of its {} bytes for request bodies in flight (--max-inflight-bytes); "
@@ -92,6 +96,7 @@ void Session::read_body_chunk(const protocol::Header& header) {
         skip_body(total - have);
         return;
     }
+    body_.reserve(capacity);
     body_.resize(have + chunk);
     asio::async_read(socket_, asio::buffer(body_.data() + have, chunk),
                      [self = shared_from_this(), header](boost::system::error_code error, std::size_t) {
@@ -131,9 +136,10 @@ void Session::body_complete(const protocol::Header& header) {
         broken_frame(broken);
         return;
     }
-    message.attachment.assign(body_.begin() + header.json_length, body_.end());
-    body_.clear();
-    body_.shrink_to_fit();
+    // The attachment takes the body's storage (the JSON prefix moved out in place): no second copy.
+    body_.erase(body_.begin(), body_.begin() + header.json_length);
+    message.attachment = std::move(body_);
+    body_ = {};
     dispatch(std::move(message));
     body_memory_.release();  // a request that keeps its attachment took its own reservation
     if (pending_.size() >= daemon_.config().max_in_flight) {

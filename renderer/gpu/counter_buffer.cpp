@@ -19,7 +19,7 @@ void CounterBuffer::write(std::span<const std::uint32_t> values) {
     glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
 }
 
-void CounterBuffer::bind(GLuint binding) const { glBindBufferBase(GL_SHADER_STORAGE_BUFFER, binding, buffer_.id()); }
+void CounterBuffer::bind(GLuint binding) const { bind_storage(binding, buffer_); }
 
 CounterValues CounterBuffer::read() const {
     glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);

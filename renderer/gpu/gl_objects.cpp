@@ -155,4 +155,10 @@ void Framebuffer::check_complete(const char* what) const {
     BOUNCE_FAIL("framebuffer for {} is incomplete: {} (0x{:x})", what, name, status);
 }
 
+void bind_storage(GLuint binding, const Buffer& buffer) {
+    if (buffer) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, binding, buffer.id());
+}
+
+void storage_barrier() { glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT); }
+
 }  // namespace bounce::gpu

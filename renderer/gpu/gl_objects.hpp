@@ -4,6 +4,8 @@
 
 #include "renderer/gpu/gl.hpp"
 
+#include <algorithm>
+#include <vector>
 #include <cstddef>
 #include <cstdint>
 #include <utility>
@@ -72,6 +74,16 @@ private:
     GlHandle<BufferTraits> handle_;
     std::size_t bytes_ = 0;
 };
+
+// Binds `buffer` to shader-storage binding point `binding` (nothing when the buffer is empty).
+void bind_storage(GLuint binding, const Buffer& buffer);
+// Makes shader writes to storage buffers visible to later shader reads and buffer updates.
+void storage_barrier();
+// A storage buffer holding `data`, at least one element long (GL allows no empty storage).
+template <typename T>
+Buffer storage_of(const std::vector<T>& data, GLbitfield flags = 0) {
+    return Buffer(std::max<std::size_t>(sizeof(T), data.size() * sizeof(T)), data.empty() ? nullptr : data.data(), flags);
+}
 
 struct TextureDesc {
     GLenum target = GL_TEXTURE_2D;  // GL_TEXTURE_2D, GL_TEXTURE_CUBE_MAP, GL_TEXTURE_3D, GL_TEXTURE_2D_ARRAY

@@ -7,6 +7,7 @@
 #include <glm/gtx/string_cast.hpp>
 
 #include <algorithm>
+#include <climits>
 #include <cmath>
 #include <map>
 #include <optional>
@@ -568,6 +569,10 @@ private:
         if (node.camera >= 0) add_camera(index, node, world);
         if (const tinygltf::Value* punctual = extension_object(node.extensions, "KHR_lights_punctual")) {
             if (const std::optional<double> light = number_member(*punctual, "light")) {
+                // Checked before the cast: a double past INT_MAX does not convert to int.
+                if (!(*light >= 0.0 && *light <= INT_MAX && std::floor(*light) == *light)) {
+                    reject(fmt::format("node {} names KHR_lights_punctual light {}, not an index", index, *light));
+                }
                 add_light(index, node, static_cast<int>(*light), world);
             }
         }

@@ -2,6 +2,7 @@
 
 #include "renderer/scene/gltf_validation.hpp"
 
+#include <climits>
 #include <cstring>
 #include <span>
 
@@ -60,6 +61,8 @@ bool png_chunks_inside(std::span<const unsigned char> bytes) {
 std::optional<std::string> decode(tinygltf::Image& image, int index, const ImageHeader& header,
                                   std::span<const unsigned char> bytes) {
     if (bytes.empty()) return "the image file could not be read again";
+    // The decoder takes the length as an int.
+    if (bytes.size() > static_cast<std::size_t>(INT_MAX)) return "the encoded image is over 2 GiB";
     if (!png_chunks_inside(bytes)) return "a PNG chunk runs past the end of the image";
     std::string error;
     std::string warning;
@@ -112,7 +115,9 @@ bool record_image_header(tinygltf::Image* /*image*/, int image_index, std::strin
                          std::string* /*warn*/, int /*required_width*/, int /*required_height*/,
                          const unsigned char* bytes, int size, void* user_data) {
     auto& context = *static_cast<LoadContext*>(user_data);
-    const std::optional<ImageHeader> header = peek_image_size(bytes, static_cast<std::size_t>(size));
+    // tinygltf passes lengths as int: one past 2 GiB arrives negative and is not an image we can read.
+    const std::optional<ImageHeader> header =
+        size > 0 ? peek_image_size(bytes, static_cast<std::size_t>(size)) : std::nullopt;
     if (!header || header->width == 0 || header->height == 0) {
         context.image_failures[image_index] = "cannot decode it: it is not a PNG or JPEG image";
     } else if (header->width > max_image_side || header->height > max_image_side) {

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <climits>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -31,20 +32,16 @@ std::uint32_t read_u32_le(const std::uint8_t* bytes) {
 // silently ignores many mistyped properties (a `primitives` object, a string `scale`), which would
 // turn a broken file into a silently different scene.
 
+// An index as tinygltf reads one: a JSON integer in [0, INT_MAX]. A float (1.0) or a larger integer
+// would be dropped or wrapped by tinygltf's int fields, so it is refused here instead.
 std::optional<std::uint64_t> as_index(const Json& value) {
-    if (value.is_number_unsigned()) return value.get<std::uint64_t>();
-    if (value.is_number_integer()) {
-        const auto signed_value = value.get<std::int64_t>();
-        if (signed_value >= 0) return static_cast<std::uint64_t>(signed_value);
-        return std::nullopt;
+    if (!value.is_number_integer()) return std::nullopt;
+    if (value.is_number_unsigned()) {
+        const auto index = value.get<std::uint64_t>();
+        return index <= static_cast<std::uint64_t>(INT_MAX) ? std::optional<std::uint64_t>(index) : std::nullopt;
     }
-    if (value.is_number_float()) {
-        const double number = value.get<double>();
-        if (number >= 0.0 && number < 9.0e15 && std::floor(number) == number) {
-            return static_cast<std::uint64_t>(number);
-        }
-    }
-    return std::nullopt;
+    const auto index = value.get<std::int64_t>();
+    return index >= 0 && index <= INT_MAX ? std::optional<std::uint64_t>(static_cast<std::uint64_t>(index)) : std::nullopt;
 }
 
 class StructureCheck {

@@ -40,6 +40,8 @@ DaemonProcess::DaemonProcess(std::vector<std::string> extra) {
         int port = 0;
         if (in >> port && port > 0) {
             port_ = static_cast<std::uint16_t>(port);
+            int ops = 0;
+            if (in >> ops && ops > 0) ops_port_ = static_cast<std::uint16_t>(ops);
             return;
         }
         std::this_thread::sleep_for(std::chrono::milliseconds(20));

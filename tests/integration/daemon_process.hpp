@@ -18,6 +18,8 @@ public:
     ~DaemonProcess();  // SIGTERM, then SIGKILL after 20 s
 
     client::Endpoint endpoint() const { return {"127.0.0.1", port_}; }
+    // The ops HTTP port, when started with --metrics-listen 127.0.0.1:0 (0 otherwise).
+    std::uint16_t ops_port() const { return ops_port_; }
     // Sends SIGTERM and returns the exit status (the process's exit code, or 128 + signal).
     int terminate_and_wait();
     void send_signal(int signal) const;
@@ -35,6 +37,7 @@ public:
 private:
     int pid_ = -1;
     std::uint16_t port_ = 0;
+    std::uint16_t ops_port_ = 0;
     std::filesystem::path directory_;
 };
 

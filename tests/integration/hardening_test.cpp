@@ -145,6 +145,50 @@ TEST(DaemonHardening, SceneBudgetsAreResourceExhausted) {
     expect_still_serving(daemon.endpoint(), baseline);
 }
 
+// One HTTP/1.1 GET on the ops port; the whole response (the daemon closes after it).
+std::string http_get(std::uint16_t port, const std::string& target) {
+    RawConnection connection({"127.0.0.1", port});
+    const std::string request = "GET " + target + " HTTP/1.1\r\nHost: localhost\r\n\r\n";
+    connection.send(std::vector<std::uint8_t>(request.begin(), request.end()));
+    std::string response;
+    std::array<char, 4096> buffer{};
+    boost::system::error_code error;
+    for (;;) {
+        const std::size_t n = connection.socket.read_some(boost::asio::buffer(buffer), error);
+        response.append(buffer.data(), n);
+        if (error) break;
+    }
+    return response;
+}
+
+// The ops listener: a scene name chosen to forge a metric line shows up escaped; connections past
+// the cap are closed at once while the ones held wait for their timeout; off loopback without a
+// token the daemon refuses to start (nothing is bound).
+TEST(DaemonHardening, OpsHttpEscapesLabelsCapsConnectionsAndNeedsATokenOffLoopback) {
+    DaemonProcess daemon({"--metrics-listen", "127.0.0.1:0"});
+    ASSERT_GT(daemon.ops_port(), 0);
+    Client client(daemon.endpoint());
+    const std::string evil = "evil\"} 1\nbounce_fake_total{a=\"";
+    client.request(MessageType::scene_load, {{"name", evil}, {"builtin", "cornell"}});
+    render(client, {{"scene", evil}, {"width", 8}, {"height", 8}});  // its resident bytes become a metric
+    const std::string metrics = http_get(daemon.ops_port(), "/metrics");
+    EXPECT_EQ(metrics.rfind("HTTP/1.1 200", 0), 0u) << metrics.substr(0, 200);
+    EXPECT_EQ(metrics.find("\nbounce_fake_total"), std::string::npos);
+    EXPECT_NE(metrics.find("bounce_resident_bytes{scene=\"evil\\\"} 1\\nbounce_fake_total{a=\\\"\"}"), std::string::npos);
+
+    std::vector<std::unique_ptr<RawConnection>> held;
+    for (int i = 0; i < 16; ++i) held.push_back(std::make_unique<RawConnection>(client::Endpoint{"127.0.0.1", daemon.ops_port()}));
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));  // all 16 accepted
+    RawConnection over({"127.0.0.1", daemon.ops_port()});
+    EXPECT_TRUE(over.closed_by_daemon(std::chrono::milliseconds(2000)));
+    EXPECT_FALSE(held.back()->closed_by_daemon(std::chrono::milliseconds(300)));  // waits for its 10 s timeout
+    held.clear();
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));  // their exchanges end as they close
+    EXPECT_EQ(http_get(daemon.ops_port(), "/healthz").rfind("HTTP/1.1 200", 0), 0u);
+
+    EXPECT_THROW(DaemonProcess({"--metrics-listen", "0.0.0.0:0"}), std::runtime_error);
+}
+
 // not_found names the scene asked for and no other client's.
 TEST(DaemonHardening, NotFoundDoesNotListOtherScenes) {
     DaemonProcess daemon;

@@ -702,7 +702,7 @@ int main(int argc, char** argv) {
               << std::endl;
 
     // Bounded whatever the daemon does: a reply that never comes ends the run as a failure.
-    const auto hard_limit = std::chrono::duration<double>(options.seconds + 35.0);
+    const auto hard_limit = std::chrono::duration<double>(options.seconds + 120.0);
     std::thread([hard_limit] {
         std::this_thread::sleep_for(hard_limit);
         std::lock_guard lock(g_output);

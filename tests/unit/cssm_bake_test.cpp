@@ -11,6 +11,8 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <gtest/gtest.h>
 
+#include <chrono>
+
 #include <algorithm>
 #include <numeric>
 #include <filesystem>
@@ -337,27 +339,32 @@ TEST(CssmBakeCache, WellFormedFilesWithAnIndexOutOfRangeOrAnotherFormatAreReject
 }
 
 // A writer that died mid-write leaves a temporary file; the next writer in the directory removes
-// it, and leaves alone those of writers that still live (this process's own, here). New
-// temporaries are created exclusively, so none is left after a store.
-TEST(CssmBakeCache, LeftoversOfDeadWritersAreRemovedAndLiveOnesKept) {
+// it once it is an hour old, and leaves alone those of writers that still live (this process's),
+// recent ones (a writer in another pid namespace may only look dead) and files not of this cache.
+// The bake itself is readable by others (mode 0644), not owner-only as mkstemp creates it.
+TEST(CssmBakeCache, LeftoversOfDeadWritersAreRemovedAndOthersKept) {
     const scene::Scene scene = scene::make_cornell_box();
     const auto dir = std::filesystem::temp_directory_path() / ("bounce-cssm-leftover-test-" + std::to_string(::getpid()));
     std::filesystem::remove_all(dir);
     std::filesystem::create_directories(dir);
     // pid 2^31-1 is beyond any kernel's pid_max: no such process.
-    const auto dead = dir / ".group.bin.tmp-2147483647-abcdef";
-    const auto live = dir / (".group.bin.tmp-" + std::to_string(::getpid()) + "-ghijkl");
-    std::ofstream(dead) << "half a bake";
-    std::ofstream(live) << "a bake being written";
+    const auto dead_old = dir / ".cssm-a.bake.tmp-2147483647-abcdef";
+    const auto dead_recent = dir / ".cssm-b.bake.tmp-2147483647-ghijkl";
+    const auto live_old = dir / (".cssm-c.bake.tmp-" + std::to_string(::getpid()) + "-mnopqr");
+    const auto foreign_old = dir / ".other.tmp-2147483647-stuvwx";
+    for (const auto& path : {dead_old, dead_recent, live_old, foreign_old}) std::ofstream(path) << "half a bake";
+    const auto two_hours_ago = std::filesystem::file_time_type::clock::now() - std::chrono::hours(2);
+    for (const auto& path : {dead_old, live_old, foreign_old}) std::filesystem::last_write_time(path, two_hours_ago);
     const CssmBake bake = bake_scene(scene, BakeParameters{8.0f, 4, Traversal::spiral, 16}, {});
     store_cached_group(dir, bake.groups[0]);
-    EXPECT_FALSE(std::filesystem::exists(dead));
-    EXPECT_TRUE(std::filesystem::exists(live));
-    std::size_t temporaries = 0;
-    for (const auto& entry : std::filesystem::directory_iterator(dir)) {
-        temporaries += entry.path().filename().string().find(".tmp-") != std::string::npos;
-    }
-    EXPECT_EQ(temporaries, 1u);  // the live writer's only
+    EXPECT_FALSE(std::filesystem::exists(dead_old));
+    EXPECT_TRUE(std::filesystem::exists(dead_recent));
+    EXPECT_TRUE(std::filesystem::exists(live_old));
+    EXPECT_TRUE(std::filesystem::exists(foreign_old));
+    const auto stored = bake_path(dir, bake.groups[0].key);
+    EXPECT_EQ(std::filesystem::status(stored).permissions() & std::filesystem::perms::all,
+              std::filesystem::perms::owner_read | std::filesystem::perms::owner_write |
+                  std::filesystem::perms::group_read | std::filesystem::perms::others_read);
     EXPECT_TRUE(load_cached_group(dir, bake.groups[0].key, bake.groups[0].objects).has_value());
     std::filesystem::remove_all(dir);
 }

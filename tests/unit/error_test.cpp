@@ -23,6 +23,7 @@ TEST(Error, FailNamesWhere) {
     const unsigned line = __LINE__ + 2;
     try {
         BOUNCE_FAIL("no {} here", "luck");
+        FAIL() << "BOUNCE_FAIL did not throw";
     } catch (const Error& error) {
         EXPECT_EQ(std::string(error.what()), "no luck here (error_test.cpp:" + std::to_string(line) + ")");
     }

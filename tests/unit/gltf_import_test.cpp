@@ -503,3 +503,36 @@ TEST(GltfImportAccepts, UnlitSceneEarnsOneWarning) {
 
 }  // namespace
 }  // namespace bounce::scene
+
+namespace bounce::scene {
+namespace {
+
+// A copy of one of the project's test files with `from` replaced by `to`, in a temporary folder
+// beside copies of its buffers; the import's fault message ("" when it loads).
+std::string import_error_of_edited(const std::string& file, const std::string& from, const std::string& to) {
+    const auto dir = std::filesystem::temp_directory_path() / ("bounce-gltf-edit-" + std::to_string(::getpid()));
+    std::filesystem::remove_all(dir);
+    std::filesystem::copy(own_dir, dir, std::filesystem::copy_options::recursive);
+    std::ifstream in(dir / file);
+    std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+    const auto at = text.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    if (at != std::string::npos) text.replace(at, from.size(), to);
+    std::ofstream(dir / file, std::ios::trunc) << text;
+    const std::string error = import_error(dir / file);
+    std::filesystem::remove_all(dir);
+    return error;
+}
+
+// Indices as tinygltf reads them: JSON integers in [0, INT_MAX]. A float index or one past INT_MAX
+// would be dropped or wrapped by tinygltf's int fields (a silently different scene), so the file is
+// refused naming it; a light index past INT_MAX would not even convert to int.
+TEST(GltfImportRejects, IndicesThatAreNotIntegersOrPastIntMax) {
+    EXPECT_EQ(import_error_of_edited("emissive_strength.gltf", "\"mesh\": 0", "\"mesh\": 0"), "");
+    EXPECT_NE(import_error_of_edited("emissive_strength.gltf", "\"mesh\": 0", "\"mesh\": 0.0"), "");
+    EXPECT_NE(import_error_of_edited("emissive_strength.gltf", "\"mesh\": 0", "\"mesh\": 4294967296"), "");
+    EXPECT_NE(import_error_of_edited("lights.gltf", "\"light\": 0", "\"light\": 3e9").find("light"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace bounce::scene

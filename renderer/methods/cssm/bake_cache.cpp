@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cerrno>
 #include <csignal>
 #include <cstdio>
@@ -16,6 +17,7 @@
 #include <mutex>
 #include <set>
 #include <type_traits>
+#include <sys/stat.h>
 #include <unistd.h>
 
 namespace bounce::methods::cssm {
@@ -278,8 +280,11 @@ std::optional<BakeGroup> load_cached_group(const std::filesystem::path& dir, con
 
 namespace {
 
-// Temporary files are named ".<final name>.tmp-<pid>-<random>": the pid says whether the writer
+// Temporary files are named ".cssm-<key>.bake.tmp-<pid>-<random>": the pid says whether the writer
 // still lives, so a writer that died mid-write (killed, power lost) leaves nothing behind for long.
+// Only this cache's own temporaries are touched, and only those an hour old: a writer in another
+// pid namespace (a container sharing the directory) may show as dead, but no bake takes an hour
+// to write.
 constexpr std::string_view kTemporaryMark = ".tmp-";
 
 void remove_leftovers_once(const std::filesystem::path& dir) {
@@ -291,9 +296,12 @@ void remove_leftovers_once(const std::filesystem::path& dir) {
     for (const auto& entry : std::filesystem::directory_iterator(dir, error)) {
         const std::string name = entry.path().filename().string();
         const auto mark = name.find(kTemporaryMark);
-        if (name.empty() || name[0] != '.' || mark == std::string::npos) continue;
+        if (!name.starts_with(".cssm-") || mark == std::string::npos) continue;
         const long pid = std::strtol(name.c_str() + mark + kTemporaryMark.size(), nullptr, 10);
-        if (pid <= 0 || (::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH)) {
+        std::error_code age_error;
+        const auto age = std::filesystem::file_time_type::clock::now() - entry.last_write_time(age_error);
+        if (pid <= 0 || age_error || age < std::chrono::hours(1)) continue;
+        if (::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH) {
             std::error_code ignored;
             if (std::filesystem::remove(entry.path(), ignored)) {
                 log::info("cssm", "removed {}, left by a bake writer that is gone", entry.path().string());
@@ -317,6 +325,8 @@ void store_cached_group(const std::filesystem::path& dir, const BakeGroup& group
     const int descriptor = ::mkstemp(name.data());
     if (descriptor < 0) BOUNCE_FAIL("cssm: cannot create a file in the bake cache {}: {}", dir.string(), std::strerror(errno));
     const std::filesystem::path temporary(name);
+    // mkstemp makes the file owner-only; a cache may be shared with other users (a CLI, the bench).
+    ::fchmod(descriptor, 0644);
     std::FILE* file = ::fdopen(descriptor, "wb");
     if (!file) {
         ::close(descriptor);
@@ -334,7 +344,12 @@ void store_cached_group(const std::filesystem::path& dir, const BakeGroup& group
         std::filesystem::remove(temporary, ignored);
         BOUNCE_FAIL("cssm: writing the bake cache {} failed: {}", temporary.string(), std::strerror(errno));
     }
-    std::filesystem::rename(temporary, final_path);  // atomic within one file system
+    std::error_code renamed;
+    std::filesystem::rename(temporary, final_path, renamed);  // atomic within one file system
+    if (renamed) {
+        std::filesystem::remove(temporary, ignored);
+        BOUNCE_FAIL("cssm: cannot move the bake into place as {}: {}", final_path.string(), renamed.message());
+    }
 }
 
 }  // namespace bounce::methods::cssm

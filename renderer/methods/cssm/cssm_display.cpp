@@ -94,7 +94,7 @@ void CssmDisplay::texel_display(const FrameContext& frame, const GatherTree& tre
     const gpu::ShaderProgram& program = frame.shaders.get({"common/fullscreen.vert", "cssm/texel_display.frag", {}});
     program.use();
     tree.bind(program, pcf, 0.0f);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CSSM_BINDING_TEXEL_INDIRECT, indirect.id());
+    gpu::bind_storage(CSSM_BINDING_TEXEL_INDIRECT, indirect);
     gbuffer_.bind_textures();
     add_into(frame, frame.output);
     triangle_.draw();

@@ -51,10 +51,10 @@ void GatherBatches::update(int pcf, const ResidentBake& resident, const TexelPla
         nodes += subtree;
     }
     batches_.push_back({first, static_cast<std::uint32_t>(roots.size()) - first});
-    roots_ = storage_of(roots);
+    roots_ = gpu::storage_of(roots);
 }
 
-void GatherBatches::bind() const { glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CSSM_BINDING_ROOTS, roots_.id()); }
+void GatherBatches::bind() const { gpu::bind_storage(CSSM_BINDING_ROOTS, roots_); }
 
 GatherCounts GatherCounts::read(const gpu::CounterBuffer& counters) {
     const gpu::CounterValues values = counters.read();

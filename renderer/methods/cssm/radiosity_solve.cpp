@@ -18,10 +18,6 @@ const gpu::ShaderProgram& compute(const FrameContext& frame, const char* path, c
     return program;
 }
 
-void bind_texels(GLuint binding, const gpu::Buffer& buffer) {
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, binding, buffer.id());
-}
-
 }  // namespace
 
 void RadiositySolve::allocate(std::size_t texels) {
@@ -45,18 +41,18 @@ void RadiositySolve::direct_light(const FrameContext& frame, const GatherTree& t
     gpu::GpuTimers::Scope timing(frame.timers, "cssm_atlas_direct");
     const gpu::ShaderProgram& program = compute(frame, "cssm/atlas_direct.comp", tree, settings);
     const std::size_t texel_count = tree.bake.bake().texel_count();
-    bind_texels(CSSM_BINDING_TEXEL_OUT, direct_);
+    gpu::bind_storage(CSSM_BINDING_TEXEL_OUT, direct_);
     program.set("u_emission_only", 1);
     program.dispatch_threads(texel_count);
     program.set("u_emission_only", 0);
     for (std::size_t l = 0; l < frame.scene.lights.size(); ++l) {
         if (!shadows.has_map(l)) continue;
-        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        gpu::storage_barrier();
         passes::set_light_uniforms(program, frame.scene.lights[l]);
         shadows.bind(program, l);
         program.dispatch_threads(texel_count);
     }
-    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    gpu::storage_barrier();
 }
 
 void RadiositySolve::bounce(const FrameContext& frame, const GatherTree& tree, const GatherSettings& settings) {
@@ -64,21 +60,21 @@ void RadiositySolve::bounce(const FrameContext& frame, const GatherTree& tree, c
     gpu::GpuTimers::Scope timing(frame.timers, "cssm_atlas_gather");
     const std::size_t texel_count = tree.bake.bake().texel_count();
     const gpu::ShaderProgram& gather = compute(frame, "cssm/gather.comp", tree, settings);
-    bind_texels(CSSM_BINDING_TEXEL_OUT, irradiance_);
+    gpu::bind_storage(CSSM_BINDING_TEXEL_OUT, irradiance_);
     const auto& batches = tree.batches.batches();
     for (std::size_t b = 0; b < batches.size(); ++b) {
         gather.set("u_first_root", batches[b].first);
         gather.set("u_root_count", batches[b].count);
         gather.set("u_first_batch", b == 0 ? 1 : 0);
         gather.dispatch_threads(texel_count);
-        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        gpu::storage_barrier();
     }
     const gpu::ShaderProgram& finish = compute(frame, "cssm/bounce.comp", tree, settings);
-    bind_texels(CSSM_BINDING_TEXEL_IN, irradiance_);
-    bind_texels(CSSM_BINDING_TEXEL_OUT, total_);
-    bind_texels(CSSM_BINDING_TEXEL_INDIRECT, indirect_);
+    gpu::bind_storage(CSSM_BINDING_TEXEL_IN, irradiance_);
+    gpu::bind_storage(CSSM_BINDING_TEXEL_OUT, total_);
+    gpu::bind_storage(CSSM_BINDING_TEXEL_INDIRECT, indirect_);
     finish.dispatch_threads(texel_count);
-    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    gpu::storage_barrier();
     std::swap(bounce_, irradiance_);  // this bounce's exitance is the next one's source
 }
 
@@ -87,7 +83,7 @@ void RadiositySolve::pull(const FrameContext& frame, const GatherTree& tree, con
     const gpu::ShaderProgram& program = frame.shaders.get(gpu::ProgramSource::compute_shader("cssm/pull.comp"));
     program.use();
     tree.placement.bind();
-    bind_texels(CSSM_BINDING_TEXEL_IN, source);
+    gpu::bind_storage(CSSM_BINDING_TEXEL_IN, source);
     const RadiosityTree& hierarchy = tree.bake.bake().tree;
     const auto node_count = static_cast<unsigned>(hierarchy.nodes.size());
     program.set("u_leaves", 1);
@@ -97,12 +93,12 @@ void RadiositySolve::pull(const FrameContext& frame, const GatherTree& tree, con
     program.set("u_leaves", 0);
     const auto& first = hierarchy.level_first;
     for (std::size_t level = 0; level + 1 < first.size(); ++level) {
-        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        gpu::storage_barrier();
         program.set("u_first", first[level]);
         program.set("u_count", first[level + 1] - first[level]);
         program.dispatch_threads(first[level + 1] - first[level]);
     }
-    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    gpu::storage_barrier();
 }
 
 }  // namespace bounce::methods::cssm

@@ -92,24 +92,24 @@ void ResidentBake::upload() {
     packed_depth.assign((run_depth.size() + 1) / 2, 0);
     for (std::size_t r = 0; r < run_depth.size(); ++r)
         packed_depth[r / 2] |= static_cast<std::uint32_t>(run_depth[r]) << (16 * (r % 2));
-    pixel_runs_ = storage_of(pixel_runs);
-    run_start_ = storage_of(run_start);
-    run_depth_ = storage_of(packed_depth);
-    csms_ = storage_of(csms);
-    csm_directions_ = storage_of(directions);
-    csm_nearest_ = storage_of(nearest);
+    pixel_runs_ = gpu::storage_of(pixel_runs);
+    run_start_ = gpu::storage_of(run_start);
+    run_depth_ = gpu::storage_of(packed_depth);
+    csms_ = gpu::storage_of(csms);
+    csm_directions_ = gpu::storage_of(directions);
+    csm_nearest_ = gpu::storage_of(nearest);
     csm_count_ = static_cast<unsigned>(csms.size());
     bytes_ = pixel_runs_.bytes() + run_start_.bytes() + run_depth_.bytes() + csms_.bytes() + csm_directions_.bytes() +
              csm_nearest_.bytes();
 }
 
 void ResidentBake::bind(const gpu::ShaderProgram& program) const {
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CSSM_BINDING_PIXEL_RUNS, pixel_runs_.id());
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CSSM_BINDING_RUN_START, run_start_.id());
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CSSM_BINDING_RUN_DEPTH, run_depth_.id());
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CSSM_BINDING_CSMS, csms_.id());
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CSSM_BINDING_CSM_DIRECTIONS, csm_directions_.id());
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CSSM_BINDING_CSM_NEAREST, csm_nearest_.id());
+    gpu::bind_storage(CSSM_BINDING_PIXEL_RUNS, pixel_runs_);
+    gpu::bind_storage(CSSM_BINDING_RUN_START, run_start_);
+    gpu::bind_storage(CSSM_BINDING_RUN_DEPTH, run_depth_);
+    gpu::bind_storage(CSSM_BINDING_CSMS, csms_);
+    gpu::bind_storage(CSSM_BINDING_CSM_DIRECTIONS, csm_directions_);
+    gpu::bind_storage(CSSM_BINDING_CSM_NEAREST, csm_nearest_);
     program.set("u_face_size", bake_->parameters.face_size);
     program.set("u_csm_count", csm_count_);
     program.set("u_texel_size", bake_->texel_size);

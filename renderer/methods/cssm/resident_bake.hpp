@@ -16,12 +16,6 @@
 
 namespace bounce::methods::cssm {
 
-// A storage buffer holding `data`, at least one element long (GL allows no empty storage).
-template <typename T>
-gpu::Buffer storage_of(const std::vector<T>& data) {
-    return gpu::Buffer(std::max<std::size_t>(sizeof(T), data.size() * sizeof(T)), data.empty() ? nullptr : data.data());
-}
-
 class ResidentBake {
 public:
     // Whether the resident bake is the one the frame's knobs and moving objects need.

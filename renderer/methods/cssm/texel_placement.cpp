@@ -39,11 +39,11 @@ void TexelPlacement::upload(const scene::Scene& scene, const ResidentBake& resid
                     glm::vec4(node.area, static_cast<float>(node.leaves), 0, 0),
                     glm::uvec4(node.child, node.skip, node.representative, node.texel)};
     }
-    texels_ = storage_of(texels);
-    groups_ = storage_of(groups);
-    nodes_ = storage_of(nodes);
+    texels_ = gpu::storage_of(texels);
+    groups_ = gpu::storage_of(groups);
+    nodes_ = gpu::storage_of(nodes);
     node_radiance_ = gpu::Buffer(std::max<std::size_t>(1, nodes.size()) * sizeof(glm::vec4), nullptr, 0);
-    level_nodes_ = storage_of(bake.tree.level_nodes);
+    level_nodes_ = gpu::storage_of(bake.tree.level_nodes);
     atlas_bytes_ = texels_.bytes() + groups_.bytes();
     tree_bytes_ = nodes_.bytes() + node_radiance_.bytes() + level_nodes_.bytes();
     ++version_;
@@ -68,11 +68,11 @@ void TexelPlacement::check_overlaps(const scene::Scene& scene, const std::vector
 }
 
 void TexelPlacement::bind() const {
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CSSM_BINDING_NODES, nodes_.id());
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CSSM_BINDING_NODE_RADIANCE, node_radiance_.id());
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CSSM_BINDING_LEVEL_NODES, level_nodes_.id());
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CSSM_BINDING_TEXELS, texels_.id());
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CSSM_BINDING_GROUPS, groups_.id());
+    gpu::bind_storage(CSSM_BINDING_NODES, nodes_);
+    gpu::bind_storage(CSSM_BINDING_NODE_RADIANCE, node_radiance_);
+    gpu::bind_storage(CSSM_BINDING_LEVEL_NODES, level_nodes_);
+    gpu::bind_storage(CSSM_BINDING_TEXELS, texels_);
+    gpu::bind_storage(CSSM_BINDING_GROUPS, groups_);
 }
 
 ResidentStructure TexelPlacement::atlas_structure(const CssmBake& bake, std::size_t radiance_bytes) const {

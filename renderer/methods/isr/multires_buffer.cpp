@@ -112,7 +112,7 @@ void MultiresolutionBuffer::count_gathered(const passes::PassContext& context) c
         program.set("u_level", level);
         dispatch_2d(program, size_[level]);
     }
-    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    gpu::storage_barrier();
 }
 
 void MultiresolutionBuffer::upsample(const passes::PassContext& context) const {

@@ -19,7 +19,6 @@ void dispatch_2d(const gpu::ShaderProgram& program, int side) {
     glDispatchCompute(groups, groups, 1);
 }
 
-void storage_barrier() { glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT); }
 }  // namespace
 
 bool VplTree::build(const passes::PassContext& context, const passes::LightViewMaps& maps, bool maps_changed,
@@ -68,11 +67,11 @@ bool VplTree::build(const passes::PassContext& context, const passes::LightViewM
         leaves.set("u_view_origin", v.origin);
         passes::set_light_uniforms(leaves, context.scene.lights[v.light]);
         dispatch_2d(leaves, size_);
-        storage_barrier();
+        gpu::storage_barrier();
         for (int level = 1; level <= top_level_; ++level) {
             reduce.set("u_level", level);
             dispatch_2d(reduce, size_ >> level);
-            storage_barrier();
+            gpu::storage_barrier();
         }
     }
     const gpu::ShaderProgram& info = context.shaders.get(gpu::ProgramSource::compute_shader("isr/tree_info.comp"));
@@ -80,7 +79,7 @@ bool VplTree::build(const passes::PassContext& context, const passes::LightViewM
     info.set("u_views", views_);
     info.use();
     glDispatchCompute(1, 1, 1);
-    storage_barrier();
+    gpu::storage_barrier();
     return true;
 }
 
@@ -101,7 +100,7 @@ void VplTree::select(const passes::PassContext& context, int mode, int finest_le
             dispatch_2d(program, size_ >> level);
         }
     }
-    storage_barrier();
+    gpu::storage_barrier();
 }
 
 std::uint32_t VplTree::cached_vpls() const {
@@ -111,9 +110,9 @@ std::uint32_t VplTree::cached_vpls() const {
 }
 
 void VplTree::bind(const gpu::ShaderProgram& program) const {
-    if (nodes_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ISR_BINDING_NODES, nodes_.id());
-    if (cache_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ISR_BINDING_CACHE, cache_.id());
-    if (info_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ISR_BINDING_TREE_INFO, info_.id());
+    gpu::bind_storage(ISR_BINDING_NODES, nodes_);
+    gpu::bind_storage(ISR_BINDING_CACHE, cache_);
+    gpu::bind_storage(ISR_BINDING_TREE_INFO, info_);
     program.set("u_rsm_size", size_);
     program.set("u_top_level", top_level_);
     program.set("u_nodes_per_view", static_cast<unsigned>(nodes_per_view_));

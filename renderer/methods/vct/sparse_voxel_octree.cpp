@@ -18,14 +18,8 @@ constexpr int kMaxDenseLeafLevel = 6;  // 129^3 lattice points: 86 MiB of leaf s
 
 std::size_t grown(std::size_t needed) { return std::max<std::size_t>(needed + needed / 2, 1024); }
 
-void storage_barrier() { glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT); }
-
 void clear_buffer(const gpu::Buffer& buffer) {
     glClearNamedBufferData(buffer.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, nullptr);
-}
-
-void bind_storage(int binding, const gpu::Buffer& buffer) {
-    if (buffer) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, static_cast<GLuint>(binding), buffer.id());
 }
 
 int cube_side_for(std::size_t bricks) {
@@ -229,7 +223,7 @@ void SparseVoxelOctree::voxelize(const passes::PassContext& context, const Objec
         }
         counters_.reset();
         counters_.bind(VCT_BINDING_COUNTERS);
-        bind_storage(VCT_BINDING_FRAGMENTS, fragments_);
+        gpu::bind_storage(VCT_BINDING_FRAGMENTS, fragments_);
         program.set("u_fragment_capacity", static_cast<unsigned>(fragment_capacity_));
         context.gpu_scene.for_each_primitive([&](const scene::Object& object, const gpu::GpuPrimitive& primitive) {
             if (!include(static_cast<std::size_t>(&object - context.scene.objects.data()))) return;
@@ -237,7 +231,7 @@ void SparseVoxelOctree::voxelize(const passes::PassContext& context, const Objec
             context.gpu_scene.bind_material(program, primitive.material);
             gpu::GpuScene::draw(primitive);
         });
-        storage_barrier();
+        gpu::storage_barrier();
         counts_.fragments = counters_.read()[VCT_COUNTER_FRAGMENTS];
         if (counts_.fragments <= fragment_capacity_) return;
         fragment_capacity_ = grown(counts_.fragments);  // the list overflowed: voxelize again, once
@@ -261,7 +255,7 @@ void SparseVoxelOctree::subdivide(const passes::PassContext& context) {
         bind_buffers();
         flag.set("u_level", static_cast<unsigned>(level));
         flag.dispatch_threads(counts_.fragments);
-        storage_barrier();
+        gpu::storage_barrier();
         const std::size_t flagged = counters_.read()[VCT_COUNTER_FLAGGED];
         ensure_node_capacity(node_count_ + 8 * flagged);
         bind_buffers();
@@ -270,7 +264,7 @@ void SparseVoxelOctree::subdivide(const passes::PassContext& context) {
             allocate.set("u_node_count", static_cast<unsigned>(range.count));
             allocate.dispatch_threads(range.count);
         }
-        storage_barrier();
+        gpu::storage_barrier();
         const LevelRange children{node_count_, 8 * flagged};
         if (!appending) {
             levels_.push_back({children});
@@ -298,9 +292,9 @@ void SparseVoxelOctree::accumulate_leaves(const passes::PassContext& context, st
     set_octree_uniforms(program);
     program.set("u_fragment_count", static_cast<unsigned>(counts_.fragments));
     bind_buffers();
-    bind_storage(VCT_BINDING_FRAGMENTS, fragments_);
+    gpu::bind_storage(VCT_BINDING_FRAGMENTS, fragments_);
     program.dispatch_threads(counts_.fragments);
-    storage_barrier();
+    gpu::storage_barrier();
 }
 
 void SparseVoxelOctree::inject(const passes::PassContext& context, const passes::LightViewMaps& maps,
@@ -327,13 +321,13 @@ void SparseVoxelOctree::inject(const passes::PassContext& context, const passes:
             passes::set_light_uniforms(program, light);
             program.dispatch_threads(static_cast<std::size_t>(maps.size()) * static_cast<std::size_t>(maps.size()));
         }
-        storage_barrier();
+        gpu::storage_barrier();
         const gpu::ShaderProgram& radiance =
             context.shaders.get(gpu::ProgramSource::compute_shader("vct/leaf_radiance.comp", program_defines()));
         set_octree_uniforms(radiance);
         radiance.set("u_slot_count", static_cast<unsigned>(slots));
         radiance.dispatch_threads(slots);
-        storage_barrier();
+        gpu::storage_barrier();
     }
     const gpu::CounterValues counters = counters_.read();
     counts_.injected_photons = counters[VCT_COUNTER_INJECTED_PHOTONS];
@@ -350,7 +344,7 @@ void SparseVoxelOctree::inject(const passes::PassContext& context, const passes:
         set_cone_uniforms(program, *second_bounce);
         program.set("u_slot_count", static_cast<unsigned>(slots));
         program.dispatch_threads(slots);
-        storage_barrier();
+        gpu::storage_barrier();
     }
     resolve_and_mipmap(context);
     bounces_ = 2;
@@ -463,10 +457,10 @@ void SparseVoxelOctree::set_octree_uniforms(const gpu::ShaderProgram& program) c
 
 void SparseVoxelOctree::bind_buffers() const {
     if (counters_) counters_.bind(VCT_BINDING_COUNTERS);
-    bind_storage(VCT_BINDING_NODES, node_children_);
-    bind_storage(VCT_BINDING_NODE_COORDS, node_coords_);
-    bind_storage(VCT_BINDING_LEAF_SUMS, leaf_sums_);
-    bind_storage(VCT_BINDING_LEAF_LIGHT, leaf_light_);
+    gpu::bind_storage(VCT_BINDING_NODES, node_children_);
+    gpu::bind_storage(VCT_BINDING_NODE_COORDS, node_coords_);
+    gpu::bind_storage(VCT_BINDING_LEAF_SUMS, leaf_sums_);
+    gpu::bind_storage(VCT_BINDING_LEAF_LIGHT, leaf_light_);
 }
 
 }  // namespace bounce::methods::vct
