@@ -2,6 +2,7 @@
 
 #include "renderer/base/error.hpp"
 #include "renderer/base/log.hpp"
+#include "renderer/memory_admission.hpp"
 
 #include <chrono>
 
@@ -29,6 +30,11 @@ std::vector<T> read_texture(const gpu::Texture& texture, GLenum type) {
     return top_down;
 }
 
+std::uint64_t next_resources_id() {
+    static std::atomic<std::uint64_t> next{1};
+    return next++;
+}
+
 }  // namespace
 
 std::vector<methods::ResidentStructure> SceneResources::resident() const {
@@ -44,21 +50,45 @@ std::vector<methods::ResidentStructure> SceneResources::resident() const {
     return structures;
 }
 
+SceneResources::SceneResources(const scene::Scene& scene) : id(next_resources_id()), gpu_scene(scene) {}
+
+SceneResources::~SceneResources() {
+    if (live_) live_->erase(this);
+}
+
+std::uint64_t SceneResources::resident_bytes() const {
+    std::uint64_t bytes = 0;
+    for (const auto& structure : resident()) bytes += structure.bytes;
+    return bytes;
+}
+
 scene::Camera camera_for(const scene::Scene& scene, const RenderRequest& request) {
     if (request.camera) return *request.camera;
     if (!scene.cameras.empty()) return scene.cameras.front();
     return scene::framing_camera(scene.world_bounds());
 }
 
-Renderer::Renderer(const gpu::DeviceChoice& device) : context_(gpu::EglContext::create(device)) {}
+Renderer::Renderer(const gpu::DeviceChoice& device)
+    : context_(gpu::EglContext::create(device)), budget_(gpu::default_memory_budget(context_->info())) {}
 
 Renderer::~Renderer() {
     // GL objects must go while the context is current; members are destroyed before context_.
     context_->make_current();
+    for (const SceneResources* resources : live_scenes_) const_cast<SceneResources*>(resources)->live_ = nullptr;
 }
 
 std::unique_ptr<SceneResources> Renderer::upload(const scene::Scene& scene) {
-    return std::make_unique<SceneResources>(scene);
+    auto resources = std::make_unique<SceneResources>(scene);
+    resources->live_ = &live_scenes_;
+    live_scenes_.insert(resources.get());
+    gpu::check_out_of_memory(fmt::format("the upload of scene '{}'", scene.name));
+    return resources;
+}
+
+std::uint64_t Renderer::resident_bytes() const {
+    std::uint64_t bytes = output_.bytes() + tonemap_.bytes();
+    for (const SceneResources* resources : live_scenes_) bytes += resources->resident_bytes();
+    return bytes;
 }
 
 void Renderer::ensure_output(int width, int height) {
@@ -119,12 +149,23 @@ void Renderer::with_frame(SceneResources& resources, const RenderRequest& reques
     const FramePlan plan = plan_frame(request);
     if (plan.site != FrameSite::gpu) throw InputError(fmt::format("method '{}' {}", request.method, kRunsOnCpu));
     const methods::KnobValues& knobs = plan.knobs;
+    const scene::Scene& scene = resources.gpu_scene.scene();
+    const auto& info = methods::MethodRegistry::builtin().find(request.method);
+    {
+        // What this frame replaces (the method's structures and the output target) is not held elsewhere.
+        std::uint64_t replaced = output_.bytes() + tonemap_.bytes();
+        if (const auto existing = resources.methods.find(request.method); existing != resources.methods.end()) {
+            for (const auto& structure : existing->second->resident()) replaced += structure.bytes;
+        }
+        check_memory_budget({info, scene, knobs, request.width, request.height, resident_bytes() - replaced, budget_.bytes,
+                             budget_.source});
+    }
     auto& method = resources.methods[request.method];
-    if (!method) method = methods::MethodRegistry::builtin().create(request.method);
+    if (!method) method = info.create();
+    gpu::check_out_of_memory("earlier GL work");  // so what follows is this frame's alone
 
     ensure_output(request.width, request.height);
 
-    const scene::Scene& scene = resources.gpu_scene.scene();
     const scene::Camera camera = camera_for(scene, request);
     const float aspect = static_cast<float>(request.width) / static_cast<float>(request.height);
     const glm::mat4 view = camera.view();
@@ -134,7 +175,14 @@ void Renderer::with_frame(SceneResources& resources, const RenderRequest& reques
          camera, view, projection, projection * view},
         knobs,
         precompute};
-    run(*method, frame, knobs);
+    try {
+        run(*method, frame, knobs);
+        gpu::check_out_of_memory(fmt::format("a '{}' frame", request.method));
+    } catch (const ResourceExhausted&) {
+        // Whatever the method allocated is in an unknown state: free it all, so the next frame starts clean.
+        resources.methods.erase(request.method);
+        throw;
+    }
 }
 
 FrameStats Renderer::prepare(SceneResources& resources, const RenderRequest& request,
@@ -154,6 +202,20 @@ FrameStats Renderer::prepare(SceneResources& resources, const RenderRequest& req
     });
     stats.render_ms = ms_since(start);
     return stats;
+}
+
+std::optional<methods::PendingWork> Renderer::pending_work(SceneResources& resources, const RenderRequest& request) {
+    std::optional<methods::PendingWork> work;
+    with_frame(resources, request, precompute_,
+               [&](methods::Method& method, const methods::FrameContext& frame, const methods::KnobValues&) {
+                   work = method.pending_work(frame);
+               });
+    return work;
+}
+
+void Renderer::install(SceneResources& resources, const std::string& method,
+                       std::shared_ptr<methods::PrecomputeResult> result) {
+    if (const auto it = resources.methods.find(method); it != resources.methods.end()) it->second->install(std::move(result));
 }
 
 RenderResult Renderer::render(SceneResources& resources, const RenderRequest& request) {

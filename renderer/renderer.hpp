@@ -6,6 +6,7 @@
 #pragma once
 
 #include "renderer/gpu/egl_device.hpp"
+#include "renderer/gpu/memory_budget.hpp"
 #include "renderer/image/frame.hpp"
 #include "renderer/image/tone.hpp"
 #include "renderer/methods/registry.hpp"
@@ -17,6 +18,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <set>
 #include <string>
 
 namespace bounce {
@@ -73,11 +75,20 @@ RenderResult render_on_cpu(const scene::Scene& scene, const RenderRequest& reque
 // their precomputed structures). Destroy it on the render thread, before the Renderer.
 class SceneResources {
 public:
-    explicit SceneResources(const scene::Scene& scene) : gpu_scene(scene) {}
+    explicit SceneResources(const scene::Scene& scene);
+    ~SceneResources();
+    SceneResources(const SceneResources&) = delete;
+    SceneResources& operator=(const SceneResources&) = delete;
+    const std::uint64_t id;  // unique in the process: work made for these resources finds them, not a successor
     gpu::GpuScene gpu_scene;
     std::map<std::string, std::unique_ptr<methods::Method>> methods;
 
     std::vector<methods::ResidentStructure> resident() const;
+    std::uint64_t resident_bytes() const;
+
+private:
+    friend class Renderer;
+    std::set<const SceneResources*>* live_ = nullptr;  // the uploading Renderer's list, for its memory budget
 };
 
 class Renderer {
@@ -103,8 +114,23 @@ public:
     FrameStats prepare(SceneResources& resources, const RenderRequest& request,
                        const std::function<bool(double, const std::string&)>& progress);
 
+    // The long CPU work (a bake) the request's method needs before its next frame, or nullopt; the
+    // memory check comes first. A server runs it off the render thread and hands the result back
+    // with install(); render() and prepare() do it inline when nobody did.
+    std::optional<methods::PendingWork> pending_work(SceneResources& resources, const RenderRequest& request);
+    void install(SceneResources& resources, const std::string& method, std::shared_ptr<methods::PrecomputeResult> result);
+
     // Where methods persist baked structures across restarts (none by default).
     void set_cache_dir(std::optional<std::filesystem::path> dir) { precompute_.cache_dir = std::move(dir); }
+
+    // The bytes every uploaded scene may hold together on the GPU (and, for a software rasterizer,
+    // in host memory): a frame whose method estimates more, with what is resident elsewhere, is
+    // refused with ResourceExhausted before anything is allocated. The default comes from the device
+    // (gpu::default_memory_budget); 0 turns the check off.
+    void set_memory_budget(gpu::MemoryBudget budget) { budget_ = std::move(budget); }
+    const gpu::MemoryBudget& memory_budget() const { return budget_; }
+    // What every uploaded scene holds now, with the output target.
+    std::uint64_t resident_bytes() const;
 
     static constexpr int kMaxDimension = 16384;
 
@@ -125,6 +151,8 @@ private:
     static constexpr std::string_view kRunsOnCpu = "runs on CPU threads, not through the GL renderer";
     gpu::Texture output_;
     gpu::Framebuffer output_framebuffer_;
+    gpu::MemoryBudget budget_;
+    std::set<const SceneResources*> live_scenes_;
 };
 
 // The camera a request renders with: its own, the scene's first, or one that frames the scene.

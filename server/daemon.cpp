@@ -110,8 +110,11 @@ Daemon::Daemon(DaemonConfig config)
                                          config_.cache_dir->string(), error.message()));
         }
     }
-    render_->run_and_wait([cache_dir = config_.cache_dir](Renderer& renderer, SceneRegistry& registry) {
-        renderer.set_cache_dir(cache_dir);
+    render_->run_and_wait([this](Renderer& renderer, SceneRegistry& registry) {
+        renderer.set_cache_dir(config_.cache_dir);
+        if (config_.gpu_memory_budget) renderer.set_memory_budget({*config_.gpu_memory_budget, "--gpu-memory-budget"});
+        log::info("daemon", "GPU memory budget: {} ({})", gpu::format_bytes(renderer.memory_budget().bytes),
+                  renderer.memory_budget().source);
         SceneEntry& entry = registry.put("cornell", scene::make_cornell_box(), "builtin");
         RenderRequest warmup;
         warmup.width = warmup.height = 8;
@@ -340,7 +343,8 @@ int Daemon::run() {
     for (int i = 1; i < config_.network_threads; ++i) threads.emplace_back([this] { io_.run(); });
     io_.run();
     for (auto& thread : threads) thread.join();
-    cpu_pool_.join();  // CPU jobs may still hand frames to the render thread
+    cpu_pool_.join();         // CPU jobs may still hand frames to the render thread
+    precompute_pool_.join();  // and finished bakes their frames (closed sessions cancelled the rest)
     render_->stop();
     encode_pool_.join();
     log::info("daemon", "stopped");

@@ -48,6 +48,9 @@ struct DaemonConfig {
     std::chrono::milliseconds auth_timeout{10000};
     std::uint64_t max_scene_bytes = std::uint64_t{2} << 30;  // a scene's decoded size (--max-scene-bytes)
     std::size_t max_scenes = 64;                              // scenes resident at once (--max-scenes)
+    // What every scene's GPU structures may hold together (--gpu-memory-budget); nullopt: the
+    // device's default (gpu::default_memory_budget).
+    std::optional<std::uint64_t> gpu_memory_budget;
     std::size_t max_ops_connections = 16;  // ops HTTP connections at once
     std::chrono::milliseconds ops_timeout{10000};  // to read an ops request and write its answer
     int network_threads = 2;
@@ -74,11 +77,15 @@ public:
     // authenticated clients are already connected.
     bool authenticated(Session* session);
     RenderService& render_service() { return *render_; }
+    boost::asio::io_context& io() { return io_; }
     Metrics& metrics() { return metrics_; }
     RequestHandlers& handlers() { return handlers_; }
     boost::asio::thread_pool& encode_pool() { return encode_pool_; }
     // CPU methods (the path-traced reference) run here, never on the render thread.
     boost::asio::thread_pool& cpu_pool() { return cpu_pool_; }
+    // Long CPU work frames need first (bakes), off the render thread: one at a time, each uses every
+    // core through TBB.
+    boost::asio::thread_pool& precompute_pool() { return precompute_pool_; }
     bool try_start_cpu_job();  // false when kMaxCpuJobs are queued or running
     void finish_cpu_job() { --cpu_jobs_; }  // once for every true try_start_cpu_job()
     static constexpr int kMaxCpuJobs = 4;
@@ -104,6 +111,7 @@ private:
     boost::asio::io_context io_;
     boost::asio::thread_pool encode_pool_{2};
     boost::asio::thread_pool cpu_pool_{1};  // one trace at a time: it uses every core through TBB
+    boost::asio::thread_pool precompute_pool_{1};
     std::atomic<int> cpu_jobs_{0};
     boost::asio::ip::tcp::acceptor acceptor_;
     std::optional<boost::asio::ip::tcp::acceptor> metrics_acceptor_;

@@ -8,6 +8,7 @@
 #include "renderer/scene/gltf_import.hpp"
 #include "server/daemon.hpp"
 
+#include <cctype>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -50,12 +51,16 @@ Daemon options:
   --max-inflight-bytes N    request bodies held across all clients          [1073741824]
   --max-scene-bytes N       a scene's decoded size (geometry and images)    [2147483648]
   --max-scenes N            scenes resident at once                         [64]
+  --gpu-memory-budget N     what every scene's GPU structures may hold together; frames that
+                            would pass it are refused (resource_exhausted)  [90% of the device's
+                            memory, or half the host's for a software rasterizer]
   --max-unauthenticated N   connections yet to authenticate (with a token)  [16]
   --auth-timeout-ms N       time a connection has to authenticate           [10000]
   --drain-seconds N         on SIGTERM, finish in-flight work for at most N s, then cancel it;
                             a second signal exits at once                   [10]
   --device D                auto, software or an EGL device index           [auto, or $BOUNCE_DEVICE]
   --log-level L             debug, info, warn, error                        [info]
+Byte counts (the -bytes flags, --gpu-memory-budget) take a K, M, G or T suffix (powers of 1024).
 
 Render options (--render-once renders one frame and exits):
   --scene NAME|FILE     built-in scene name (cornell) or a .gltf/.glb file   [cornell]
@@ -84,6 +89,18 @@ unsigned long long number(const std::string& flag, const std::string& text, unsi
     }
     usage_error(flag + " expects a whole number in [" + std::to_string(min) + ", " + std::to_string(max) + "], got '" +
                 text + "'");
+}
+
+// A byte count: a whole number with an optional binary suffix (K, M, G, T: 2^10 .. 2^40).
+unsigned long long bytes(const std::string& flag, const std::string& text, unsigned long long min,
+                         unsigned long long max) {
+    static const std::string suffixes = "KMGT";
+    const std::size_t suffix = text.empty() ? std::string::npos : suffixes.find(static_cast<char>(std::toupper(text.back())));
+    if (suffix == std::string::npos) return number(flag, text, min, max);
+    const unsigned shift = 10 * static_cast<unsigned>(suffix + 1);
+    const unsigned long long scaled = number(flag, text.substr(0, text.size() - 1), 0, max >> shift) << shift;
+    if (scaled < min) usage_error(flag + " must be at least " + std::to_string(min) + " bytes, got '" + text + "'");
+    return scaled;
 }
 
 Options parse(int argc, char** argv) {
@@ -149,7 +166,7 @@ Options parse(int argc, char** argv) {
         } else if (flag == "--max-clients") {
             options.daemon.max_clients = number(flag, value(), 1, 100000);
         } else if (flag == "--max-message-bytes") {
-            options.daemon.max_message_bytes = number(flag, value(), 1024, 4294967295ull);
+            options.daemon.max_message_bytes = bytes(flag, value(), 1024, 4294967295ull);
         } else if (flag == "--max-pixels") {
             options.daemon.max_pixels = number(flag, value(), 1, 268435456);
         } else if (flag == "--max-in-flight") {
@@ -159,9 +176,11 @@ Options parse(int argc, char** argv) {
         } else if (flag == "--metrics-listen") {
             options.daemon.metrics_listen = value();
         } else if (flag == "--max-inflight-bytes") {
-            options.daemon.max_inflight_bytes = number(flag, value(), 1u << 20, 1ull << 40);
+            options.daemon.max_inflight_bytes = bytes(flag, value(), 1u << 20, 1ull << 40);
+        } else if (flag == "--gpu-memory-budget") {
+            options.daemon.gpu_memory_budget = bytes(flag, value(), 1u << 20, 1ull << 50);
         } else if (flag == "--max-scene-bytes") {
-            options.daemon.max_scene_bytes = number(flag, value(), 1024, 1ull << 40);
+            options.daemon.max_scene_bytes = bytes(flag, value(), 1024, 1ull << 40);
         } else if (flag == "--max-scenes") {
             options.daemon.max_scenes = number(flag, value(), 1, 100000);
         } else if (flag == "--max-unauthenticated") {

@@ -59,6 +59,16 @@ bool RenderService::submit(Job job) {
     return true;
 }
 
+bool RenderService::resume(Job job) {
+    {
+        std::lock_guard lock(mutex_);
+        if (stopping_) return false;
+        jobs_.push_front(std::move(job));
+    }
+    wake_.notify_one();
+    return true;
+}
+
 void RenderService::run_and_wait(const Job& job) {
     std::promise<void> done;
     auto future = done.get_future();

@@ -26,6 +26,9 @@ public:
 
     // Queues a job; false when the queue is full (the caller answers `busy`) or stopping.
     bool submit(Job job);
+    // Queues a job ahead of the others, past the capacity: the continuation of work already admitted
+    // (a frame whose bake finished off the thread). False only when stopping.
+    bool resume(Job job);
     // Runs a job and waits for it (startup work); rethrows what the job threw.
     void run_and_wait(const Job& job);
     // Finishes queued jobs, then ends the thread. Idempotent.

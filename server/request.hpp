@@ -8,6 +8,10 @@
 #include "server/orders.hpp"
 #include "server/request_error.hpp"
 
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/post.hpp>
+#include <boost/asio/steady_timer.hpp>
+
 #include <atomic>
 #include <chrono>
 #include <cstdint>
@@ -51,6 +55,9 @@ public:
     ByteBudget::Reservation memory;
 
     bool is_cancelled() const { return cancelled->load(); }
+    // Makes the deadline stop running work: when it passes, the request is cancelled (CPU frames and
+    // bakes stop as for `cancel`) and its error is `timeout`. The timer goes when the request ends.
+    void arm_deadline(boost::asio::io_context& io, std::chrono::milliseconds timeout);
     // Throws RequestError `cancelled` or `timeout` when the request should not start.
     void check_still_wanted() const;
 
@@ -64,6 +71,7 @@ public:
 private:
     bool end();  // true the first time
     std::shared_ptr<ReplyChannel> channel_;
+    std::shared_ptr<boost::asio::steady_timer> deadline_timer_;
     protocol::Message message_;
     std::atomic<bool> ended_{false};
 };

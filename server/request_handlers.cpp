@@ -50,7 +50,7 @@ void RequestHandlers::admit(const std::shared_ptr<Request>& request) {
     try {
         const json& body = request->message().body;
         if (const auto timeout = protocol::get_optional_integer(body, "timeout_ms", 1, 24ll * 3600 * 1000)) {
-            request->deadline = request->received + std::chrono::milliseconds(*timeout);
+            request->arm_deadline(daemon_.io(), std::chrono::milliseconds(*timeout));
         }
         request->order = parse_order(request->message(), daemon_.config().max_pixels);
         const bool queued = daemon_.render_service().submit(
@@ -121,6 +121,7 @@ void RequestHandlers::render_on_gpu(const std::shared_ptr<Request>& request, con
     check_scene_version(entry, order);
     RenderRequest frame = order.request;
     if (auto camera = named_camera(*entry.scene, order)) frame.camera = std::move(camera);
+    if (wait_for_pending_work(request, order.scene, entry, frame, renderer)) return;
     auto result = std::make_shared<const RenderResult>(renderer.render(*entry.resources, frame));
     clock.rendered = Clock::now();
     daemon_.metrics().set_resident_bytes(order.scene, result->stats.resident_bytes);
@@ -177,6 +178,7 @@ void RequestHandlers::deliver(const std::shared_ptr<Request>& request, const Ren
 json RequestHandlers::bake(const std::shared_ptr<Request>& request, const BakeOrder& order, Renderer& renderer,
                            SceneRegistry& registry) {
     SceneEntry& entry = registry.get(order.frame.scene);
+    if (wait_for_pending_work(request, order.frame.scene, entry, order.frame.request, renderer)) return nullptr;
     const auto started = Clock::now();
     auto last_sent = started - std::chrono::seconds(1);
     const FrameStats stats =
@@ -197,6 +199,58 @@ json RequestHandlers::bake(const std::shared_ptr<Request>& request, const BakeOr
     return reply;
 }
 
+bool RequestHandlers::wait_for_pending_work(const std::shared_ptr<Request>& request, const std::string& scene_name,
+                                            SceneEntry& entry, const RenderRequest& frame, Renderer& renderer) {
+    auto work = renderer.pending_work(*entry.resources, frame);
+    if (!work) return false;
+    const std::uint64_t resources_id = entry.resources->id;
+    const std::string key = fmt::format("{}/{}/{}", resources_id, frame.method, work->key);
+    auto& shared = running_work_[key];
+    const bool joined = shared != nullptr;
+    if (!joined) shared = std::make_shared<SharedWork>();
+    shared->add(request);
+    if (joined) return true;
+
+    boost::asio::post(daemon_.precompute_pool(), [this, shared, key, resources_id, scene_name, method = frame.method,
+                                                  run = std::move(work->run)] {
+        std::shared_ptr<methods::PrecomputeResult> result;
+        std::exception_ptr failure;
+        try {
+            result = run([&](double fraction, const std::string& stage) { return shared->progress(fraction, stage); });
+        } catch (...) {
+            failure = std::current_exception();
+        }
+        const bool resumed = daemon_.render_service().resume(
+            [this, shared, key, resources_id, scene_name, method, result, failure](Renderer& renderer, SceneRegistry& registry) {
+                running_work_.erase(key);
+                const auto waiters = shared->take();
+                if (failure) {
+                    for (const auto& waiter : waiters) {
+                        try {
+                            waiter->check_still_wanted();  // cancelled or timed out: say which
+                            waiter->fail(failure);
+                        } catch (...) {
+                            waiter->fail(std::current_exception());
+                        }
+                    }
+                    return;
+                }
+                const auto entry = registry.entries().find(scene_name);
+                if (entry != registry.entries().end() && entry->second.resources->id == resources_id) {
+                    renderer.install(*entry->second.resources, method, result);
+                }
+                // Each runs as if just dequeued: a scene unloaded or changed meanwhile is handled there.
+                for (const auto& waiter : waiters) execute(waiter, renderer, registry);
+            });
+        if (!resumed) {
+            for (const auto& waiter : shared->take()) {
+                waiter->fail(std::make_exception_ptr(RequestError(ErrorCode::shutting_down, "the daemon is shutting down")));
+            }
+        }
+    });
+    return true;
+}
+
 json RequestHandlers::stats(Renderer& renderer, SceneRegistry& registry) {
     json errors = json::object();
     for (const auto& [code, count] : daemon_.metrics().errors()) errors[code] = count;
@@ -205,6 +259,9 @@ json RequestHandlers::stats(Renderer& renderer, SceneRegistry& registry) {
     reply["errors"] = errors;
     reply["queue_depth"] = daemon_.render_service().queue_depth();
     reply["renderer"] = renderer.gpu_info().renderer;
+    reply["gpu_memory"] = {{"budget_bytes", renderer.memory_budget().bytes},
+                           {"budget_source", renderer.memory_budget().source},
+                           {"resident_bytes", renderer.resident_bytes()}};
     return reply;
 }
 

@@ -1,7 +1,10 @@
 // Executes the requests sessions admit. The path of a request (docs/architecture.md):
 //
 //   network thread (session strand): parse_order + plan_frame; refused here, nothing queued
-//   render thread: scene requests, GPU frames, bakes; CPU frames only snapshot the scene here
+//   render thread: scene requests, GPU frames; CPU frames only snapshot the scene here, and frames
+//                  that need a bake first only start it
+//   precompute pool: bakes (a method's PendingWork); the frames that waited for one go back to the
+//                  render thread, ahead of the queue
 //   CPU pool: CPU frames (trace, CPU tone map)
 //   encode pool: every frame's encoding and reply
 //
@@ -11,8 +14,11 @@
 
 #include "server/frame_json.hpp"
 #include "server/request.hpp"
+#include "server/shared_work.hpp"
 
+#include <map>
 #include <memory>
+#include <string>
 
 namespace bounce {
 class Renderer;
@@ -22,6 +28,7 @@ namespace bounce::server {
 
 class Daemon;
 class SceneRegistry;
+struct SceneEntry;
 
 class RequestHandlers {
 public:
@@ -39,11 +46,17 @@ private:
     nlohmann::json bake(const std::shared_ptr<Request>& request, const BakeOrder& order, Renderer& renderer,
                         SceneRegistry& registry);
     nlohmann::json stats(Renderer& renderer, SceneRegistry& registry);
+    // When the frame's method needs long CPU work first, makes the request wait for it (starting it
+    // on the precompute pool, or joining a run of the same work) and returns true: the request runs
+    // again once the work is done. False when there is none.
+    bool wait_for_pending_work(const std::shared_ptr<Request>& request, const std::string& scene_name,
+                               SceneEntry& entry, const RenderRequest& frame, Renderer& renderer);
     // Encodes the frame on the encode pool and answers with it.
     void deliver(const std::shared_ptr<Request>& request, const RenderOrder& order,
                  std::shared_ptr<const RenderResult> result, std::uint64_t scene_version, FrameClock clock);
 
     Daemon& daemon_;
+    std::map<std::string, std::shared_ptr<SharedWork>> running_work_;  // render thread only, by work key
 };
 
 }  // namespace bounce::server

@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <functional>
 #include <map>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -39,6 +40,50 @@ struct FrameContext : passes::PassContext {
     int knob_int(std::string_view name) const { return static_cast<int>(knob(name)); }
 };
 
+// What a frame would make a method hold, asked before anything is allocated: the scene, the
+// resolved knobs and the frame size.
+struct EstimateInput {
+    const scene::Scene& scene;
+    const KnobValues& knobs;
+    int width = 0;
+    int height = 0;
+
+    double knob(std::string_view name) const;
+    int knob_int(std::string_view name) const { return static_cast<int>(knob(name)); }
+};
+
+// One structure of an estimate, and what sizes it: the knob whose value it grows with, "frame size",
+// or nothing (the scene alone). Structures whose size depends on what the GPU finds (a sparse
+// octree's nodes, compressed depth runs) are estimated from the scene's surface area and say so in
+// their method's estimate function.
+struct StructureEstimate {
+    std::string name;
+    std::uint64_t bytes = 0;
+    std::string scaled_by;
+};
+using MemoryEstimate = std::vector<StructureEstimate>;
+
+// What every GPU method holds for direct light: the G-buffer at the frame size and a shadow map per
+// light at the `shadow_map_size` knob.
+MemoryEstimate direct_light_estimate(const EstimateInput& input);
+
+// The result of a method's long CPU work (a bake), made off the render thread by PendingWork::run and
+// handed back to the method that asked for it by Method::install.
+class PrecomputeResult {
+public:
+    virtual ~PrecomputeResult() = default;
+};
+
+using PrecomputeProgress = std::function<bool(double fraction, const std::string& stage)>;
+
+// Long CPU work a frame needs first. `run` reads only what it captured (a snapshot of the scene),
+// never the method or the live scene, so it may run on any thread while the render thread serves
+// other frames; it reports progress and throws Cancelled when `progress` returns false.
+struct PendingWork {
+    std::string key;  // equal keys: the same work, so frames waiting for it can share one run
+    std::function<std::shared_ptr<PrecomputeResult>(const PrecomputeProgress& progress)> run;
+};
+
 class Method {
 public:
     virtual ~Method() = default;
@@ -48,6 +93,15 @@ public:
     // request), reporting progress through frame.precompute. Nothing by default: render() builds
     // what it needs lazily.
     virtual void prepare(const FrameContext& frame) { (void)frame; }
+    // Long CPU work this frame would otherwise do inline on the render thread (render() and prepare()
+    // still do it there when nobody ran it first); none by default.
+    virtual std::optional<PendingWork> pending_work(const FrameContext& frame) {
+        (void)frame;
+        return std::nullopt;
+    }
+    // Takes a finished PendingWork's result; the next frame uses it if it still serves that frame
+    // (the scene may have changed meanwhile).
+    virtual void install(std::shared_ptr<PrecomputeResult> result) { (void)result; }
     // The structures held right now, with their bytes and the reason each exists.
     virtual std::vector<ResidentStructure> resident() const = 0;
     // Counts that describe the method's state after the last frame (structure sizes, how often each

@@ -42,6 +42,7 @@ void MethodRegistry::add(MethodInfo info) {
     BOUNCE_CHECK(gpu ? info.create != nullptr && info.create_cpu == nullptr
                      : info.create_cpu != nullptr && info.create == nullptr,
                  "method '{}' must have exactly the factory of its device ({})", info.name, gpu ? "gpu" : "cpu");
+    BOUNCE_CHECK(!gpu || info.estimate != nullptr, "GPU method '{}' must estimate its memory", info.name);
     for (const auto& preset : preset_names()) {
         const auto it = info.presets.find(preset);
         BOUNCE_CHECK(it != info.presets.end(), "method '{}' lacks preset '{}'", info.name, preset);

@@ -40,6 +40,9 @@ struct MethodInfo {
     std::map<std::string, KnobValues> presets;  // every name of preset_names(), every knob set
     std::function<std::unique_ptr<Method>()> create;         // GPU methods
     std::function<std::unique_ptr<CpuMethod>()> create_cpu;  // CPU methods
+    // GPU methods: the structures a frame with these knobs will hold, before any is allocated (the
+    // renderer refuses frames past its memory budget with it).
+    std::function<MemoryEstimate(const EstimateInput&)> estimate;
 };
 
 class MethodRegistry {

@@ -62,6 +62,10 @@ void GBufferPass::bind_textures() const {
     }
 }
 
+std::uint64_t GBufferPass::bytes_for(int width, int height) {
+    return static_cast<std::uint64_t>(width) * static_cast<std::uint64_t>(height) * (16 + 8 + 8 + 16 + 4);
+}
+
 std::size_t GBufferPass::bytes() const {
     return position_.bytes() + normal_.bytes() + albedo_.bytes() + emissive_.bytes() + depth_.bytes();
 }

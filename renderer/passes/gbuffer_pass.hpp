@@ -14,6 +14,9 @@ public:
     const gpu::Texture& position() const { return position_; }
     const gpu::Texture& normal() const { return normal_; }
     std::size_t bytes() const;
+    // What a G-buffer of this size holds (position and emission RGBA32F, normal and albedo RGBA16F,
+    // depth 32F), before it is allocated.
+    static std::uint64_t bytes_for(int width, int height);
 
 private:
     void resize(int width, int height);

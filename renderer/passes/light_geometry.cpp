@@ -23,6 +23,14 @@ bool has_power(const scene::Light& light) {
     return radiant.x > 0.0f || radiant.y > 0.0f || radiant.z > 0.0f;
 }
 
+std::uint64_t light_views_with_power(const scene::Scene& scene) {
+    std::uint64_t views = 0;
+    for (const scene::Light& light : scene.lights) {
+        if (has_power(light)) views += light.type == scene::LightType::point ? 6 : 1;
+    }
+    return views;
+}
+
 glm::vec3 up_for(const glm::vec3& direction) {
     return std::abs(direction.y) > 0.99f ? glm::vec3(0.0f, 0.0f, 1.0f) : glm::vec3(0.0f, 1.0f, 0.0f);
 }

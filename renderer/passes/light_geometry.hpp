@@ -13,6 +13,10 @@ namespace bounce::passes {
 // A light without power sends nothing: no map, no photons.
 bool has_power(const scene::Light& light);
 
+// The views a light-space map needs across the lights with power: six faces per point light, one
+// per spot or directional light.
+std::uint64_t light_views_with_power(const scene::Scene& scene);
+
 // An up vector that is not parallel to `direction`.
 glm::vec3 up_for(const glm::vec3& direction);
 

@@ -66,6 +66,11 @@ bool frustum_misses(const glm::mat4& view_projection, const scene::Aabb& bounds)
 }
 }  // namespace
 
+std::uint64_t LightViewMaps::bytes_for(const scene::Scene& scene, int size) {
+    return std::max<std::uint64_t>(light_views_with_power(scene), 1) * static_cast<std::uint64_t>(size) * static_cast<std::uint64_t>(size) *
+           (16 + 8 + 4 + 4);
+}
+
 bool LightViewMaps::render(const PassContext& context, int size) {
     const std::uint64_t fingerprint = light_view_fingerprint(context.scene, size);
     if (fingerprint == fingerprint_ && size == size_) return false;

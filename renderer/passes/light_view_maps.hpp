@@ -35,6 +35,9 @@ public:
     const gpu::Texture& normal() const { return normal_; }      // RGBA16F: shading normal
     const gpu::Texture& albedo() const { return albedo_; }      // RGBA8: diffuse albedo
     std::size_t bytes() const;
+    // At most what render(scene, size) will hold: every view of every light with power (culling
+    // may drop some), RGBA32F position, RGBA16F normal, RGBA8 albedo and 32-bit depth per texel.
+    static std::uint64_t bytes_for(const scene::Scene& scene, int size);
     std::size_t frames_drawn() const { return frames_drawn_; }
     // Views of lights with power that were not drawn because they cannot see the scene.
     std::size_t views_culled() const { return views_culled_; }

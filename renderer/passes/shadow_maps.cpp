@@ -132,6 +132,10 @@ void ShadowMaps::bind(const gpu::ShaderProgram& program, std::size_t light_index
     glBindSampler(unit, 0);
 }
 
+std::uint64_t ShadowMaps::bytes_for(const scene::Scene& scene, int size) {
+    return light_views_with_power(scene) * static_cast<std::uint64_t>(size) * static_cast<std::uint64_t>(size) * 4;
+}
+
 std::size_t ShadowMaps::bytes() const {
     std::size_t total = 0;
     for (const auto& map : maps_) total += map.depth.bytes();

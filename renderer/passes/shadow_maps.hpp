@@ -24,6 +24,9 @@ public:
     // Sets the shadow uniforms of common/shadows.glsl on `program` and binds the light's map.
     void bind(const gpu::ShaderProgram& program, std::size_t light_index) const;
     std::size_t bytes() const;
+    // What render(scene, size) will hold: a 32-bit depth map per light with power, six faces for a
+    // point light.
+    static std::uint64_t bytes_for(const scene::Scene& scene, int size);
     std::size_t map_count() const;
 
 private:

@@ -11,6 +11,7 @@ public:
     // Reads `hdr` and returns the RGBA8 texture it wrote (owned by the pass, valid until the next run).
     const gpu::Texture& run(gpu::ShaderCache& shaders, gpu::StateCache& state, gpu::GpuTimers& timers,
                             const gpu::Texture& hdr, const image::DisplayTransform& transform);
+    std::size_t bytes() const { return display_.bytes(); }
 
 private:
     gpu::Texture display_;

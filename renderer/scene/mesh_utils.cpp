@@ -72,4 +72,23 @@ std::vector<glm::vec4> uv_tangents(const Primitive& primitive, std::span<const g
     return tangents;
 }
 
+float world_triangle_area(const glm::mat4& transform, const Primitive& primitive, std::size_t triangle) {
+    glm::vec3 p[3];
+    for (int c = 0; c < 3; ++c) p[c] = glm::vec3(transform * glm::vec4(primitive.positions[primitive.indices[3 * triangle + c]], 1.0f));
+    return 0.5f * glm::length(glm::cross(p[1] - p[0], p[2] - p[0]));
+}
+
+double surface_area(const Scene& scene) {
+    double area = 0.0;
+    for (const Object& object : scene.objects) {
+        if (object.mesh < 0) continue;
+        for (const Primitive& primitive : scene.meshes[static_cast<std::size_t>(object.mesh)].primitives)
+            for (std::size_t t = 0; t < primitive.triangle_count(); ++t) {
+                const float triangle = world_triangle_area(object.transform, primitive, t);
+                if (std::isfinite(triangle)) area += triangle;
+            }
+    }
+    return area;
+}
+
 }  // namespace bounce::scene

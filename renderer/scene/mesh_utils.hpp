@@ -26,4 +26,10 @@ glm::vec4 fallback_tangent(const glm::vec3& normal);
 // normals must be set), orthogonal to the normal, with the handedness in w.
 std::vector<glm::vec4> uv_tangents(const Primitive& primitive, std::span<const glm::vec2> uvs);
 
+// The area of `primitive`'s triangle `triangle` once `transform` places it in the world.
+float world_triangle_area(const glm::mat4& transform, const Primitive& primitive, std::size_t triangle);
+
+// The world-space area of every object's triangles (a mesh placed twice counts twice).
+double surface_area(const Scene& scene);
+
 }  // namespace bounce::scene

@@ -2,6 +2,7 @@
 // n = 1, 2, 3, with and without the indirect visibility its cube maps provide; what it keeps
 // between frames, and its statistics.
 #include "gpu_fixture.hpp"
+#include "renderer/base/error.hpp"
 #include "renderer/image/metrics.hpp"
 #include "renderer/methods/reference/path_tracer.hpp"
 #include "renderer/scene/builtin.hpp"
@@ -80,6 +81,47 @@ TEST(Cssm, CubeMapVisibilityIsWhatMakesItMatch) {
     const double unoccluded = image::compare(reference_frame(scene, 1, false), cornell_reference(1)).rel_mse;
     EXPECT_GT(unoccluded, 0.05);
     EXPECT_LT(cssm, 0.1 * unoccluded) << cssm << " " << unoccluded;
+}
+
+// The bake made off the render thread (the daemon's path: pending work run on a snapshot, its result
+// installed) gives the frame the inline bake gives, bit for bit, and no second bake; a result that
+// does not serve the next frame (made for other knobs) is dropped, not adopted.
+TEST(Cssm, ABakeMadeOffTheRenderThreadGivesTheSameFrame) {
+    Renderer& renderer = shared_renderer();
+    const scene::Scene scene = scene::make_cornell_box();
+    const RenderRequest request = method_request("cssm", "draft", kSize);
+    const RenderResult inline_bake = render_scene(scene, request);
+
+    auto resources = renderer.upload(scene);
+    auto work = renderer.pending_work(*resources, request);
+    ASSERT_TRUE(work.has_value());
+    std::vector<double> fractions;
+    auto result = work->run([&](double fraction, const std::string&) {
+        fractions.push_back(fraction);
+        return true;
+    });
+    ASSERT_FALSE(fractions.empty());
+    EXPECT_DOUBLE_EQ(fractions.back(), 1.0);
+    renderer.install(*resources, "cssm", result);
+    EXPECT_FALSE(renderer.pending_work(*resources, request).has_value()) << "the installed bake serves the frame";
+    const RenderResult off_thread = renderer.render(*resources, request);
+    EXPECT_EQ(off_thread.frame.rgba, inline_bake.frame.rgba);
+    EXPECT_EQ(off_thread.stats.method_statistics.at("bakes"), 1.0);
+
+    // Work for other knobs, installed before a frame with the first ones: dropped, the resident bake kept.
+    const RenderRequest finer = method_request("cssm", "draft", kSize, {{"face_size", 24}});
+    auto stale = renderer.pending_work(*resources, finer);
+    ASSERT_TRUE(stale.has_value());
+    renderer.install(*resources, "cssm", stale->run([](double, const std::string&) { return true; }));
+    const auto kept = renderer.render(*resources, request).stats.method_statistics;
+    EXPECT_EQ(kept.at("bakes"), 1.0);
+    EXPECT_EQ(kept.at("cube_face_size"), 16.0);
+    EXPECT_EQ(renderer.render(*resources, finer).stats.method_statistics.at("bakes"), 2.0) << "the dropped result was kept";
+
+    // A progress callback that says stop ends the work with Cancelled and installs nothing.
+    auto cancelled = renderer.pending_work(*resources, method_request("cssm", "draft", kSize, {{"face_size", 32}}));
+    ASSERT_TRUE(cancelled.has_value());
+    EXPECT_THROW(cancelled->run([](double, const std::string&) { return false; }), Cancelled);
 }
 
 TEST(Cssm, KeepsItsBakeAndSolutionWhileOnlyTheCameraMovesAndRelightsWithoutRebaking) {

@@ -7,7 +7,9 @@
 
 #include <chrono>
 #include <fstream>
+#include <iterator>
 #include <random>
+#include <sstream>
 #include <stdexcept>
 #include <thread>
 
@@ -81,13 +83,36 @@ int DaemonProcess::wait_for_exit(std::chrono::seconds limit) {
     return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
 }
 
-long DaemonProcess::resident_kb() const {
-    std::ifstream status("/proc/" + std::to_string(pid_) + "/status");
+namespace {
+long status_kb(pid_t pid, const std::string& field) {
+    std::ifstream status("/proc/" + std::to_string(pid) + "/status");
     std::string line;
     while (std::getline(status, line)) {
-        if (line.rfind("VmRSS:", 0) == 0) return std::stol(line.substr(6));
+        if (line.rfind(field, 0) == 0) return std::stol(line.substr(field.size()));
     }
     return -1;
+}
+}  // namespace
+
+long DaemonProcess::resident_kb() const { return status_kb(pid_, "VmRSS:"); }
+
+long DaemonProcess::peak_resident_kb() const { return status_kb(pid_, "VmHWM:"); }
+
+double DaemonProcess::cpu_seconds() const {
+    std::ifstream stat("/proc/" + std::to_string(pid_) + "/stat");
+    std::string text((std::istreambuf_iterator<char>(stat)), std::istreambuf_iterator<char>());
+    // Fields after the command name (which may hold spaces) in parentheses: utime and stime are the
+    // 14th and 15th fields of the line, the 12th and 13th after ") ".
+    const auto close = text.rfind(')');
+    if (close == std::string::npos) return -1.0;
+    std::istringstream fields(text.substr(close + 2));
+    std::string field;
+    unsigned long long utime = 0, stime = 0;
+    for (int i = 1; i <= 13 && fields >> field; ++i) {
+        if (i == 12) utime = std::stoull(field);
+        if (i == 13) stime = std::stoull(field);
+    }
+    return static_cast<double>(utime + stime) / static_cast<double>(sysconf(_SC_CLK_TCK));
 }
 
 void DaemonProcess::kill_hard() {

@@ -29,6 +29,10 @@ public:
     int pid() const { return pid_; }
     // The process's resident set size now, from /proc (kB).
     long resident_kb() const;
+    // The most it has had resident since it started (VmHWM), in KiB.
+    long peak_resident_kb() const;
+    // CPU time it has used, user and system, in seconds.
+    double cpu_seconds() const;
     // SIGKILL: the daemon gets no chance to clean up (a crash, or a machine going down).
     void kill_hard();
     bool running() const;

@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <regex>
 #include <thread>
 #include <unistd.h>
 
@@ -142,6 +143,97 @@ TEST(DaemonHardening, SceneBudgetsAreResourceExhausted) {
     expect_error([&] { client.request(MessageType::scene_load, {{"name", "third"}, {"builtin", "cornell"}}); },
                  ErrorCode::resource_exhausted, "name");
     client.request(MessageType::scene_load, {{"name", "second"}, {"builtin", "cornell_blob"}});  // a replacement fits
+    expect_still_serving(daemon.endpoint(), baseline);
+}
+
+// 16 point lights with 8192^2 shadow maps would take 24 GiB: under a 256 MiB GPU budget the
+// frame is refused before anything is allocated, the refusal names the shadow maps and a size that
+// fits, that size renders, and the daemon's peak resident memory stays within the budget of where
+// it started (llvmpipe allocates GPU memory on the host).
+TEST(DaemonHardening, GpuMemoryBudgetRefusesFramesThatWouldPassIt) {
+    DaemonProcess daemon({"--gpu-memory-budget", "256M"});
+    const auto baseline = cornell_frame(daemon.endpoint());
+    const long started_kb = daemon.peak_resident_kb();
+    Client client(daemon.endpoint());
+    client.request(MessageType::scene_load, {{"name", "lights"}, {"builtin", "cornell"}});
+    for (int i = 0; i < 15; ++i) {
+        client.request(MessageType::light_set, {{"scene", "lights"}, {"light", "extra" + std::to_string(i)}, {"type", "point"},
+                                                {"position", {0.1 * i - 0.7, 1.5, 0.0}}, {"intensity", 0.1}});
+    }
+    json request = {{"scene", "lights"}, {"method", "direct"}, {"width", 64}, {"height", 64},
+                    {"knobs", {{"shadow_map_size", 8192}}}};
+    std::string message;
+    try {
+        client.request(MessageType::render, request);
+        ADD_FAILURE() << "a 24 GiB frame was rendered under a 256 MiB budget";
+    } catch (const ServerError& error) {
+        EXPECT_EQ(error.code(), ErrorCode::resource_exhausted) << error.what();
+        message = error.what();
+    }
+    EXPECT_NE(message.find("'shadow_maps'"), std::string::npos) << message;
+    std::smatch match;
+    ASSERT_TRUE(std::regex_search(message, match, std::regex("shadow_map_size=([0-9]+) would fit"))) << message;
+    request["knobs"]["shadow_map_size"] = std::stoi(match[1]);
+    const auto frame = render(client, request);
+    EXPECT_GT(rgb_sum(frame), 0.0);
+    const json stats = client.request(MessageType::stats, json::object()).body;
+    EXPECT_EQ(stats.at("gpu_memory").at("budget_bytes"), 256u << 20) << stats.dump();
+    EXPECT_LE(stats.at("gpu_memory").at("resident_bytes").get<std::uint64_t>(), 256u << 20) << stats.dump();
+    EXPECT_LT(daemon.peak_resident_kb() - started_kb, 256 * 1024 + 64 * 1024)
+        << "peak resident memory past the budget (with 64 MiB for the frame's readback and encoding)";
+    expect_still_serving(daemon.endpoint(), baseline);
+}
+
+// The daemon's CPU use over one second, starting one second from now: a daemon with nothing to do
+// measures about 0.01 s; a bake or a trace that kept running would measure close to the core count.
+double cpu_seconds_a_second_later(const DaemonProcess& daemon) {
+    std::this_thread::sleep_for(std::chrono::seconds(1));
+    const double before = daemon.cpu_seconds();
+    std::this_thread::sleep_for(std::chrono::seconds(1));
+    return daemon.cpu_seconds() - before;
+}
+
+// The next message for request `id`, a progress event included.
+protocol::Message next_for(Client& client, std::uint64_t id) {
+    for (;;) {
+        auto message = client.read();
+        if (message.request_id == id) return message;
+    }
+}
+
+// A cssm frame whose bake would take hours (atlas_resolution 1024: about a million cube maps). The
+// bake runs off the render thread and reports progress; another client's frame is served while it
+// runs; a cancel, a timeout_ms and a disconnect each stop it, and the daemon is idle a second later.
+TEST(DaemonHardening, LongBakesHoldNoOtherFramesAndStopWhenNoLongerWanted) {
+    DaemonProcess daemon;
+    const auto baseline = cornell_frame(daemon.endpoint());
+    const json hours = {{"scene", "cornell"}, {"method", "cssm"}, {"width", 32}, {"height", 32},
+                        {"knobs", {{"atlas_resolution", 1024}, {"face_size", 32}}}};
+    {
+        Client baker(daemon.endpoint());
+        baker.send_raw(protocol::encode({static_cast<std::uint16_t>(MessageType::render), 200, hours, {}}));
+        const auto event = next_for(baker, 200);
+        ASSERT_EQ(event.type, static_cast<std::uint16_t>(MessageType::progress)) << event.body.dump();
+        EXPECT_LT(event.body.at("fraction").get<double>(), 0.01);
+        expect_still_serving(daemon.endpoint(), baseline);  // while the bake runs
+        baker.send_raw(protocol::encode({static_cast<std::uint16_t>(MessageType::cancel), 201, {{"id", 200}}, {}}));
+        const auto reply = reply_to(baker, 200);
+        ASSERT_EQ(reply.type, static_cast<std::uint16_t>(MessageType::error));
+        EXPECT_EQ(reply.body.at("code").get<std::string>(), "cancelled") << reply.body.dump();
+        EXPECT_LT(cpu_seconds_a_second_later(daemon), 0.25) << "the cancelled bake kept running";
+
+        json timed = hours;
+        timed["timeout_ms"] = 1500;
+        baker.send_raw(protocol::encode({static_cast<std::uint16_t>(MessageType::render), 202, timed, {}}));
+        const auto timeout = reply_to(baker, 202);
+        ASSERT_EQ(timeout.type, static_cast<std::uint16_t>(MessageType::error));
+        EXPECT_EQ(timeout.body.at("code").get<std::string>(), "timeout") << timeout.body.dump();
+        EXPECT_LT(cpu_seconds_a_second_later(daemon), 0.25) << "the timed-out bake kept running";
+
+        baker.send_raw(protocol::encode({static_cast<std::uint16_t>(MessageType::render), 203, hours, {}}));
+        ASSERT_EQ(next_for(baker, 203).type, static_cast<std::uint16_t>(MessageType::progress));
+    }  // the client disconnects mid-bake
+    EXPECT_LT(cpu_seconds_a_second_later(daemon), 0.25) << "the abandoned bake kept running";
     expect_still_serving(daemon.endpoint(), baseline);
 }
 

@@ -26,6 +26,12 @@ scene::Scene object_alone(const scene::Scene& scene, std::uint32_t object) {
 struct Progress {
     const BakeOptions& options;
     std::uint64_t done = 0, total = 1;
+    // A point where the bake may stop: reports the progress so far, throws Cancelled when told to.
+    void checkpoint(const std::string& stage) const {
+        if (options.progress && !options.progress(static_cast<double>(done) / static_cast<double>(total), stage)) {
+            throw Cancelled(fmt::format("bake cancelled at {}", stage));
+        }
+    }
     BakeProgress for_stage(const std::string& stage) {
         if (!options.progress) return {};
         return [this, stage, base = done](std::uint32_t finished, std::uint32_t) {
@@ -43,28 +49,28 @@ void bake_group(const scene::Scene& scene, BakeGroup& group, const BakeParameter
         const std::uint32_t object = group.objects.front();
         const scene::Scene alone = object_alone(scene, object);
         group.atlas = build_surface_atlas(alone, {0}, atlas_settings);
+        progress.checkpoint("surface atlas (" + first_name + ")");
         const scene::Aabb bounds = alone.meshes[0].bounds;
         const float radius = std::max(0.5f * glm::length(bounds.extent()) * 1.01f, 1e-30f);
         // The maps hold this object alone, so they need reach no farther than its diameter; a
         // receiver beyond still compares against what lies between.
         const CubeMapSettings cube{parameters.face_size, 0.25f * texel_size, 2.0f * radius};
         const raytrace::RayScene rays(alone);
-        group.maps = bake_surface_shadow_maps(alone, group.atlas, traverse_atlas(alone, group.atlas, parameters.traversal), cube,
-                                              rays, progress.for_stage("depth cube maps (" + first_name + ")"));
+        auto order = traverse_atlas(alone, group.atlas, parameters.traversal);
+        progress.checkpoint("traversal (" + first_name + ")");
+        group.maps = bake_surface_shadow_maps(alone, group.atlas, std::move(order), cube, rays,
+                                              progress.for_stage("depth cube maps (" + first_name + ")"));
         progress.done += group.atlas.texels.size();
         group.csm = bake_coherent_shadow_maps(rays, bounds.center(), radius, parameters.csm_directions, parameters.face_size);
         progress.done += static_cast<std::uint64_t>(parameters.csm_directions);
-        if (progress.options.progress &&
-            !progress.options.progress(static_cast<double>(progress.done) / static_cast<double>(progress.total),
-                                       "coherent shadow maps (" + first_name + ")")) {
-            throw Cancelled("bake cancelled");
-        }
+        progress.checkpoint("coherent shadow maps (" + first_name + ")");
         for (AtlasTexel& texel : group.atlas.texels) texel.object = object;
         for (AtlasChart& chart : group.atlas.charts) chart.object = object;
         group.atlas.objects = {object};
         return;
     }
     group.atlas = build_surface_atlas(scene, group.objects, atlas_settings);
+    progress.checkpoint("surface atlas");
     scene::Aabb bounds;
     for (std::uint32_t o : group.objects) bounds.extend(scene.objects[o].world_bounds(scene.meshes[scene.objects[o].mesh]));
     CubeMapSettings cube{parameters.face_size, 0.25f * texel_size, std::max(1.01f * glm::length(bounds.extent()), 1e-30f)};
@@ -72,8 +78,9 @@ void bake_group(const scene::Scene& scene, BakeGroup& group, const BakeParameter
     const raytrace::RayScene rays(scene, [&](std::size_t o) {
         return std::binary_search(members.begin(), members.end(), static_cast<std::uint32_t>(o));
     });
-    group.maps = bake_surface_shadow_maps(scene, group.atlas, traverse_atlas(scene, group.atlas, parameters.traversal), cube,
-                                          rays, progress.for_stage("depth cube maps"));
+    auto order = traverse_atlas(scene, group.atlas, parameters.traversal);
+    progress.checkpoint("traversal");
+    group.maps = bake_surface_shadow_maps(scene, group.atlas, std::move(order), cube, rays, progress.for_stage("depth cube maps"));
     progress.done += group.atlas.texels.size();
 }
 

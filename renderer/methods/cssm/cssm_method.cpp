@@ -85,19 +85,42 @@ public:
         return stats;
     }
 
+    std::optional<PendingWork> pending_work(const FrameContext& frame) override {
+        if (finished_) {
+            scene_ = &frame.scene;
+            const auto finished = std::move(finished_);
+            if (bake_.adopt(*finished, frame)) after_new_bake(frame);
+        }
+        if (frame.scene.world_bounds().empty() || bake_.serves(frame)) return std::nullopt;
+        return bake_.work(frame);
+    }
+
+    void install(std::shared_ptr<PrecomputeResult> result) override { finished_ = std::move(result); }
+
 private:
     void prepare(const FrameContext& frame) override { ensure_bake(frame); }
 
-    // The bake these knobs need: kept (its moving objects placed anew when they moved), or made
-    // resident anew with its texels where they stand.
+    // The bake these knobs need: kept (its moving objects placed anew when they moved), taken from
+    // finished work, or made resident anew with its texels where they stand.
     void ensure_bake(const FrameContext& frame) {
         scene_ = &frame.scene;
+        if (finished_) {
+            const auto finished = std::move(finished_);
+            if (bake_.adopt(*finished, frame)) {
+                after_new_bake(frame);
+                return;
+            }
+        }
         if (bake_.serves(frame)) {
             placement_.follow(frame.scene, bake_);
             return;
         }
         gpu::GpuTimers::Scope timing(frame.timers, "cssm_bake");
         bake_.make(frame);
+        after_new_bake(frame);
+    }
+
+    void after_new_bake(const FrameContext& frame) {
         solve_.allocate(bake_.bake().texel_count());
         placement_.upload(frame.scene, bake_);
     }
@@ -111,12 +134,39 @@ private:
     RadiositySolve solve_;
     CssmDisplay display_{gbuffer_};
     gpu::CounterBuffer counters_{CSSM_COUNTERS};
+    std::shared_ptr<PrecomputeResult> finished_;  // a bake made off the render thread, not adopted yet
     const scene::Scene* scene_ = nullptr;  // the last frame's: names the objects it holds
     GatherSettings settings_;
     std::uint64_t lighting_ = 0;
     std::size_t atlas_solutions_ = 0;
     GatherCounts atlas_counts_, pixel_counts_;
 };
+
+// The atlas holds about atlas_resolution^2 texels (texel edge = sqrt(area) / atlas_resolution; chart
+// padding adds some). Each texel costs on the GPU its CssmTexel, about two radiosity-tree nodes with
+// their radiance and five vec4 solve buffers; on the host its atlas entry and the bake's arrays. The
+// compressed depth runs depend on the scene: at least one run per cube-map pixel per group (the
+// static objects, and each moving one), and the bake's chunk of 32 uncompressed maps on the host.
+MemoryEstimate estimate(const EstimateInput& input) {
+    MemoryEstimate estimate = direct_light_estimate(input);
+    const auto texels = static_cast<std::uint64_t>(input.knob("atlas_resolution") * input.knob("atlas_resolution"));
+    constexpr std::uint64_t kGpuPerTexel = sizeof(glsl::CssmTexel) + 2 * (sizeof(glsl::CssmNode) + 16) + 5 * 16;
+    constexpr std::uint64_t kHostPerTexel = sizeof(AtlasTexel) + 6 * sizeof(glm::vec3) + 3 * sizeof(std::uint32_t);
+    estimate.push_back({"atlas_texels", texels * (kGpuPerTexel + kHostPerTexel), "atlas_resolution"});
+    std::uint64_t groups = 1;
+    for (const scene::Object& object : input.scene.objects) groups += object.mesh >= 0 && object.dynamic ? 1 : 0;
+    const auto face = static_cast<std::uint64_t>(input.knob_int("face_size"));
+    const std::uint64_t pixels = 6 * face * face;
+    estimate.push_back({"depth_cube_maps", groups * pixels * (2 * sizeof(std::uint32_t) + sizeof(std::uint16_t)) +
+                                               32 * pixels * sizeof(DepthInterval),
+                        "face_size"});
+    if (input.knob_int("jitter_frames") > 1) {
+        estimate.push_back({"jitter_accumulation",
+                            2 * static_cast<std::uint64_t>(input.width) * static_cast<std::uint64_t>(input.height) * 16,
+                            "frame size"});
+    }
+    return estimate;
+}
 
 }  // namespace
 
@@ -154,6 +204,7 @@ MethodInfo method_info() {
                     {"high", preset(48, 32, 0.05, 3)},
                     {"ultra", preset(64, 32, 0.02, 3)}};
     info.create = [] { return std::make_unique<CssmMethod>(); };
+    info.estimate = estimate;
     return info;
 }
 

@@ -1,5 +1,6 @@
 #include "renderer/methods/cssm/resident_bake.hpp"
 
+#include "renderer/base/hash.hpp"
 #include "renderer/base/log.hpp"
 
 #include "cssm/cssm_layout.h"
@@ -30,19 +31,63 @@ bool ResidentBake::serves(const FrameContext& frame) const {
     return bake_ && bake_->parameters == parameters(frame) && bake_->moving == moving_objects(frame.scene);
 }
 
+namespace {
+
+// A finished bake on its way from the worker that made it to the render thread.
+struct BakeResult final : PrecomputeResult {
+    std::unique_ptr<CssmBake> bake;
+};
+
+}  // namespace
+
 void ResidentBake::make(const FrameContext& frame) {
+    install(std::make_unique<CssmBake>(bake_scene(frame.scene, parameters(frame), moving_objects(frame.scene),
+                                                  BakeOptions{frame.precompute.cache_dir, frame.precompute.progress})),
+            frame.scene);
+}
+
+PendingWork ResidentBake::work(const FrameContext& frame) const {
     const BakeParameters wanted = parameters(frame);
     const std::vector<std::uint32_t> moving = moving_objects(frame.scene);
+    Hasher key;
+    key.add(wanted.atlas_resolution).add(wanted.face_size).add(static_cast<int>(wanted.traversal)).add(wanted.csm_directions);
+    for (std::uint32_t o : moving) key.add(o);
+    auto snapshot = std::make_shared<const scene::Scene>(frame.scene);
+    return {fmt::format("cssm-bake-{:016x}", key.value()),
+            [snapshot, wanted, moving, cache_dir = frame.precompute.cache_dir](const PrecomputeProgress& progress) {
+                auto result = std::make_shared<BakeResult>();
+                result->bake = std::make_unique<CssmBake>(bake_scene(*snapshot, wanted, moving, BakeOptions{cache_dir, progress}));
+                return std::shared_ptr<PrecomputeResult>(std::move(result));
+            }};
+}
+
+bool ResidentBake::adopt(PrecomputeResult& result, const FrameContext& frame) {
+    auto* finished = dynamic_cast<BakeResult*>(&result);
+    if (!finished || !finished->bake || !(finished->bake->parameters == parameters(frame)) ||
+        finished->bake->moving != moving_objects(frame.scene)) {
+        return false;
+    }
+    // Texels were placed where the snapshot had the moving objects; they may have moved since.
+    CssmBake& bake = *finished->bake;
+    const bool moved = std::any_of(bake.moving.begin(), bake.moving.end(), [&](std::uint32_t o) {
+        return bake.baked_transforms[o] != frame.scene.objects[o].transform;
+    });
+    if (moved) place_texels(frame.scene, bake);
+    install(std::move(finished->bake), frame.scene);
+    return true;
+}
+
+void ResidentBake::install(std::unique_ptr<CssmBake> bake, const scene::Scene& scene) {
     if (bake_) {
-        for (std::uint32_t o : moving) {
+        for (std::uint32_t o : bake->moving) {
             if (!std::binary_search(bake_->moving.begin(), bake_->moving.end(), o)) {
                 log::info("cssm", "object '{}' moved without being declared dynamic: rebaking the static objects "
-                          "without it, and it alone with a CSM", frame.scene.objects[o].name);
+                          "without it, and it alone with a CSM", scene.objects[o].name);
             }
         }
     }
-    bake_ = std::make_unique<CssmBake>(bake_scene(frame.scene, wanted, moving,
-                                                  BakeOptions{frame.precompute.cache_dir, frame.precompute.progress}));
+    const BakeParameters wanted = bake->parameters;
+    bake_ = std::move(bake);
     for (const BakeGroup& group : bake_->groups) {
         if (group.loaded) {
             ++bakes_loaded_;

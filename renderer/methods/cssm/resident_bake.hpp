@@ -24,6 +24,12 @@ public:
     // else baked and stored there, and uploads it. Replaces the resident bake only once complete:
     // a cancelled bake loses nothing.
     void make(const FrameContext& frame);
+    // The same bake as work that runs off the render thread, on a snapshot of the scene; its result
+    // goes to adopt().
+    PendingWork work(const FrameContext& frame) const;
+    // Makes a finished work's bake resident when it is the one the frame needs (the scene may have
+    // changed since the snapshot); false otherwise, and the result is dropped.
+    bool adopt(PrecomputeResult& result, const FrameContext& frame);
 
     explicit operator bool() const { return static_cast<bool>(bake_); }
     CssmBake& bake() { return *bake_; }
@@ -48,6 +54,8 @@ private:
     BakeParameters parameters(const FrameContext& frame) const;
     std::vector<std::uint32_t> moving_objects(const scene::Scene& scene) const;
     void upload();
+    // Makes `bake` resident: counts it, logs it and uploads it.
+    void install(std::unique_ptr<CssmBake> bake, const scene::Scene& scene);
 
     std::unique_ptr<CssmBake> bake_;
     std::uint64_t generation_ = 0;

@@ -1,6 +1,7 @@
 #include "renderer/methods/cssm/surface_atlas.hpp"
 
 #include "renderer/base/error.hpp"
+#include "renderer/scene/mesh_utils.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -49,12 +50,6 @@ void rasterize(const glm::vec2 (&q)[3], bool strict, Visit&& visit) {
     }
 }
 
-float world_area(const glm::mat4& transform, const scene::Primitive& primitive, std::uint32_t triangle) {
-    glm::vec3 p[3];
-    for (int c = 0; c < 3; ++c) p[c] = glm::vec3(transform * glm::vec4(primitive.positions[primitive.indices[3 * triangle + c]], 1.0f));
-    return 0.5f * glm::length(glm::cross(p[1] - p[0], p[2] - p[0]));
-}
-
 AtlasTexel texel_from(const TriangleRef& triangle, const glm::vec3& barycentric, std::uint32_t object, std::uint32_t chart,
                       int x, int y) {
     const scene::Primitive& primitive = *triangle.primitive;
@@ -101,7 +96,7 @@ PackItem charts_from_uv1(const scene::Scene& scene, std::uint32_t object_index, 
             if (!(uv.x >= 0.0f && uv.x <= 1.0f && uv.y >= 0.0f && uv.y <= 1.0f)) return {};
         }
         for (std::uint32_t t = 0; t < primitive.triangle_count(); ++t) {
-            area += world_area(object.transform, primitive, t);
+            area += scene::world_triangle_area(object.transform, primitive, t);
             const glm::vec2 a = primitive.uv1[primitive.indices[3 * t]], b = primitive.uv1[primitive.indices[3 * t + 1]],
                             c = primitive.uv1[primitive.indices[3 * t + 2]];
             uv_area += 0.5f * std::abs(edge_function(a, b, c));
@@ -137,7 +132,7 @@ PackItem charts_from_uv1(const scene::Scene& scene, std::uint32_t object_index, 
             const std::uint32_t chart = it->second;
             if (added) chart_area.push_back(0.0f);
             const TriangleRef triangle{&primitive, t};
-            const float triangle_area = world_area(object.transform, primitive, t);
+            const float triangle_area = scene::world_triangle_area(object.transform, primitive, t);
             chart_area[chart] += triangle_area;
             glm::vec2 q[3];
             for (int c = 0; c < 3; ++c) q[c] = primitive.uv1[triangle.vertex(c)] * static_cast<float>(side);
@@ -281,7 +276,7 @@ float surface_area(const scene::Scene& scene, const std::vector<std::uint32_t>& 
         const scene::Object& object = scene.objects[o];
         if (object.mesh < 0) continue;
         for (const scene::Primitive& primitive : scene.meshes[object.mesh].primitives)
-            for (std::uint32_t t = 0; t < primitive.triangle_count(); ++t) area += world_area(object.transform, primitive, t);
+            for (std::uint32_t t = 0; t < primitive.triangle_count(); ++t) area += scene::world_triangle_area(object.transform, primitive, t);
     }
     return area;
 }

@@ -72,7 +72,9 @@ SurfaceShadowMaps bake_surface_shadow_maps(const scene::Scene& scene, const Surf
     const float below = -2.0f / static_cast<float>(face);
 
     DepthSequenceCompressor compressor(pixels);
-    constexpr std::uint32_t kChunk = 32;
+    // Maps are traced a chunk at a time between progress reports (where a cancel stops the bake):
+    // about a million cube-map pixels a chunk, a fraction of a second of rays, up to 32 maps.
+    const std::uint32_t kChunk = std::clamp<std::uint32_t>((1u << 20) / pixels, 1, 32);
     std::vector<DepthInterval> intervals(static_cast<std::size_t>(kChunk) * pixels);
     const auto total = static_cast<std::uint32_t>(maps.order.size());
     for (std::uint32_t first = 0; first < total; first += kChunk) {

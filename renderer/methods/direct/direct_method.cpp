@@ -44,6 +44,7 @@ MethodInfo method_info() {
                     {"high", {{"shadow_map_size", 2048}}},
                     {"ultra", {{"shadow_map_size", 4096}}}};
     info.create = [] { return std::make_unique<DirectMethod>(); };
+    info.estimate = direct_light_estimate;
     return info;
 }
 

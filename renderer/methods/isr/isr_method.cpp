@@ -4,6 +4,7 @@
 #include "renderer/methods/isr/multires_buffer.hpp"
 #include "renderer/methods/isr/vpl_tree.hpp"
 #include "renderer/passes/direct_light_pass.hpp"
+#include "renderer/passes/light_geometry.hpp"
 #include "renderer/passes/light_view_maps.hpp"
 
 #include "common/shared_layout.h"
@@ -215,6 +216,14 @@ MethodInfo method_info() {
                     {"high", preset(256, 4, 0.02, 0.2, 0.005, 4)},
                     {"ultra", preset(256, 3, 0.01, 0.1, 0.002, 4)}};
     info.create = [] { return std::make_unique<IsrMethod>(); };
+    info.estimate = [](const EstimateInput& input) {
+        MemoryEstimate estimate = direct_light_estimate(input);
+        const int rsm_size = power_of_two_floor(input.knob_int("rsm_size"));
+        estimate.push_back({"reflective_shadow_maps", passes::LightViewMaps::bytes_for(input.scene, rsm_size), "rsm_size"});
+        estimate.push_back({"vpl_tree", VplTree::bytes_for(passes::light_views_with_power(input.scene), rsm_size), "rsm_size"});
+        estimate.push_back({"multires_atlas", MultiresolutionBuffer::bytes_for(input.width, input.height), "frame size"});
+        return estimate;
+    };
     return info;
 }
 

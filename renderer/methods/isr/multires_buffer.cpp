@@ -10,6 +10,17 @@ namespace bounce::methods::isr {
 namespace {
 int ceil_shift(int value, int level) { return (value + (1 << level) - 1) >> level; }
 
+// The atlas: the finest level, and right of it a column of every coarser level.
+glm::ivec2 atlas_extent(int width, int height) {
+    glm::ivec2 extent(width, height);
+    int column_y = 0;
+    for (int level = 1; level < ISR_MAX_LEVELS; ++level) {
+        column_y += ceil_shift(height, level);
+        extent = glm::max(extent, glm::ivec2(width + ceil_shift(width, level), column_y));
+    }
+    return extent;
+}
+
 void dispatch_2d(const gpu::ShaderProgram& program, glm::ivec2 size) {
     program.use();
     glDispatchCompute(static_cast<GLuint>((size.x + 7) / 8), static_cast<GLuint>((size.y + 7) / 8), 1);
@@ -22,10 +33,15 @@ int usable_levels(int requested, int width, int height) {
     return levels;
 }
 
+std::uint64_t MultiresolutionBuffer::bytes_for(int width, int height) {
+    const glm::ivec2 extent = atlas_extent(width, height);
+    return static_cast<std::uint64_t>(extent.x) * static_cast<std::uint64_t>(extent.y) * (16 + 16 + 8 + 8 + 4);
+}
+
 void MultiresolutionBuffer::resize(int width, int height) {
     width_ = width;
     height_ = height;
-    int atlas_width = width, atlas_height = height, column_y = 0;
+    int column_y = 0;
     for (int level = 0; level < ISR_MAX_LEVELS; ++level) {
         size_[level] = {ceil_shift(width, level), ceil_shift(height, level)};
         if (level == 0) {
@@ -34,9 +50,8 @@ void MultiresolutionBuffer::resize(int width, int height) {
         }
         origin_[level] = {width, column_y};
         column_y += size_[level].y;
-        atlas_width = std::max(atlas_width, width + size_[level].x);
-        atlas_height = std::max(atlas_height, column_y);
     }
+    const int atlas_width = atlas_extent(width, height).x, atlas_height = atlas_extent(width, height).y;
     irradiance_ = gpu::Texture({GL_TEXTURE_2D, GL_RGBA32F, atlas_width, atlas_height});
     depth_ = gpu::Texture({GL_TEXTURE_2D, GL_RGBA32F, atlas_width, atlas_height});
     normal_min_ = gpu::Texture({GL_TEXTURE_2D, GL_RGBA16F, atlas_width, atlas_height});

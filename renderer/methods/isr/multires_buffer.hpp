@@ -20,6 +20,9 @@ struct MultiresSettings {
 
 class MultiresolutionBuffer {
 public:
+    // What resize(width, height) allocates: an atlas of every level (the finest, then a column of
+    // the coarser ones) with irradiance and depth RGBA32F, two RGBA16F normal bounds and a stencil.
+    static std::uint64_t bytes_for(int width, int height);
     // Builds the min-max pyramid and marks the patches that gather (stencil = 1).
     void refine(const passes::PassContext& context, const passes::GBufferPass& gbuffer, const MultiresSettings& settings);
     // Binds the atlas with the stencil test on and additive blending: full-screen draws reach the

@@ -12,6 +12,7 @@ namespace {
 constexpr std::size_t kNodeBytes = 6 * 16;  // VplNode in shaders/isr/vpl.glsl
 constexpr std::size_t kVplBytes = 3 * 16;   // Vpl
 constexpr std::size_t kCacheHeaderBytes = 16;
+constexpr std::size_t kInfoBytes = 16;
 
 void dispatch_2d(const gpu::ShaderProgram& program, int side) {
     program.use();
@@ -20,6 +21,17 @@ void dispatch_2d(const gpu::ShaderProgram& program, int side) {
 }
 
 }  // namespace
+
+std::uint64_t VplTree::bytes_for(std::uint64_t views, int size) {
+    int top_level = 0;
+    while ((size >> top_level) > ISR_TOP_PATCHES && top_level + 1 < ISR_MAX_TREE_LEVELS) ++top_level;
+    std::uint64_t per_view = 0;
+    for (int level = 0; level <= top_level; ++level) {
+        per_view += static_cast<std::uint64_t>(size >> level) * static_cast<std::uint64_t>(size >> level);
+    }
+    const std::uint64_t nodes = std::max<std::uint64_t>(views * per_view, 1);
+    return nodes * (kNodeBytes + kVplBytes) + kCacheHeaderBytes + kInfoBytes;
+}
 
 bool VplTree::build(const passes::PassContext& context, const passes::LightViewMaps& maps, bool maps_changed,
                     const VplTreeSettings& settings) {
@@ -44,7 +56,7 @@ bool VplTree::build(const passes::PassContext& context, const passes::LightViewM
     if (nodes_.bytes() != node_bytes) nodes_ = gpu::Buffer(node_bytes, nullptr);
     const std::size_t cache_bytes = kCacheHeaderBytes + std::max<std::size_t>(nodes(), 1) * kVplBytes;
     if (cache_.bytes() < cache_bytes) cache_ = gpu::Buffer(cache_bytes, nullptr, GL_DYNAMIC_STORAGE_BIT);
-    if (!info_) info_ = gpu::Buffer(16, nullptr);
+    if (!info_) info_ = gpu::Buffer(kInfoBytes, nullptr);
     if (views_ == 0) return true;
 
     glBindTextureUnit(0, maps.position().id());

@@ -20,6 +20,9 @@ struct VplTreeSettings {
 
 class VplTree {
 public:
+    // What build() holds for `views` light views of `size`^2 texels: a node per texel of every
+    // level up to the top patches, and the VPL cache.
+    static std::uint64_t bytes_for(std::uint64_t views, int size);
     // Rebuilds the tree from the maps (every view) when the maps or the settings changed; returns
     // whether it did.
     bool build(const passes::PassContext& context, const passes::LightViewMaps& maps, bool maps_changed,

@@ -2,6 +2,7 @@
 
 #include "renderer/base/error.hpp"
 #include "renderer/passes/light_geometry.hpp"
+#include "renderer/scene/mesh_utils.hpp"
 #include "vct/vct_layout.h"
 
 #include <fmt/format.h>
@@ -61,6 +62,29 @@ OctreeGrid grid_for(const scene::Aabb& bounds, int resolution) {
     }
     grid.origin = bounds.min - 2.0f * grid.spacing;
     return grid;
+}
+
+std::uint64_t SparseVoxelOctree::estimate_bytes(const scene::Scene& scene, int resolution, bool dense, bool anisotropic) {
+    const scene::Aabb bounds = scene.world_bounds();
+    if (bounds.empty()) return 0;
+    const OctreeGrid grid = grid_for(bounds, resolution);
+    const std::uint64_t side = static_cast<std::uint64_t>(grid.lattice_max()) + 1;
+    constexpr std::uint64_t kSlotBytes = VCT_LEAF_SUM_WORDS * 4 + 3 * sizeof(float);  // leaf sums, leaf light
+    constexpr std::uint64_t kBrickBytes = VCT_BRICK * VCT_BRICK * VCT_BRICK * 8;       // RGBA16F
+    if (dense) {
+        std::uint64_t z = side;
+        for (int level = grid.leaf_level - 1; level >= 0; --level) z += (anisotropic ? 6u : 1u) * ((2u << level) + 1u);
+        return side * side * z * 8 + side * side * side * kSlotBytes;
+    }
+    const double leaf_face = 2.0 * static_cast<double>(grid.spacing);
+    const double leaf_nodes_across = static_cast<double>(1u << grid.leaf_level);
+    const double leaves = std::clamp(2.0 * scene::surface_area(scene) / (leaf_face * leaf_face), 1.0,
+                                     leaf_nodes_across * leaf_nodes_across * leaf_nodes_across);
+    const auto nodes = static_cast<std::uint64_t>(leaves * 4.0 / 3.0);  // each level up: a quarter of the one below
+    const auto bricks_per_axis = static_cast<std::uint64_t>(cube_side_for(nodes));
+    const std::uint64_t pool = bricks_per_axis * bricks_per_axis * bricks_per_axis * kBrickBytes;
+    const std::uint64_t directional = anisotropic ? static_cast<std::uint64_t>(6.0 * leaves / 3.0) * kBrickBytes : 0;
+    return pool + directional + static_cast<std::uint64_t>(8.0 * leaves) * kSlotBytes + nodes * 9 * sizeof(std::uint32_t);
 }
 
 void SparseVoxelOctree::build(const passes::PassContext& context, int resolution, const ObjectFilter& include,

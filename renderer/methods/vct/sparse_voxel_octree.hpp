@@ -99,6 +99,13 @@ public:
     }
     std::size_t pool_bytes() const { return pool_.bytes() + directional_pool_.bytes(); }
 
+    // What build() at this resolution will hold, before it runs. Dense: exact (every level's lattice
+    // and every lattice point's leaf data). Sparse: the nodes depend on what the voxelization finds,
+    // so leaf nodes are taken as twice the scene's surface area over a leaf node's face (a plane
+    // aligned with the grid crosses its area's worth; oblique and curved surfaces up to about
+    // twice that), capped by the full lattice.
+    static std::uint64_t estimate_bytes(const scene::Scene& scene, int resolution, bool dense, bool anisotropic);
+
 private:
     void voxelize(const passes::PassContext& context, const ObjectFilter& include);
     // Subdivides for the current fragments from the tree as it stands, appending nodes level by level.

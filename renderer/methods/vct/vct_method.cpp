@@ -278,6 +278,17 @@ MethodInfo method_info() {
                     {"high", preset(64, 16, 0.5, 512, 2048)},
                     {"ultra", preset(96, 32, 0.35, 512, 2048)}};
     info.create = [] { return std::make_unique<VctMethod>(); };
+    info.estimate = [](const EstimateInput& input) {
+        MemoryEstimate estimate = direct_light_estimate(input);
+        if (input.knob_int("ao") != 0) estimate[1].bytes = 0;  // ambient occlusion draws no direct light
+        estimate.push_back({"light_view_maps", passes::LightViewMaps::bytes_for(input.scene, input.knob_int("light_view_size")),
+                            "light_view_size"});
+        estimate.push_back({"octree", SparseVoxelOctree::estimate_bytes(input.scene, input.knob_int("resolution"),
+                                                                        input.knob_int("dense") != 0,
+                                                                        input.knob_int("anisotropic") != 0),
+                            "resolution"});
+        return estimate;
+    };
     return info;
 }
 

@@ -1,0 +1,146 @@
+// The memory budget: each method's estimate against what it then holds, and frames past the budget
+// refused before anything is allocated, with advice that holds.
+#include "gpu_fixture.hpp"
+#include "renderer/base/error.hpp"
+#include "renderer/memory_admission.hpp"
+#include "renderer/scene/builtin.hpp"
+
+#include <gtest/gtest.h>
+
+#include <regex>
+
+namespace bounce::test {
+namespace {
+
+// Restores the shared renderer's budget however a test ends.
+class BudgetScope {
+public:
+    BudgetScope(Renderer& renderer, std::uint64_t bytes) : renderer_(renderer), saved_(renderer.memory_budget()) {
+        renderer.set_memory_budget({bytes, "a test's budget"});
+    }
+    ~BudgetScope() { renderer_.set_memory_budget(saved_); }
+
+private:
+    Renderer& renderer_;
+    gpu::MemoryBudget saved_;
+};
+
+scene::Scene cornell_with_point_lights(int count) {
+    scene::Scene scene = scene::make_cornell_box();
+    const scene::Light first = scene.lights.at(0);
+    scene.lights.clear();
+    for (int i = 0; i < count; ++i) {
+        scene::Light light = first;
+        light.name = "light" + std::to_string(i);
+        light.type = scene::LightType::point;
+        light.position.x += 0.01f * static_cast<float>(i);
+        scene.lights.push_back(light);
+    }
+    return scene;
+}
+
+std::uint64_t held(const std::vector<methods::ResidentStructure>& resident, const std::string& name) {
+    for (const auto& structure : resident) {
+        if (structure.name == name) return structure.bytes;
+    }
+    ADD_FAILURE() << "no resident structure " << name;
+    return 0;
+}
+
+// Structures whose size the knobs, the lights and the frame size fix: the estimate is what the method
+// then holds, to the byte. The light-view maps are an upper bound (views that miss the scene are
+// culled; the Cornell box's point light sees it through all six).
+TEST(MemoryBudget, ClosedFormEstimatesMatchWhatMethodsHold) {
+    const scene::Scene scene = cornell_with_point_lights(2);
+    const struct {
+        std::string method;
+        std::vector<std::pair<std::string, std::string>> exact;  // estimate name, resident name
+    } cases[] = {
+        {"direct", {{"gbuffer", "gbuffer"}, {"shadow_maps", "shadow_maps"}}},
+        {"vct", {{"gbuffer", "gbuffer"}, {"shadow_maps", "shadow_maps"}, {"light_view_maps", "light_view_maps"}}},
+        {"isr",
+         {{"gbuffer", "gbuffer"},
+          {"shadow_maps", "shadow_maps"},
+          {"reflective_shadow_maps", "reflective_shadow_maps"},
+          {"vpl_tree", "vpl_tree"},
+          {"multires_atlas", "multires_atlas"}}},
+        {"cssm", {{"gbuffer", "gbuffer"}, {"shadow_maps", "shadow_maps"}}},
+    };
+    for (const auto& c : cases) {
+        SCOPED_TRACE(c.method);
+        const RenderRequest request = method_request(c.method, "draft", 40, {});
+        const FramePlan plan = plan_frame(request);
+        const auto& info = methods::MethodRegistry::builtin().find(c.method);
+        const methods::MemoryEstimate estimate = info.estimate({scene, plan.knobs, 40, 40});
+        const RenderResult result = render_scene(scene, request);
+        for (const auto& [estimated, resident] : c.exact) {
+            const auto it = std::find_if(estimate.begin(), estimate.end(), [&](const auto& s) { return s.name == estimated; });
+            ASSERT_NE(it, estimate.end()) << estimated;
+            EXPECT_EQ(it->bytes, held(result.stats.resident, c.method + "." + resident)) << estimated;
+        }
+    }
+}
+
+TEST(MemoryBudget, ShadowMapsPastTheBudgetAreRefusedWithASizeThatFits) {
+    Renderer& renderer = shared_renderer();
+    const scene::Scene scene = cornell_with_point_lights(16);
+    auto resources = renderer.upload(scene);
+    const std::uint64_t geometry = resources->resident_bytes();
+    // 16 point lights x 6 faces x 8192^2 x 4 bytes = 24 GiB of shadow maps; the budget is 64 MiB.
+    const BudgetScope budget(renderer, 64ull << 20);
+    const RenderRequest huge = method_request("direct", "medium", 32, {{"shadow_map_size", 8192}});
+    std::string message;
+    try {
+        renderer.render(*resources, huge);
+        FAIL() << "a 24 GiB frame under a 64 MiB budget was rendered";
+    } catch (const ResourceExhausted& error) {
+        message = error.what();
+    }
+    EXPECT_EQ(resources->resident_bytes(), geometry) << "nothing may be allocated for a refused frame";
+    EXPECT_NE(message.find("'shadow_maps'"), std::string::npos) << message;
+    EXPECT_NE(message.find("64 MiB"), std::string::npos) << message;
+    std::smatch match;
+    ASSERT_TRUE(std::regex_search(message, match, std::regex("shadow_map_size=([0-9]+) would fit"))) << message;
+    const int fits = std::stoi(match[1]);
+    // The largest size that fits: 96 maps of fits^2 x 4 bytes with the rest of the frame under 64 MiB.
+    EXPECT_GT(fits, 256);
+    EXPECT_LT(fits, 8192);
+
+    const RenderResult result = renderer.render(*resources, method_request("direct", "medium", 32, {{"shadow_map_size", fits}}));
+    EXPECT_EQ(result.frame.non_finite_count(), 0u);
+    EXPECT_LE(renderer.resident_bytes(), 64ull << 20);
+    EXPECT_THROW(renderer.render(*resources, method_request("direct", "medium", 32, {{"shadow_map_size", fits + 1}})),
+                 ResourceExhausted)
+        << "the advice must be the largest size that fits";
+}
+
+TEST(MemoryBudget, WhatOtherScenesHoldCountsAndAFrameSizeIsAdvised) {
+    Renderer& renderer = shared_renderer();
+    const scene::Scene first_scene = scene::make_cornell_box(), second_scene = scene::make_cornell_box();
+    auto first = renderer.upload(first_scene);
+    auto second = renderer.upload(second_scene);
+    const RenderRequest request = method_request("direct", "draft", 256, {});
+    renderer.render(*first, request);
+    const std::uint64_t first_holds = first->resident_bytes();
+    // Room for the second scene's frame, and for half of what the first one holds.
+    std::uint64_t frame_bytes = 0;
+    for (const auto& structure : frame_estimate(methods::MethodRegistry::builtin().find("direct"),
+                                                {second_scene, plan_frame(request).knobs, 256, 256})) {
+        frame_bytes += structure.bytes;
+    }
+    const BudgetScope budget(renderer, frame_bytes + first_holds / 2);
+    try {
+        renderer.render(*second, request);
+        FAIL() << "the second scene's frame fit beside the first";
+    } catch (const ResourceExhausted& error) {
+        const std::string message = error.what();
+        EXPECT_NE(message.find("held by resident scenes"), std::string::npos) << message;
+        EXPECT_NE(message.find("'gbuffer'"), std::string::npos) << message;
+        EXPECT_NE(message.find("a frame of"), std::string::npos) << message;
+    }
+    first.reset();  // unloading the first scene frees room for the second's frame
+    EXPECT_NO_THROW(renderer.render(*second, request));
+}
+
+}  // namespace
+}  // namespace bounce::test
