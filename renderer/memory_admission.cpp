@@ -90,8 +90,9 @@ void check_memory_budget(const MemoryCheck& check) {
     } else {
         advice = "the scene itself is too large for it";
     }
+    // Named when it matters: more than a hundredth of the budget.
     const std::string elsewhere =
-        check.held_elsewhere > 0 ? fmt::format(", with {} held by resident scenes and methods (unloading scenes frees it)",
+        check.held_elsewhere > check.budget / 100 ? fmt::format(", with {} held by resident scenes and methods (unloading scenes frees it)",
                                                gpu::format_bytes(check.held_elsewhere))
                                  : "";
     throw ResourceExhausted(fmt::format(
