@@ -145,7 +145,7 @@ void Renderer::fill_stats(FrameStats& stats, const RenderRequest& request, const
 
 template <typename Run>
 void Renderer::with_frame(SceneResources& resources, const RenderRequest& request, const methods::Precompute& precompute,
-                          Run&& run) {
+                          Run&& run, const std::atomic<bool>* cancelled) {
     const FramePlan plan = plan_frame(request);
     if (plan.site != FrameSite::gpu) throw InputError(fmt::format("method '{}' {}", request.method, kRunsOnCpu));
     const methods::KnobValues& knobs = plan.knobs;
@@ -174,7 +174,8 @@ void Renderer::with_frame(SceneResources& resources, const RenderRequest& reques
         {scene, resources.gpu_scene, shaders_, state_, timers_, output_framebuffer_, request.width, request.height,
          camera, view, projection, projection * view},
         knobs,
-        precompute};
+        precompute,
+        cancelled};
     try {
         run(*method, frame, knobs);
         gpu::check_out_of_memory(fmt::format("a '{}' frame", request.method));
@@ -218,7 +219,7 @@ void Renderer::install(SceneResources& resources, const std::string& method,
     if (const auto it = resources.methods.find(method); it != resources.methods.end()) it->second->install(std::move(result));
 }
 
-RenderResult Renderer::render(SceneResources& resources, const RenderRequest& request) {
+RenderResult Renderer::render(SceneResources& resources, const RenderRequest& request, const std::atomic<bool>* cancelled) {
     const auto start = Clock::now();
     RenderResult result;
     with_frame(resources, request, precompute_, [&](methods::Method& method, const methods::FrameContext& frame,
@@ -236,7 +237,7 @@ RenderResult Renderer::render(SceneResources& resources, const RenderRequest& re
         result.stats.readback_ms = ms_since(readback_start);
 
         fill_stats(result.stats, request, knobs, method, resources);
-    });
+    }, cancelled);
     result.stats.render_ms = ms_since(start);
     return result;
 }

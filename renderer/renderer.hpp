@@ -106,7 +106,9 @@ public:
 
     // Renders a GPU plan. Throws InputError for bad requests (unknown method, preset or knob, size
     // out of range, a method that runs on the CPU).
-    RenderResult render(SceneResources& resources, const RenderRequest& request);
+    // `cancelled`, when given, stops long GPU work between its batches (Cancelled is thrown).
+    RenderResult render(SceneResources& resources, const RenderRequest& request,
+                        const std::atomic<bool>* cancelled = nullptr);
 
     // Builds the method's precomputed structures for the request's knobs (Method::prepare) and
     // returns the stats a frame would carry, without drawing one. `progress` may cancel (the
@@ -147,7 +149,7 @@ private:
     // Resolves the request's knobs, creates its method if needed, and calls run(method, frame, knobs).
     template <typename Run>
     void with_frame(SceneResources& resources, const RenderRequest& request, const methods::Precompute& precompute,
-                    Run&& run);
+                    Run&& run, const std::atomic<bool>* cancelled = nullptr);
     static constexpr std::string_view kRunsOnCpu = "runs on CPU threads, not through the GL renderer";
     gpu::Texture output_;
     gpu::Framebuffer output_framebuffer_;

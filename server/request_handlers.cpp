@@ -122,7 +122,7 @@ void RequestHandlers::render_on_gpu(const std::shared_ptr<Request>& request, con
     RenderRequest frame = order.request;
     if (auto camera = named_camera(*entry.scene, order)) frame.camera = std::move(camera);
     if (wait_for_pending_work(request, order.scene, entry, frame, renderer)) return;
-    auto result = std::make_shared<const RenderResult>(renderer.render(*entry.resources, frame));
+    auto result = std::make_shared<const RenderResult>(renderer.render(*entry.resources, frame, request->cancelled.get()));
     clock.rendered = Clock::now();
     daemon_.metrics().set_resident_bytes(order.scene, result->stats.resident_bytes);
     deliver(request, order, std::move(result), entry.version, clock);

@@ -1,6 +1,7 @@
 #include "renderer/methods/method.hpp"
 
 #include "renderer/base/error.hpp"
+#include "renderer/gpu/gl.hpp"
 #include "renderer/passes/gbuffer_pass.hpp"
 #include "renderer/passes/shadow_maps.hpp"
 
@@ -15,6 +16,12 @@ double resolved_knob(const KnobValues& knobs, std::string_view name) {
 }  // namespace
 
 double FrameContext::knob(std::string_view name) const { return resolved_knob(knobs, name); }
+
+void FrameContext::interruption_point() const {
+    if (!cancelled) return;
+    glFinish();
+    if (cancelled->load()) throw Cancelled("frame cancelled while the GPU worked on it");
+}
 
 double EstimateInput::knob(std::string_view name) const { return resolved_knob(knobs, name); }
 

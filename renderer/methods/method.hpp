@@ -10,6 +10,7 @@
 #include "renderer/methods/knobs.hpp"
 #include "renderer/passes/pass_context.hpp"
 
+#include <atomic>
 #include <filesystem>
 #include <functional>
 #include <map>
@@ -34,7 +35,12 @@ struct Precompute {
 struct FrameContext : passes::PassContext {
     const KnobValues& knobs;
     const Precompute& precompute;
+    const std::atomic<bool>* cancelled = nullptr;  // set: the frame is no longer wanted
 
+    // Where long GPU work may stop: between its bounded dispatches. When the frame can be cancelled,
+    // waits for the GPU to finish what was submitted (so a cancel is seen within one batch of work,
+    // not after the whole queue) and throws Cancelled if it was; without a cancel flag, nothing.
+    void interruption_point() const;
     // A knob's value (validated by the registry, so present for every knob the method declares).
     double knob(std::string_view name) const;
     int knob_int(std::string_view name) const { return static_cast<int>(knob(name)); }

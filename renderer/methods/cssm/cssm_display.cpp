@@ -39,6 +39,7 @@ void CssmDisplay::final_gather(const FrameContext& frame, const GatherTree& tree
         program.set("u_first_root", batch.first);
         program.set("u_root_count", batch.count);
         triangle_.draw();
+        frame.interruption_point();
     }
     glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
 }

@@ -68,6 +68,7 @@ void RadiositySolve::bounce(const FrameContext& frame, const GatherTree& tree, c
         gather.set("u_first_batch", b == 0 ? 1 : 0);
         gather.dispatch_threads(texel_count);
         gpu::storage_barrier();
+        frame.interruption_point();
     }
     const gpu::ShaderProgram& finish = compute(frame, "cssm/bounce.comp", tree, settings);
     gpu::bind_storage(CSSM_BINDING_TEXEL_IN, irradiance_);
