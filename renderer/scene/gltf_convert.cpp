@@ -20,9 +20,11 @@ namespace {
 // ------------------------------------------------------------------------------------------------
 // Topology: strips and fans.
 
-// Triangle lists from strips and fans, with the winding the spec gives for each triangle.
+// Triangle lists from strips and fans, with the winding the spec gives for each triangle. Each
+// list is reserved at its size: the scene's budget counts it so (gltf_budget.cpp).
 std::vector<std::uint32_t> triangles_from_strip(const std::vector<std::uint32_t>& strip) {
     std::vector<std::uint32_t> out;
+    if (strip.size() > 2) out.reserve(3 * (strip.size() - 2));
     for (std::size_t i = 0; i + 2 < strip.size(); ++i) {
         const bool odd = i % 2 == 1;
         out.insert(out.end(), {strip[i], strip[i + (odd ? 2 : 1)], strip[i + (odd ? 1 : 2)]});
@@ -32,6 +34,7 @@ std::vector<std::uint32_t> triangles_from_strip(const std::vector<std::uint32_t>
 
 std::vector<std::uint32_t> triangles_from_fan(const std::vector<std::uint32_t>& fan) {
     std::vector<std::uint32_t> out;
+    if (fan.size() > 2) out.reserve(3 * (fan.size() - 2));
     for (std::size_t i = 1; i + 1 < fan.size(); ++i) out.insert(out.end(), {fan[i], fan[i + 1], fan[0]});
     return out;
 }

@@ -12,8 +12,9 @@ namespace bounce::scene {
 
 // What one import may cost. The scene's size is counted from the file before anything is decoded:
 // every accessor as the importer materializes it (once per primitive that reads it), the normals,
-// tangents and indices each primitive gets, and every image a material uses at width x height x 4
-// bytes plus a third for its mipmaps, its dimensions read from the PNG or JPEG header.
+// tangents and indices each primitive gets, and the images materials use at the peak of their
+// decoding, conversion to Textures and upload with mipmaps, from what their PNG or JPEG headers
+// declare (size, channels, bit depth; gltf_budget.hpp says what is counted).
 struct ImportLimits {
     std::uint64_t max_scene_bytes = std::uint64_t{2} << 30;  // 2 GiB
 };
