@@ -25,6 +25,10 @@ inline constexpr int max_image_side = 16384;
 inline constexpr std::uint64_t max_input_bytes = 0xFFFFFFFFull;  // tinygltf takes lengths as unsigned int
 // JSON nested deeper than this is refused before any parser sees it: nlohmann and tinygltf recurse.
 inline constexpr int max_json_depth = 128;
+// A light's colour components and intensity: the ranges light.set allows (docs/protocol.md,
+// "Numbers"), which keep their product finite.
+inline constexpr double max_light_color = 1e6;
+inline constexpr double max_light_intensity = 1e12;
 
 // A fault in the input: throws InputError with `message`.
 [[noreturn]] inline void reject(const std::string& message) { throw InputError(message); }

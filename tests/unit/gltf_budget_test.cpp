@@ -555,6 +555,100 @@ TEST(GltfBudget, SparseAccessorsAreRefusedCleanly) {
     EXPECT_EQ(huge.type, "ResourceExhausted") << huge.message;
 }
 
+// ---- numbers past their ranges
+
+// One triangle at +-`coordinate` under node 0, with `extra` merged into the document (cameras,
+// lights, more nodes); node 1, when `extra` adds it, is in the scene too.
+std::vector<std::uint8_t> triangle_with(float coordinate, const json& extra = json::object()) {
+    std::vector<std::uint8_t> bin;
+    for (const float value : {-coordinate, -coordinate, 0.0f, coordinate, 0.0f, 0.0f, 0.0f, coordinate, coordinate}) {
+        const auto* bytes = reinterpret_cast<const std::uint8_t*>(&value);
+        bin.insert(bin.end(), bytes, bytes + 4);
+    }
+    json document = {{"asset", {{"version", "2.0"}}},
+                     {"buffers", {{{"byteLength", bin.size()}}}},
+                     {"bufferViews", {{{"buffer", 0}, {"byteLength", bin.size()}}}},
+                     {"accessors", {{{"bufferView", 0}, {"componentType", 5126}, {"count", 3}, {"type", "VEC3"}}}},
+                     {"meshes", {{{"primitives", {{{"attributes", {{"POSITION", 0}}}}}}}}},
+                     {"nodes", {{{"name", "tri"}, {"mesh", 0}}}},
+                     {"scenes", {{{"nodes", {0}}}}}};
+    document.merge_patch(extra);
+    if (document["nodes"].size() > 1) document["scenes"][0]["nodes"] = {0, 1};
+    return make_glb(document.dump(), bin);
+}
+
+json light_node(const json& light, const json& translation = {0, 0, 1}) {
+    return {{"extensionsUsed", {"KHR_lights_punctual"}},
+            {"extensions", {{"KHR_lights_punctual", {{"lights", {light}}}}}},
+            {"nodes", {{{"name", "tri"}, {"mesh", 0}},
+                       {{"name", "lamp"}, {"translation", translation},
+                        {"extensions", {{"KHR_lights_punctual", {{"light", 0}}}}}}}}};
+}
+
+json camera_node(const json& perspective, const json& translation = {0, 0, 3}) {
+    return {{"cameras", {{{"type", "perspective"}, {"perspective", perspective}}}},
+            {"nodes", {{{"name", "tri"}, {"mesh", 0}}, {{"name", "eye"}, {"camera", 0}, {"translation", translation}}}}};
+}
+
+TEST(GltfBudget, NumbersPastTheirRangesAreRefused) {
+    const json pass = {{"yfov", 0.8}, {"znear", 0.1}};
+    const std::array<std::pair<std::vector<std::uint8_t>, std::string>, 8> cases = {{
+        // Past the range of a float: converting them would be undefined behaviour.
+        {triangle_with(1, {{"nodes", {{{"name", "tri"}, {"mesh", 0}, {"translation", {1e39, 0, 0}}}}}}),
+         "node 0 translation is 1e+39, past the range of a float"},
+        {triangle_with(1, {{"materials", {{{"emissiveFactor", {1, 1, 1e39}}}}}}),
+         "material 0 ('') emissiveFactor is 1e+39, past the range of a float"},
+        // Each in range, their product not.
+        {triangle_with(1, {{"extensionsUsed", {"KHR_materials_emissive_strength"}},
+                           {"materials", {{{"emissiveFactor", {1e30, 0, 0}},
+                                           {"extensions", {{"KHR_materials_emissive_strength",
+                                                            {{"emissiveStrength", 1e30}}}}}}}}}),
+         "material 0 (''): its emissive factor times its strength is past the range of a float"},
+        // The ranges light.set allows.
+        {triangle_with(1, light_node({{"type", "point"}, {"intensity", 1e13}})),
+         "light 0 ('') has the intensity 1e+13, outside [0, 1e+12]"},
+        {triangle_with(1, light_node({{"type", "point"}, {"color", {1, -1, 1}}})), "has the color vec3(1.000000, -1.000000"},
+        // Distances a projection divides by.
+        {triangle_with(1, camera_node({{"yfov", 0.8}, {"znear", 1e16}})),
+         "camera 0 ('') has the znear 1e+16, past the limit of 1e+15 m"},
+        // Views look from a position to the position plus a unit vector: past 2^24 m they are NaN.
+        {triangle_with(1, camera_node(pass, {0, 0, 2e7})), "camera 'eye' lies at vec3(0.000000, 0.000000, 20000000.000000)"},
+        {triangle_with(1, light_node({{"type", "point"}}, {-3e7, 0, 0})), "light 'lamp' lies at vec3(-30000000.000000"},
+    }};
+    for (const auto& [glb, expected] : cases) {
+        const Refusal result = refusal([&] { import_glb_memory(glb, "numbers"); });
+        EXPECT_EQ(result.type, "InputError") << expected;
+        EXPECT_TRUE(mentions(result.message, expected)) << result.message;
+    }
+    // At the edges of those ranges they load.
+    EXPECT_NO_THROW(import_glb_memory(triangle_with(1, light_node({{"type", "point"}, {"intensity", 1e12},
+                                                                   {"color", {1e6, 0, 1e6}}},
+                                                                  {1e7, -1e7, 1e7})),
+                                      "edges"));
+    EXPECT_NO_THROW(import_glb_memory(triangle_with(1, camera_node({{"yfov", 0.8}, {"znear", 1e14}}, {1e7, 0, 0})),
+                                      "edges"));
+}
+
+TEST(GltfBudget, ObjectsPastTheirReachAreRefused) {
+    // Finite floats whose bounds overflow, or that a node scales past the limit.
+    const Refusal far = refusal([] { import_glb_memory(triangle_with(3e38f, camera_node({{"yfov", 0.8}, {"znear", 0.1}})), "far"); });
+    EXPECT_EQ(far.type, "InputError");
+    EXPECT_TRUE(mentions(far.message, "far: object 'tri' (its world bounds) lies at")) << far.message;
+    EXPECT_TRUE(mentions(far.message, "past the limit of 1e+15 m from the origin on an axis")) << far.message;
+    const json scaled = {{"nodes", {{{"name", "tri"}, {"mesh", 0}, {"scale", {1e12, 1e12, 1e12}}},
+                                    {{"name", "eye"}, {"camera", 0}, {"translation", {0, 0, 3}}}}},
+                         {"cameras", {{{"type", "perspective"}, {"perspective", {{"yfov", 0.8}, {"znear", 0.1}}}}}}};
+    EXPECT_TRUE(mentions(refusal([&] { import_glb_memory(triangle_with(1e4f, scaled), "scaled"); }).message,
+                         "object 'tri' (its world bounds) lies at"));
+    // Within it, with a camera of its own, a scene loads; without one, a default camera that frames
+    // it would stand past max_eye_coordinate.
+    EXPECT_NO_THROW(import_glb_memory(triangle_with(1e14f, camera_node({{"yfov", 0.8}, {"znear", 0.1}})), "large"));
+    const Refusal unframed = refusal([] { import_glb_memory(triangle_with(1e14f), "unframed"); });
+    EXPECT_EQ(unframed.type, "InputError");
+    EXPECT_TRUE(mentions(unframed.message, "the file has no camera, and one that frames the whole scene would stand"))
+        << unframed.message;
+}
+
 // ---- URIs of a file import stay in its folder
 
 std::string scene_with_uris(const std::string& buffer_uri, const std::string& image_uri) {
