@@ -8,7 +8,9 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/type_ptr.hpp>
+#include <glm/gtx/component_wise.hpp>
 
+#include <algorithm>
 #include <cmath>
 
 namespace bounce::server {
@@ -27,6 +29,9 @@ json mutated(SceneEntry& entry) {
 std::size_t object_index(const scene::Scene& scene, const ObjectRef& object) {
     if (const auto* index = std::get_if<std::uint64_t>(&object)) {
         if (*index < scene.objects.size()) return static_cast<std::size_t>(*index);
+        if (scene.objects.empty()) {
+            throw RequestError(ErrorCode::not_found, fmt::format("scene '{}' has no objects", scene.name), "object");
+        }
         throw RequestError(ErrorCode::not_found,
                            fmt::format("object index {} is outside 0..{}", *index, scene.objects.size() - 1), "object");
     }
@@ -98,14 +103,7 @@ json load_scene(SceneRegistry& registry, const SceneRoot& root, const LoadOrder&
         source = "builtin";
     }
     // Objects declared movable: methods with precomputed structures prepare them for motion now.
-    for (const std::string& name : order.dynamic) {
-        const auto index = loaded.find_object(name);
-        if (!index) {
-            throw RequestError(ErrorCode::not_found, fmt::format("scene has no object '{}' to declare dynamic", name),
-                               "dynamic");
-        }
-        loaded.objects[*index].dynamic = true;
-    }
+    declare_dynamic(loaded, order.dynamic);
     const auto warnings = loaded.warnings;
     SceneEntry& entry = registry.put(order.name, std::move(loaded), source);
     return {{"scene", order.name}, {"scene_version", entry.version}, {"warnings", warnings},
@@ -153,12 +151,44 @@ json describe_scene(SceneRegistry& registry, const SceneNameOrder& order) {
             {"warnings", scene.warnings}, {"resident", resident_json(entry.resources->resident())}};
 }
 
-json set_object_transform(SceneRegistry& registry, const TransformOrder& order) {
-    SceneEntry& entry = registry.get(order.scene);
-    scene::Object& object = entry.scene->objects[object_index(*entry.scene, order.object)];
+// ------------------------------------------------------------------------------------------------
+// The scene-state orders on a scene alone.
+
+void declare_dynamic(scene::Scene& loaded, const std::vector<std::string>& names) {
+    for (const std::string& name : names) {
+        const auto index = loaded.find_object(name);
+        if (!index) {
+            throw RequestError(ErrorCode::not_found, fmt::format("scene has no object '{}' to declare dynamic", name),
+                               "dynamic");
+        }
+        loaded.objects[*index].dynamic = true;
+    }
+}
+
+namespace {
+
+// Refuses a transform that would take `object` past max_world_coordinate on any axis (or to
+// infinity): past it, what a render derives from the scene would not stay finite.
+void check_reach(const scene::Scene& scene, const scene::Object& object, const glm::mat4& transform,
+                 const TransformOrder& order) {
+    if (object.mesh < 0 || static_cast<std::size_t>(object.mesh) >= scene.meshes.size()) return;
+    const scene::Aabb bounds = scene.meshes[static_cast<std::size_t>(object.mesh)].bounds.transformed(transform);
+    if (bounds.empty()) return;
+    const float reach = glm::compMax(glm::max(glm::abs(bounds.min), glm::abs(bounds.max)));
+    if (reach <= scene::max_world_coordinate) return;  // false for NaN too
+    const char* field = order.matrix ? "matrix" : order.scale ? "scale" : order.translation ? "translation" : "rotation_deg";
+    throw protocol::FieldError(field, fmt::format("the transform takes object '{}' to {:g} m from the origin, past the "
+                                                  "limit of {:g} m", object.name, reach, scene::max_world_coordinate));
+}
+
+}  // namespace
+
+void apply_transform(scene::Scene& scene, const TransformOrder& order) {
+    scene::Object& object = scene.objects[object_index(scene, order.object)];
     if (order.matrix) {
+        check_reach(scene, object, *order.matrix, order);
         object.transform = *order.matrix;
-        return mutated(entry);
+        return;
     }
     // TRS about the object's origin, relative to how it was loaded.
     glm::mat4 trs(1.0f);
@@ -172,14 +202,14 @@ json set_object_transform(SceneRegistry& registry, const TransformOrder& order) 
     if (order.scale) trs = glm::scale(trs, glm::vec3(*order.scale));
     const glm::vec3 origin(object.initial_transform[3]);
     const glm::mat4 local = glm::translate(glm::mat4(1.0f), -origin) * object.initial_transform;
-    object.transform = glm::translate(glm::mat4(1.0f), origin) * trs * local;
-    return mutated(entry);
+    const glm::mat4 transform = glm::translate(glm::mat4(1.0f), origin) * trs * local;
+    check_reach(scene, object, transform, order);
+    object.transform = transform;
 }
 
-json set_light(SceneRegistry& registry, const LightOrder& order) {
-    SceneEntry& entry = registry.get(order.scene);
-    auto& lights = entry.scene->lights;
-    const auto existing = entry.scene->find_light(order.light);
+void apply_light(scene::Scene& scene, const LightOrder& order) {
+    auto& lights = scene.lights;
+    const auto existing = scene.find_light(order.light);
     scene::Light light = existing ? lights[*existing] : scene::Light{};
     light.name = order.light;
     if (order.type) light.type = *order.type;
@@ -195,29 +225,27 @@ json set_light(SceneRegistry& registry, const LightOrder& order) {
     if (existing) {
         lights[*existing] = light;
     } else {
-        if (lights.size() >= 256) throw RequestError(ErrorCode::too_large, "a scene holds at most 256 lights", "light");
+        if (lights.size() >= kMaxLights) {
+            throw RequestError(ErrorCode::too_large, fmt::format("a scene holds at most {} lights", kMaxLights), "light");
+        }
         lights.push_back(light);
     }
-    return mutated(entry);
 }
 
-json remove_light(SceneRegistry& registry, const RemoveLightOrder& order) {
-    SceneEntry& entry = registry.get(order.scene);
-    const auto index = entry.scene->find_light(order.light);
+void apply_remove_light(scene::Scene& scene, const RemoveLightOrder& order) {
+    const auto index = scene.find_light(order.light);
     if (!index) throw RequestError(ErrorCode::not_found, fmt::format("scene has no light '{}'", order.light), "light");
-    entry.scene->lights.erase(entry.scene->lights.begin() + static_cast<std::ptrdiff_t>(*index));
-    return mutated(entry);
+    scene.lights.erase(scene.lights.begin() + static_cast<std::ptrdiff_t>(*index));
 }
 
-json set_camera(SceneRegistry& registry, const CameraOrder& order) {
-    SceneEntry& entry = registry.get(order.scene);
-    auto& cameras = entry.scene->cameras;
+void apply_camera(scene::Scene& scene, const CameraOrder& order) {
+    auto& cameras = scene.cameras;
     if (order.camera) {
-        const auto index = entry.scene->find_camera(*order.camera);
+        const auto index = scene.find_camera(*order.camera);
         if (!index) throw RequestError(ErrorCode::not_found, fmt::format("scene has no camera '{}'", *order.camera), "camera");
         const auto at = cameras.begin() + static_cast<std::ptrdiff_t>(*index);
         std::rotate(cameras.begin(), at, at + 1);
-        return mutated(entry);
+        return;
     }
     scene::Camera camera = cameras.empty() ? scene::Camera{} : cameras.front();
     if (order.position) camera.position = *order.position;
@@ -239,6 +267,32 @@ json set_camera(SceneRegistry& registry, const CameraOrder& order) {
     } else {
         cameras.front() = camera;
     }
+}
+
+// ------------------------------------------------------------------------------------------------
+// The same on the registry's scenes: each mutation bumps the scene's version.
+
+json set_object_transform(SceneRegistry& registry, const TransformOrder& order) {
+    SceneEntry& entry = registry.get(order.scene);
+    apply_transform(*entry.scene, order);
+    return mutated(entry);
+}
+
+json set_light(SceneRegistry& registry, const LightOrder& order) {
+    SceneEntry& entry = registry.get(order.scene);
+    apply_light(*entry.scene, order);
+    return mutated(entry);
+}
+
+json remove_light(SceneRegistry& registry, const RemoveLightOrder& order) {
+    SceneEntry& entry = registry.get(order.scene);
+    apply_remove_light(*entry.scene, order);
+    return mutated(entry);
+}
+
+json set_camera(SceneRegistry& registry, const CameraOrder& order) {
+    SceneEntry& entry = registry.get(order.scene);
+    apply_camera(*entry.scene, order);
     return mutated(entry);
 }
 

@@ -11,6 +11,8 @@
 #include <filesystem>
 #include <optional>
 #include <span>
+#include <string>
+#include <vector>
 
 namespace bounce::server {
 
@@ -29,9 +31,24 @@ nlohmann::json load_scene(SceneRegistry& registry, const SceneRoot& root, const 
 nlohmann::json unload_scene(SceneRegistry& registry, const SceneNameOrder& order);
 nlohmann::json list_scenes(SceneRegistry& registry);
 nlohmann::json describe_scene(SceneRegistry& registry, const SceneNameOrder& order);
+// The scene-state orders. Each takes the scene named by the order from the registry (not_found
+// naming it otherwise), mutates it as the apply_* function below does, and returns
+// {"scene_version": N}, the scene's version increased by one.
 nlohmann::json set_object_transform(SceneRegistry& registry, const TransformOrder& order);
 nlohmann::json set_light(SceneRegistry& registry, const LightOrder& order);
 nlohmann::json remove_light(SceneRegistry& registry, const RemoveLightOrder& order);
 nlohmann::json set_camera(SceneRegistry& registry, const CameraOrder& order);
+
+// What those orders and scene.load's `dynamic` do to a scene::Scene, with no registry and no GL
+// (bounce_request_fuzz applies them alone). Faults throw RequestError (not_found naming the
+// object, light or camera; too_large past kMaxLights) or protocol::FieldError (among them a
+// transform that would take its object past scene::max_world_coordinate), and leave the scene as
+// it was.
+inline constexpr std::size_t kMaxLights = 256;
+void declare_dynamic(scene::Scene& loaded, const std::vector<std::string>& names);
+void apply_transform(scene::Scene& scene, const TransformOrder& order);
+void apply_light(scene::Scene& scene, const LightOrder& order);
+void apply_remove_light(scene::Scene& scene, const RemoveLightOrder& order);
+void apply_camera(scene::Scene& scene, const CameraOrder& order);
 
 }  // namespace bounce::server

@@ -10,16 +10,36 @@
 
 namespace bounce::scene::gltf {
 
-// Sums what importing `model` will allocate:
+// Sums what loading `model` will allocate at its peak:
 //  - each accessor a primitive reads, as the converter stores it (POSITION and NORMAL as 12-byte
 //    vectors, TANGENT 16, TEXCOORD_0 and _1 8, indices 4 bytes), once per primitive that reads it,
 //    whether or not it has a bufferView;
 //  - each primitive's normals and tangents (made for every vertex), its index list when the file
 //    has none, and the triangle lists that strips and fans become;
-//  - each image a material uses (images_in_use), from its header (context.image_headers):
-//    width x height x 4 bytes, and a third more for its mipmaps.
+//  - the images that materials use (texture_uses), from their headers (context.image_headers),
+//    at the peak of three phases that follow one another:
+//      decoding:   every image decoded, as tinygltf keeps it until the conversion ends (stb_image
+//                  expands every image to 4 channels of its bit depth: 4 or 8 bytes a pixel), and
+//                  for the image whose decoding needs the most, the decoder's buffers at their
+//                  peak (image_bytes in gltf_budget.cpp: a PNG's inflated rows and its image at the
+//                  file's channels and bit depth, or a JPEG's planes; the result while it is copied;
+//                  the bytes read again from a URI);
+//      converting: the decoded images and each Texture made from them (4 bytes a pixel, one per
+//                  image and colour space it is used in: an image used as base colour and as
+//                  metallic-roughness makes two);
+//      uploading:  the Textures, which the scene keeps, and their GL textures with full mip
+//                  chains (4 bytes a texel), which the registry makes as soon as the scene loads;
+//                  tinygltf's decoded images are gone by then.
+//    The geometry above is held through all three. The budget bounds memory, host and GPU (one
+//    and the same with llvmpipe), which is why the GL copy of a texture counts; the GL copy of the
+//    geometry is not counted, nor the file's own bytes and tinygltf's copy of its buffers, which
+//    its length bounds. Measured with stb_image 2.27, a decode stays within its count but for
+//    those and a few hundred KiB of fixed state.
+// Not bounded here: a PNG whose image data inflates to more than its rows need. stb_image grows its
+// buffer by doubling to hold all of it (up to 4 GiB; a 200 KB file declaring 16 x 16 pixels takes
+// 256 MiB); bounding that needs an inflate pass over the data before decoding.
 // Throws ResourceExhausted naming the total and its largest part when the sum is past
-// `max_scene_bytes`.
+// `max_scene_bytes`; an image's part is what it holds in the peak phase.
 void check_scene_size(const tinygltf::Model& model, const LoadContext& context,
                       std::uint64_t max_scene_bytes);
 

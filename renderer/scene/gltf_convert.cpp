@@ -20,9 +20,11 @@ namespace {
 // ------------------------------------------------------------------------------------------------
 // Topology: strips and fans.
 
-// Triangle lists from strips and fans, with the winding the spec gives for each triangle.
+// Triangle lists from strips and fans, with the winding the spec gives for each triangle. Each
+// list is reserved at its size: the scene's budget counts it so (gltf_budget.cpp).
 std::vector<std::uint32_t> triangles_from_strip(const std::vector<std::uint32_t>& strip) {
     std::vector<std::uint32_t> out;
+    if (strip.size() > 2) out.reserve(3 * (strip.size() - 2));
     for (std::size_t i = 0; i + 2 < strip.size(); ++i) {
         const bool odd = i % 2 == 1;
         out.insert(out.end(), {strip[i], strip[i + (odd ? 2 : 1)], strip[i + (odd ? 1 : 2)]});
@@ -32,6 +34,7 @@ std::vector<std::uint32_t> triangles_from_strip(const std::vector<std::uint32_t>
 
 std::vector<std::uint32_t> triangles_from_fan(const std::vector<std::uint32_t>& fan) {
     std::vector<std::uint32_t> out;
+    if (fan.size() > 2) out.reserve(3 * (fan.size() - 2));
     for (std::size_t i = 1; i + 1 < fan.size(); ++i) out.insert(out.end(), {fan[i], fan[i + 1], fan[0]});
     return out;
 }
@@ -65,25 +68,40 @@ std::optional<double> number_member(const tinygltf::Value& object, const std::st
     return object.Get(key).GetNumberAsDouble();
 }
 
+// Whether every coordinate of `point` lies within `limit` of the origin.
+bool within(const glm::vec3& point, float limit) {
+    return glm::all(glm::lessThanEqual(glm::abs(point), glm::vec3(limit)));  // false for NaN
+}
+
+// A number of the document as the float the scene keeps. One past the float range is refused:
+// converting it is undefined behaviour, and an infinity would reach the renderer.
+float as_float(double value, const std::string& what) {
+    if (!(std::abs(value) <= static_cast<double>(std::numeric_limits<float>::max()))) {
+        reject(fmt::format("{} is {:g}, past the range of a float", what, value));
+    }
+    return static_cast<float>(value);
+}
+
 template <typename Vec>
-Vec to_vec(const std::vector<double>& values, const Vec& fallback) {
+Vec to_vec(const std::vector<double>& values, const Vec& fallback, const std::string& what) {
     if (values.size() != static_cast<std::size_t>(Vec::length())) return fallback;
     Vec out;
-    for (int i = 0; i < Vec::length(); ++i) out[i] = static_cast<float>(values[static_cast<std::size_t>(i)]);
+    for (int i = 0; i < Vec::length(); ++i) out[i] = as_float(values[static_cast<std::size_t>(i)], what);
     return out;
 }
 
-glm::mat4 local_transform(const tinygltf::Node& node) {
+glm::mat4 local_transform(const tinygltf::Node& node, std::size_t index) {
+    const std::string where = fmt::format("node {}", index);
     if (node.matrix.size() == 16) {
         glm::mat4 matrix;
         for (int i = 0; i < 16; ++i) {
-            glm::value_ptr(matrix)[i] = static_cast<float>(node.matrix[std::size_t(i)]);
+            glm::value_ptr(matrix)[i] = as_float(node.matrix[std::size_t(i)], where + " matrix");
         }
         return matrix;  // both glTF and glm are column-major
     }
-    const glm::vec3 translation = to_vec(node.translation, glm::vec3(0.0f));
-    const glm::vec3 scale = to_vec(node.scale, glm::vec3(1.0f));
-    const glm::vec4 xyzw = to_vec(node.rotation, glm::vec4(0.0f, 0.0f, 0.0f, 1.0f));
+    const glm::vec3 translation = to_vec(node.translation, glm::vec3(0.0f), where + " translation");
+    const glm::vec3 scale = to_vec(node.scale, glm::vec3(1.0f), where + " scale");
+    const glm::vec4 xyzw = to_vec(node.rotation, glm::vec4(0.0f, 0.0f, 0.0f, 1.0f), where + " rotation");
     glm::quat rotation(xyzw.w, xyzw.x, xyzw.y, xyzw.z);
     const float length = glm::length(rotation);
     rotation = length > 1e-12f ? rotation / length : glm::quat(1.0f, 0.0f, 0.0f, 0.0f);
@@ -136,21 +154,25 @@ private:
             const std::string where = fmt::format("material {} ('{}')", m, source.name);
             Material material;
             material.name = source.name.empty() ? fmt::format("material_{}", m) : source.name;
-            material.base_color = to_vec(pbr.baseColorFactor, glm::vec4(1.0f));
-            material.metallic = static_cast<float>(pbr.metallicFactor);
-            material.roughness = static_cast<float>(pbr.roughnessFactor);
-            material.emissive = to_vec(source.emissiveFactor, glm::vec3(0.0f));
+            material.base_color = to_vec(pbr.baseColorFactor, glm::vec4(1.0f), where + " baseColorFactor");
+            material.metallic = as_float(pbr.metallicFactor, where + " metallicFactor");
+            material.roughness = as_float(pbr.roughnessFactor, where + " roughnessFactor");
+            material.emissive = to_vec(source.emissiveFactor, glm::vec3(0.0f), where + " emissiveFactor");
             if (const tinygltf::Value* strength =
                     extension_object(source.extensions, "KHR_materials_emissive_strength")) {
-                material.emissive *=
-                    static_cast<float>(number_member(*strength, "emissiveStrength").value_or(1.0));
+                material.emissive *= as_float(number_member(*strength, "emissiveStrength").value_or(1.0),
+                                              where + " emissiveStrength");
+                if (!finite(material.emissive)) {
+                    reject(fmt::format("{}: its emissive factor times its strength is past the range of a float",
+                                       where));
+                }
             }
             if (const tinygltf::Value* specular =
                     extension_object(source.extensions, "KHR_materials_specular")) {
                 material.specular =
-                    static_cast<float>(number_member(*specular, "specularFactor").value_or(1.0));
+                    as_float(number_member(*specular, "specularFactor").value_or(1.0), where + " specularFactor");
             }
-            material.normal_scale = static_cast<float>(source.normalTexture.scale);
+            material.normal_scale = as_float(source.normalTexture.scale, where + " normalTexture.scale");
             material.double_sided = source.doubleSided;
             material.base_color_texture =
                 texture_ref(pbr.baseColorTexture, true, where + " baseColorTexture");
@@ -545,7 +567,7 @@ private:
             }
             visited[static_cast<std::size_t>(index)] = true;
             const tinygltf::Node& node = model_.nodes[static_cast<std::size_t>(index)];
-            const glm::mat4 world = parent_world * local_transform(node);
+            const glm::mat4 world = parent_world * local_transform(node, static_cast<std::size_t>(index));
             add_node_contents(static_cast<std::size_t>(index), node, world);
             for (auto child = node.children.rbegin(); child != node.children.rend(); ++child) {
                 pending.emplace_back(*child, world);
@@ -601,8 +623,17 @@ private:
         camera.position = glm::vec3(world[3]);
         camera.orientation = rotation_of(world);
         camera.vertical_fov = static_cast<float>(yfov);
-        camera.z_near = static_cast<float>(std::max(source.perspective.znear, 0.0));
-        camera.z_far = static_cast<float>(std::max(source.perspective.zfar, 0.0));  // 0 when absent: derived
+        // Distances: within the scene's reach (max_world_coordinate), so that the projection stays
+        // finite; 0 when absent: derived.
+        auto distance = [&](double value, const char* field) {
+            if (!(value <= max_world_coordinate)) {
+                reject(fmt::format("camera {} ('{}') has the {} {:g}, past the limit of {:g} m", node.camera,
+                                   source.name, field, value, max_world_coordinate));
+            }
+            return static_cast<float>(std::max(value, 0.0));
+        };
+        camera.z_near = distance(source.perspective.znear, "znear");
+        camera.z_far = distance(source.perspective.zfar, "zfar");
         scene_.cameras.push_back(std::move(camera));
     }
 
@@ -627,9 +658,21 @@ private:
         }
         light.name = light_names_.claim(!source.name.empty() ? source.name : node.name,
                                         fmt::format("light_{}", scene_.lights.size()));
-        light.color = to_vec(source.color, glm::vec3(1.0f));
+        // The ranges light.set allows (docs/protocol.md, "Numbers"), so that colour times intensity
+        // stays finite.
+        const std::string what = fmt::format("light {} ('{}')", light_index, source.name);
+        light.color = to_vec(source.color, glm::vec3(1.0f), what + " color");
+        if (!glm::all(glm::greaterThanEqual(light.color, glm::vec3(0.0f))) ||
+            !glm::all(glm::lessThanEqual(light.color, glm::vec3(max_light_color)))) {
+            reject(fmt::format("{} has the color {}, outside [0, {:g}]", what, glm::to_string(light.color),
+                               max_light_color));
+        }
         // The number is taken as is and read radiometrically: W/sr for point and spot lights,
         // W/m^2 for directional ones (KHR_lights_punctual's photometric units are not converted).
+        if (!(source.intensity >= 0.0 && source.intensity <= max_light_intensity)) {
+            reject(fmt::format("{} has the intensity {:g}, outside [0, {:g}]", what, source.intensity,
+                               max_light_intensity));
+        }
         light.intensity = static_cast<float>(source.intensity);
         light.position = glm::vec3(world[3]);
         // The light shines along the node's local -Z.
@@ -637,9 +680,10 @@ private:
             normalized_or(glm::mat3(world) * glm::vec3(0.0f, 0.0f, -1.0f), glm::vec3(0.0f, 0.0f, -1.0f));
         if (light.type == LightType::spot) {
             constexpr float half_pi = 1.57079633f;
-            light.outer_cone = std::clamp(static_cast<float>(source.spot.outerConeAngle), 1e-4f, half_pi);
+            light.outer_cone =
+                std::clamp(as_float(source.spot.outerConeAngle, what + " outerConeAngle"), 1e-4f, half_pi);
             light.inner_cone =
-                std::clamp(static_cast<float>(source.spot.innerConeAngle), 0.0f, light.outer_cone);
+                std::clamp(as_float(source.spot.innerConeAngle, what + " innerConeAngle"), 0.0f, light.outer_cone);
         }
         scene_.lights.push_back(std::move(light));
     }
@@ -658,6 +702,11 @@ private:
     // A camera that sees the whole scene.
     void add_default_camera() {
         Camera camera = framing_camera(scene_.world_bounds());
+        if (!within(camera.position, max_eye_coordinate)) {
+            reject(fmt::format("the file has no camera, and one that frames the whole scene would stand at {}, "
+                               "past the limit of {:g} m from the origin on an axis",
+                               glm::to_string(camera.position), max_eye_coordinate));
+        }
         camera.name = camera_names_.claim("default", "default");
         scene_.cameras.push_back(std::move(camera));
     }
@@ -674,6 +723,33 @@ private:
 };
 
 }  // namespace
+
+void check_world_extent(const Scene& scene) {
+    auto refuse = [](const std::string& what, const glm::vec3& point, float limit) {
+        reject(fmt::format("{} lies at {}, past the limit of {:g} m from the origin on an axis", what,
+                           glm::to_string(point), limit));
+    };
+    for (const Object& object : scene.objects) {
+        if (object.mesh < 0 || static_cast<std::size_t>(object.mesh) >= scene.meshes.size()) continue;
+        const Aabb bounds = object.world_bounds(scene.meshes[static_cast<std::size_t>(object.mesh)]);
+        if (bounds.empty()) continue;
+        for (const glm::vec3& corner : {bounds.min, bounds.max}) {
+            if (!within(corner, max_world_coordinate)) {
+                refuse(fmt::format("object '{}' (its world bounds)", object.name), corner, max_world_coordinate);
+            }
+        }
+    }
+    for (const Camera& camera : scene.cameras) {
+        if (!within(camera.position, max_eye_coordinate)) {
+            refuse(fmt::format("camera '{}'", camera.name), camera.position, max_eye_coordinate);
+        }
+    }
+    for (const Light& light : scene.lights) {
+        if (!within(light.position, max_eye_coordinate)) {
+            refuse(fmt::format("light '{}'", light.name), light.position, max_eye_coordinate);
+        }
+    }
+}
 
 Scene convert_model(const tinygltf::Model& model, const LoadContext& context, Warnings& warnings,
                     std::string name) {

@@ -2,6 +2,7 @@
 #pragma once
 
 #include "renderer/scene/gltf_detail.hpp"
+#include "renderer/scene/gltf_import.hpp"
 #include "renderer/scene/scene.hpp"
 
 #include <tiny_gltf.h>
@@ -17,5 +18,10 @@ namespace bounce::scene::gltf {
 // `warnings`.
 Scene convert_model(const tinygltf::Model& model, const LoadContext& context, Warnings& warnings,
                     std::string name);
+
+// Every object's world bounds within max_world_coordinate of the origin on each axis, every camera
+// and light within max_eye_coordinate (gltf_import.hpp); throws InputError naming the first that
+// is not.
+void check_world_extent(const Scene& scene);
 
 }  // namespace bounce::scene::gltf

@@ -2,6 +2,7 @@
 
 #include "renderer/scene/gltf_validation.hpp"
 
+#include <algorithm>
 #include <climits>
 #include <cstring>
 #include <span>
@@ -64,6 +65,12 @@ std::optional<std::string> decode(tinygltf::Image& image, int index, const Image
     // The decoder takes the length as an int.
     if (bytes.size() > static_cast<std::size_t>(INT_MAX)) return "the encoded image is over 2 GiB";
     if (!png_chunks_inside(bytes)) return "a PNG chunk runs past the end of the image";
+    // The budget counted what decoding the header it read costs; a file read again may have
+    // changed since.
+    std::string why;
+    if (read_image_header(bytes, why) != header) {
+        return "its header is not the one read when the scene's size was counted (the file changed)";
+    }
     std::string error;
     std::string warning;
     if (!tinygltf::LoadImageData(&image, index, &error, &warning, 0, 0, bytes.data(),
@@ -85,30 +92,148 @@ std::optional<std::string> decode(tinygltf::Image& image, int index, const Image
 
 }  // namespace
 
-std::optional<ImageHeader> peek_image_size(const unsigned char* bytes, std::size_t size) {
-    static constexpr unsigned char png_signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
-    auto be16 = [&](std::size_t at) { return std::uint64_t{bytes[at]} << 8 | bytes[at + 1]; };
-    auto be32 = [&](std::size_t at) { return be16(at) << 16 | be16(at + 2); };
-    if (size >= 24 && std::memcmp(bytes, png_signature, 8) == 0) {
-        if (std::memcmp(bytes + 12, "IHDR", 4) != 0) return std::nullopt;  // the first chunk must be IHDR
-        return ImageHeader{be32(16), be32(20)};
+namespace {
+
+std::uint64_t be16(std::span<const unsigned char> bytes, std::size_t at) {
+    return std::uint64_t{bytes[at]} << 8 | bytes[at + 1];
+}
+
+std::uint64_t be32(std::span<const unsigned char> bytes, std::size_t at) {
+    return be16(bytes, at) << 16 | be16(bytes, at + 2);
+}
+
+// The IHDR chunk, which must come first, and of the chunks after it what the decoder's allocations
+// depend on: the IDAT chunks' lengths and whether there is a tRNS chunk. Only what stb_image
+// decodes is accepted: bit depths 1, 2, 4, 8 and 16, colour types 0, 2, 3, 4 and 6 (no 16-bit
+// palette), deflate, the one filter method, no or Adam7 interlacing.
+std::optional<ImageHeader> png_header(std::span<const unsigned char> bytes, std::string& why) {
+    if (bytes.size() < 29 || be32(bytes, 8) != 13 || std::memcmp(bytes.data() + 12, "IHDR", 4) != 0) {
+        why = "a PNG whose first chunk is not a whole IHDR";
+        return std::nullopt;
     }
-    if (size >= 4 && bytes[0] == 0xFF && bytes[1] == 0xD8) {
-        std::size_t at = 2;
-        while (at + 9 < size) {
-            if (bytes[at] != 0xFF) return std::nullopt;
-            const unsigned char marker = bytes[at + 1];
-            if (marker == 0xFF) {
-                ++at;  // fill byte
-                continue;
-            }
-            const bool start_of_frame =
-                marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 && marker != 0xCC;
-            if (start_of_frame) return ImageHeader{be16(at + 7), be16(at + 5)};
-            at += 2 + be16(at + 2);
+    ImageHeader header;
+    header.format = ImageHeader::Format::png;
+    header.width = be32(bytes, 16);
+    header.height = be32(bytes, 20);
+    header.bit_depth = bytes[24];
+    const int colour_type = bytes[25];
+    header.palette = colour_type == 3;
+    header.interlaced = bytes[28] == 1;
+    header.encoded_bytes = bytes.size();
+    const bool depth_ok = header.bit_depth == 1 || header.bit_depth == 2 || header.bit_depth == 4 ||
+                          header.bit_depth == 8 || header.bit_depth == 16;
+    static constexpr int channels_of_type[7] = {1, 0, 3, 1, 2, 0, 4};
+    const int channels = colour_type <= 6 ? channels_of_type[colour_type] : 0;
+    if (!depth_ok || channels == 0 || (header.palette && header.bit_depth == 16) || bytes[26] != 0 ||
+        bytes[27] != 0 || bytes[28] > 1) {
+        why = fmt::format("a PNG of bit depth {}, colour type {}, compression {}, filter {} and interlace {} "
+                          "cannot be decoded",
+                          header.bit_depth, colour_type, bytes[26], bytes[27], bytes[28]);
+        return std::nullopt;
+    }
+    header.channels = channels;
+    // stb_image reads the IDAT chunks into one buffer: at least 4 KiB or the first chunk's length,
+    // doubled until the next chunk fits.
+    std::uint64_t read = 0;
+    std::size_t at = 8;
+    while (bytes.size() - at >= 8) {
+        const std::uint64_t length = be32(bytes, at);
+        const unsigned char* type = bytes.data() + at + 4;
+        if (std::memcmp(type, "IEND", 4) == 0) break;
+        if (std::memcmp(type, "tRNS", 4) == 0) header.transparency = true;
+        if (std::memcmp(type, "IDAT", 4) == 0) {
+            std::uint64_t& capacity = header.idat_buffer_bytes;
+            if (capacity == 0) capacity = std::max<std::uint64_t>(length, 4096);
+            while (read + length > capacity) capacity *= 2;
+            read += length;
         }
+        if (length + 12 > bytes.size() - at) break;  // past the end: not decoded (png_chunks_inside)
+        at += 12 + static_cast<std::size_t>(length);
+    }
+    return header;
+}
+
+// The first frame header (SOF) of a JPEG, found as stb_image finds it: past the segments before
+// it, each skipped by its length. Only what stb_image decodes is accepted: baseline and extended
+// (SOF0, SOF1) or progressive (SOF2) Huffman coding, 8 bits, 1, 3 or 4 components whose sampling
+// factors (1 to 4) divide the largest.
+std::optional<ImageHeader> jpeg_header(std::span<const unsigned char> bytes, std::string& why) {
+    why = "a JPEG without a whole frame header";
+    std::size_t at = 2;
+    while (bytes.size() - at >= 4) {
+        if (bytes[at] != 0xFF) return std::nullopt;
+        const unsigned char marker = bytes[at + 1];
+        if (marker == 0xFF) {
+            ++at;  // fill byte
+            continue;
+        }
+        const std::size_t length = static_cast<std::size_t>(be16(bytes, at + 2));
+        const bool start_of_frame =
+            marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 && marker != 0xCC;
+        if (!start_of_frame) {
+            at += 2 + length;
+            if (at > bytes.size()) return std::nullopt;
+            continue;
+        }
+        if (length < 8 || bytes.size() - at < 2 + length) return std::nullopt;
+        ImageHeader header;
+        header.format = ImageHeader::Format::jpeg;
+        header.bit_depth = bytes[at + 4];
+        header.height = be16(bytes, at + 5);
+        header.width = be16(bytes, at + 7);
+        header.channels = bytes[at + 9];
+        header.progressive = marker == 0xC2;
+        header.encoded_bytes = bytes.size();
+        if (marker > 0xC2) {
+            why = fmt::format("a JPEG coded as SOF{} (lossless, hierarchical or arithmetic) cannot be decoded",
+                              marker - 0xC0);
+            return std::nullopt;
+        }
+        if (header.bit_depth != 8 || (header.channels != 1 && header.channels != 3 && header.channels != 4) ||
+            length != 8 + 3 * static_cast<std::size_t>(header.channels)) {
+            why = fmt::format("a {}-bit JPEG of {} components cannot be decoded", header.bit_depth,
+                              header.channels);
+            return std::nullopt;
+        }
+        int h_max = 1;
+        int v_max = 1;
+        for (int c = 0; c < header.channels; ++c) {
+            const unsigned char factors = bytes[at + 11 + 3 * static_cast<std::size_t>(c)];
+            header.sampling.push_back(factors);
+            h_max = std::max(h_max, factors >> 4);
+            v_max = std::max(v_max, factors & 15);
+        }
+        for (const std::uint8_t factors : header.sampling) {
+            const int h = factors >> 4;
+            const int v = factors & 15;
+            if (h < 1 || h > 4 || v < 1 || v > 4 || h_max % h != 0 || v_max % v != 0) {
+                why = fmt::format("a JPEG with the sampling factors {}x{} cannot be decoded", h, v);
+                return std::nullopt;
+            }
+        }
+        return header;
     }
     return std::nullopt;
+}
+
+}  // namespace
+
+std::optional<ImageHeader> read_image_header(std::span<const unsigned char> bytes, std::string& why) {
+    static constexpr unsigned char png_signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
+    if (bytes.size() >= 8 && std::memcmp(bytes.data(), png_signature, 8) == 0) return png_header(bytes, why);
+    if (bytes.size() >= 2 && bytes[0] == 0xFF && bytes[1] == 0xD8) return jpeg_header(bytes, why);
+    why = "it is not a PNG or JPEG image";
+    return std::nullopt;
+}
+
+std::string describe(const ImageHeader& header) {
+    if (header.format == ImageHeader::Format::jpeg) {
+        return fmt::format("{}-component {}JPEG", header.channels, header.progressive ? "progressive " : "");
+    }
+    static constexpr const char* layouts[5] = {"", "grey", "grey+alpha", "RGB", "RGBA"};
+    return fmt::format("{}-bit {}{} PNG", header.bit_depth,
+                       header.palette ? "palette" : layouts[std::clamp(header.channels, 0, 4)],
+                       header.interlaced ? " interlaced" : "");
 }
 
 bool record_image_header(tinygltf::Image* /*image*/, int image_index, std::string* /*err*/,
@@ -116,10 +241,12 @@ bool record_image_header(tinygltf::Image* /*image*/, int image_index, std::strin
                          const unsigned char* bytes, int size, void* user_data) {
     auto& context = *static_cast<LoadContext*>(user_data);
     // tinygltf passes lengths as int: one past 2 GiB arrives negative and is not an image we can read.
+    std::string why = "it is not a PNG or JPEG image";
     const std::optional<ImageHeader> header =
-        size > 0 ? peek_image_size(bytes, static_cast<std::size_t>(size)) : std::nullopt;
+        size > 0 ? read_image_header({bytes, static_cast<std::size_t>(size)}, why) : std::nullopt;
     if (!header || header->width == 0 || header->height == 0) {
-        context.image_failures[image_index] = "cannot decode it: it is not a PNG or JPEG image";
+        context.image_failures[image_index] =
+            fmt::format("cannot decode it: {}", header ? "it declares no pixels" : why);
     } else if (header->width > max_image_side || header->height > max_image_side) {
         context.image_failures[image_index] = fmt::format("{}x{} pixels exceeds the limit of {} per side",
                                                           header->width, header->height, max_image_side);
@@ -129,29 +256,29 @@ bool record_image_header(tinygltf::Image* /*image*/, int image_index, std::strin
     return true;
 }
 
-std::vector<bool> images_in_use(const tinygltf::Model& model) {
-    std::vector<bool> used(model.images.size(), false);
-    auto use = [&](const auto& info) {
+std::vector<unsigned> texture_uses(const tinygltf::Model& model) {
+    std::vector<unsigned> uses(model.images.size(), 0);
+    auto use = [&](const auto& info, unsigned colour_space) {
         if (info.index < 0 || static_cast<std::size_t>(info.index) >= model.textures.size()) return;
         if (info.texCoord > 1) return;  // the converter ignores it
         const int source = model.textures[static_cast<std::size_t>(info.index)].source;
-        if (source >= 0 && static_cast<std::size_t>(source) < used.size()) {
-            used[static_cast<std::size_t>(source)] = true;
+        if (source >= 0 && static_cast<std::size_t>(source) < uses.size()) {
+            uses[static_cast<std::size_t>(source)] |= colour_space;
         }
     };
     for (const tinygltf::Material& material : model.materials) {
-        use(material.pbrMetallicRoughness.baseColorTexture);
-        use(material.pbrMetallicRoughness.metallicRoughnessTexture);
-        use(material.normalTexture);
-        use(material.emissiveTexture);
+        use(material.pbrMetallicRoughness.baseColorTexture, used_as_srgb);
+        use(material.pbrMetallicRoughness.metallicRoughnessTexture, used_as_linear);
+        use(material.normalTexture, used_as_linear);
+        use(material.emissiveTexture, used_as_srgb);
     }
-    return used;
+    return uses;
 }
 
 void decode_images(tinygltf::Model& model, const Json& document, LoadContext& context) {
-    const std::vector<bool> used = images_in_use(model);
+    const std::vector<unsigned> uses = texture_uses(model);
     for (const auto& [index, header] : context.image_headers) {
-        if (!used.at(static_cast<std::size_t>(index))) continue;
+        if (uses.at(static_cast<std::size_t>(index)) == 0) continue;
         tinygltf::Image& image = model.images[static_cast<std::size_t>(index)];
         const EncodedImage encoded = encoded_image(model, document, index, context);
         if (std::optional<std::string> failure = decode(image, index, header, encoded.bytes)) {

@@ -97,6 +97,7 @@ Scene import_bytes(const Source& source, const std::string& label) {
     Scene scene = convert_model(model, context, warnings, source.scene_name);
     scene.warnings = warnings.take();
     validate_finite(scene);
+    check_world_extent(scene);
     return scene;
 }
 

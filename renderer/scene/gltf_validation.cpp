@@ -415,22 +415,43 @@ void for_each_uri(const Json& root, Visit&& visit) {
     }
 }
 
-// A URI's %XX escapes decoded, and '+' read as a space, as tinygltf does before it opens the file.
+// A URI decoded exactly as tinygltf decodes it before it opens the file (dlib::urldecode): '+' is
+// a space, and '%' with at least two characters after it is the byte they give in hex, where a
+// character that is not a hex digit counts as 0 ("%zz" is a NUL byte, "%2z" a space).
 std::string percent_decoded(std::string_view uri) {
+    auto nibble = [](char c) {
+        if (c >= '0' && c <= '9') return c - '0';
+        if (c >= 'a' && c <= 'f') return c - 'a' + 10;
+        if (c >= 'A' && c <= 'F') return c - 'A' + 10;
+        return 0;
+    };
     std::string out;
     out.reserve(uri.size());
     for (std::size_t i = 0; i < uri.size(); ++i) {
-        const bool escape = uri[i] == '%' && i + 2 < uri.size() &&
-                            std::isxdigit(static_cast<unsigned char>(uri[i + 1])) &&
-                            std::isxdigit(static_cast<unsigned char>(uri[i + 2]));
-        if (escape) {
-            out += static_cast<char>(std::stoi(std::string(uri.substr(i + 1, 2)), nullptr, 16));
+        if (uri[i] == '+') {
+            out += ' ';
+        } else if (uri[i] == '%' && uri.size() > i + 2) {
+            out += static_cast<char>(nibble(uri[i + 1]) << 4 | nibble(uri[i + 2]));
             i += 2;
         } else {
-            out += uri[i] == '+' ? ' ' : uri[i];
+            out += uri[i];
         }
     }
     return out;
+}
+
+// The first '%' escape that tinygltf decodes (two characters follow it) but whose two characters
+// are not both hex digits; empty when there is none.
+std::string_view invalid_escape(std::string_view uri) {
+    for (std::size_t i = 0; i + 2 < uri.size(); ++i) {
+        if (uri[i] != '%') continue;
+        if (!std::isxdigit(static_cast<unsigned char>(uri[i + 1])) ||
+            !std::isxdigit(static_cast<unsigned char>(uri[i + 2]))) {
+            return uri.substr(i, 3);
+        }
+        i += 2;
+    }
+    return {};
 }
 
 // Whether `path` lies inside `folder` (canonical) once `..` and symlinks are resolved.
@@ -574,6 +595,10 @@ void refuse_external_uris(const Json& root) {
 void confine_uris(const Json& root, const std::filesystem::path& folder) {
     for_each_uri(root, [&](const char* key, std::size_t index, const std::string& uri) {
         if (tinygltf::IsDataURI(uri)) return;  // what tinygltf does not take for data, it reads as a file
+        // tinygltf reads such an escape as bytes nobody meant; refused rather than guessed at.
+        if (const std::string_view escape = invalid_escape(uri); !escape.empty()) {
+            reject(fmt::format("{}[{}].uri '{}' has the invalid percent escape '{}'", key, index, uri, escape));
+        }
         const std::string decoded = percent_decoded(uri);
         const std::filesystem::path relative(decoded);
         if (decoded.find('\0') != std::string::npos || relative.has_root_path()) {

@@ -41,7 +41,8 @@ void check_extensions(const Json& root, Warnings& warnings);
 void refuse_external_uris(const Json& root);
 
 // A file's buffer and image URIs other than data: URIs must be relative paths that stay inside
-// `folder` (the glTF file's canonical folder) once `..` and symlinks are resolved.
+// `folder` (the glTF file's canonical folder) once percent-decoded as tinygltf decodes them and
+// `..` and symlinks are resolved; a '%' escape that is not two hex digits is refused.
 void confine_uris(const Json& root, const std::filesystem::path& folder);
 
 // The file an external URI names, read again from context.folder as tinygltf read it; nullopt when

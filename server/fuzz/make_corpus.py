@@ -2,8 +2,11 @@
 """Writes the seed corpus of bounce_request_fuzz: python3 server/fuzz/make_corpus.py [DIR].
 
 Each file is a byte stream as a client would send it (docs/protocol.md, "Frames"): a frame of every
-request type, scene.load with small .glb uploads (built here), a stream of several requests, and a
-few broken ones. DIR defaults to server/fuzz/corpus; its files are replaced.
+request type, scene.load with small .glb uploads (built here), a stream of several requests, a few
+broken ones, and the scene-state orders (object.set_transform, light.set, light.remove, camera.set)
+with numbers at the edges of their ranges and past them (1e39, -0, 1e400, NaN and Infinity, which
+JSON does not allow, and "NaN" as a string), on the scenes the target starts with and on uploads
+far from the origin. DIR defaults to server/fuzz/corpus; its files are replaced.
 """
 import json
 import pathlib
@@ -21,6 +24,18 @@ def frame(kind, body=None, attachment=b"", request_id=1, version=1):
     text = json.dumps(body, separators=(",", ":")).encode() if body else b""
     header = MAGIC + struct.pack("<HHQII", version, TYPES[kind], request_id, len(text), len(attachment))
     return header + text + attachment
+
+
+def raw_frame(kind, text, request_id=1):
+    """A frame whose body is `text` as given: numbers JSON cannot carry (NaN, Infinity, 1e400)."""
+    header = MAGIC + struct.pack("<HHQII", 1, TYPES[kind], request_id, len(text), 0)
+    return header + text
+
+
+def stream(requests):
+    """Several frames in one input: (kind, body[, attachment]) each, numbered from 1."""
+    return b"".join(frame(kind, body, *rest, request_id=number)
+                    for number, (kind, body, *rest) in enumerate(requests, start=1))
 
 
 def padded(data, fill):
@@ -60,6 +75,27 @@ def triangle_glb():
         "scene": 0,
     }
     return glb(document, positions + indices)
+
+
+def far_triangle_glb(coordinate, node_matrix=None):
+    """One triangle at +-`coordinate` (finite floats at the edge of their range), optionally under a
+    node matrix of its own, with a camera placed by another node: what object.set_transform, light.set
+    and camera.set then do to an imported scene far from the origin."""
+    positions = struct.pack("<9f", -coordinate, -coordinate, 0, coordinate, 0, 0, 0, coordinate, coordinate)
+    node = {"name": "far", "mesh": 0}
+    if node_matrix is not None:
+        node["matrix"] = node_matrix
+    document = {
+        "asset": {"version": "2.0"},
+        "buffers": [{"byteLength": len(positions)}],
+        "bufferViews": [{"buffer": 0, "byteLength": len(positions)}],
+        "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3"}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+        "cameras": [{"type": "perspective", "perspective": {"yfov": 1.0, "znear": coordinate}}],
+        "nodes": [node, {"name": "eye", "camera": 0, "translation": [0, 0, min(coordinate, 1e6)]}],
+        "scenes": [{"nodes": [0, 1]}],
+    }
+    return glb(document, positions)
 
 
 def textured_glb():
@@ -166,7 +202,101 @@ def corpus():
         "bad_magic": b"BNCF" + frame("ping")[4:],
         "truncated": frame("scene.load", {"name": "tri"}, tri)[:-20],
     }
+    files.update(scene_state_seeds(tri, textured))
     return files
+
+
+def scene_state_seeds(tri, textured):
+    """The scene-state orders at the edges of their ranges and past them, on the built-in scenes the
+    target starts with ("cornell", "crowded": one light short of the cap) and on uploads."""
+    big, angle, colour = 1e7, 1e6, 1e6  # docs/protocol.md, "Numbers"
+    extreme_matrix = [big, -big, big, 0, -big, big, big, 0, big, big, -big, 0, big, -big, big, 1]
+    return {
+        "state_matrix_extreme": frame("object.set_transform", {"scene": "cornell", "object": 0,
+                                                               "matrix": extreme_matrix}),
+        "state_matrix_negative_zero": frame("object.set_transform", {"scene": "cornell", "object": "tall_block",
+                                                                     "matrix": [-0.0] * 16}),
+        "state_trs_extreme": frame("object.set_transform", {"scene": "cornell", "object": "short_block",
+                                                            "translation": [big, -big, big],
+                                                            "rotation_deg": [angle, -angle, 0.5], "scale": 1e6}),
+        "state_trs_tiny": frame("object.set_transform", {"scene": "cornell", "object": 1, "scale": 1e-6,
+                                                         "translation": [-0.0, 1e-30, -1e-30]}),
+        "state_transform_1e39": frame("object.set_transform", {"scene": "cornell", "object": 0,
+                                                               "matrix": [1e39] + [0.0] * 15}),
+        "state_transform_nan_string": frame("object.set_transform", {"scene": "cornell", "object": 0,
+                                                                     "scale": "NaN"}),
+        "state_transform_nan": raw_frame("object.set_transform",
+                                         b'{"scene":"cornell","object":0,"translation":[NaN,0,0]}'),
+        "state_transform_infinity": raw_frame("object.set_transform",
+                                              b'{"scene":"cornell","object":0,"scale":Infinity}'),
+        "state_transform_1e400": raw_frame("object.set_transform",
+                                           b'{"scene":"cornell","object":0,"scale":1e400}'),
+        "state_light_extreme": frame("light.set", {"scene": "cornell", "light": "far", "type": "spot",
+                                                   "position": [big, big, -big], "direction": [1e-6, -big, 0],
+                                                   "color": [colour] * 3, "intensity": 1e12,
+                                                   "inner_cone_deg": 90, "outer_cone_deg": 90}),
+        "state_light_point_negative_zero": frame("light.set", {"scene": "cornell", "light": "ceiling_light",
+                                                               "position": [-0.0, -0.0, -0.0], "intensity": 0,
+                                                               "color": [-0.0, 0, 0]}),
+        "state_light_tiny_direction": frame("light.set", {"scene": "cornell", "light": "sun",
+                                                          "type": "directional", "direction": [1e-20, 0, 0]}),
+        "state_light_cap": stream([("light.set", {"scene": "crowded", "light": "one_more"}),
+                                   ("light.set", {"scene": "crowded", "light": "past_the_cap"}),
+                                   ("light.remove", {"scene": "crowded", "light": "extra_5"}),
+                                   ("light.set", {"scene": "crowded", "light": "past_the_cap"})]),
+        "state_camera_extreme": frame("camera.set", {"scene": "cornell", "position": [big, big, big],
+                                                     "look_at": [-big, -big, -big], "fov_deg": 178.9}),
+        "state_camera_close": frame("camera.set", {"scene": "cornell", "position": [0, 1, 1],
+                                                   "look_at": [0, 1, 1.000001], "fov_deg": 0.11}),
+        "state_camera_down": frame("camera.set", {"scene": "cornell", "position": [0, big, 0],
+                                                  "look_at": [0, -big, 0]}),
+        "state_camera_orientation": frame("camera.set", {"scene": "cornell",
+                                                         "orientation": [1e-7, 0, -0.0, 2e-6]}),
+        "state_camera_same_point": frame("camera.set", {"scene": "cornell", "position": [1, 1, 1],
+                                                        "look_at": [1, 1, 1]}),
+        "state_unloaded": stream([("scene.unload", {"name": "cornell"}),
+                                  ("light.set", {"scene": "cornell", "light": "l"}),
+                                  ("scene.load", {"name": "cornell", "builtin": "cornell_blob",
+                                                  "dynamic": ["blob"]}),
+                                  ("object.set_transform", {"scene": "cornell", "object": 1, "scale": 1e6,
+                                                            "translation": [big, big, big]}),
+                                  ("camera.set", {"scene": "cornell", "position": [-big, 0, 0]})]),
+        "state_upload_session": stream([("scene.load", {"name": "quad", "dynamic": ["quad"]}, textured),
+                                        ("object.set_transform", {"scene": "quad", "object": "quad",
+                                                                  "matrix": extreme_matrix}),
+                                        ("light.set", {"scene": "quad", "light": "key", "position": [big, 0, 0],
+                                                       "intensity": 1e12}),
+                                        ("camera.set", {"scene": "quad", "camera": "view"}),
+                                        ("camera.set", {"scene": "quad", "position": [0, 0, -big], "fov_deg": 179}),
+                                        ("light.remove", {"scene": "quad", "light": "key"}),
+                                        ("scene.load", {"name": "tri"}, tri),
+                                        ("object.set_transform", {"scene": "tri", "object": 0, "scale": 1e6,
+                                                                  "rotation_deg": [90, 90, 90]})]),
+        "state_far_upload": stream([("scene.load", {"name": "far"}, far_triangle_glb(3e38)),
+                                    ("object.set_transform", {"scene": "far", "object": "far", "scale": 1e6})]),
+        "state_far_scaled": stream([("scene.load", {"name": "far"}, far_triangle_glb(1e14)),
+                                    ("object.set_transform", {"scene": "far", "object": "far", "scale": 1e6}),
+                                    ("object.set_transform", {"scene": "far", "object": 0,
+                                                              "matrix": extreme_matrix}),
+                                    ("object.set_transform", {"scene": "far", "object": 0, "scale": 1e3}),
+                                    ("light.set", {"scene": "far", "light": "l", "position": [-big, 0, big]}),
+                                    ("camera.set", {"scene": "far", "position": [big, big, big],
+                                                    "look_at": [0, 0, 0]})]),
+        "state_small_and_far": stream([("scene.load", {"name": "small"}, far_triangle_glb(1e-3)),
+                                       ("object.set_transform", {"scene": "small", "object": 0,
+                                                                 "translation": [big, big, -big]}),
+                                       ("light.set", {"scene": "small", "light": "sun", "type": "directional",
+                                                      "direction": [0.2, -1, 0.3]})]),
+        "state_empty_scene": stream([("scene.load", {"name": "empty"},
+                                      glb({"asset": {"version": "2.0"}, "scenes": [{"nodes": []}], "scene": 0}, b"")),
+                                     ("light.set", {"scene": "empty", "light": "l", "type": "spot",
+                                                    "position": [0, 0, 2]}),
+                                     ("camera.set", {"scene": "empty", "position": [big, 0, 0],
+                                                     "look_at": [0, 0, 0]})]),
+        "state_far_node": stream([("scene.load", {"name": "far"},
+                                   far_triangle_glb(1e6, [1e30, 0, 0, 0, 0, 1e30, 0, 0, 0, 0, 1e30, 0, 0, 0, 0, 1])),
+                                  ("camera.set", {"scene": "far", "position": [big, 0, 0]})]),
+    }
 
 
 def main():
