@@ -2,6 +2,8 @@
 
 #include "renderer/base/hash.hpp"
 
+#include <glm/gtc/matrix_transform.hpp>
+
 #include <algorithm>
 #include <cmath>
 
@@ -29,6 +31,10 @@ std::uint64_t light_views_with_power(const scene::Scene& scene) {
         if (has_power(light)) views += light.type == scene::LightType::point ? 6 : 1;
     }
     return views;
+}
+
+glm::mat4 directional_view(const glm::vec3& center, const glm::vec3& direction, float distance) {
+    return glm::lookAt(-direction * distance, glm::vec3(0.0f), up_for(direction)) * glm::translate(glm::mat4(1.0f), -center);
 }
 
 glm::vec3 up_for(const glm::vec3& direction) {

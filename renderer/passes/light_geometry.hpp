@@ -20,6 +20,11 @@ std::uint64_t light_views_with_power(const scene::Scene& scene);
 // An up vector that is not parallel to `direction`.
 glm::vec3 up_for(const glm::vec3& direction);
 
+// The view of a directional light: from `distance` behind `center` against `direction`, looking at
+// it. Built about the centre, then moved there, so a scene small against its distance from the
+// origin (where centre - direction * distance rounds onto the centre) still gets a finite view.
+glm::mat4 directional_view(const glm::vec3& center, const glm::vec3& direction, float distance);
+
 // The content hash (renderer/base/hash.hpp) of every object's mesh and transform (geometry itself is immutable once uploaded).
 std::uint64_t geometry_fingerprint(const scene::Scene& scene);
 

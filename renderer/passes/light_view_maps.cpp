@@ -42,7 +42,7 @@ std::vector<LightViewMaps::View> light_views(const scene::Light& light, std::siz
     const float texel = 2.0f * radius / texels;
     views.push_back({index,
                      glm::ortho(-radius, radius, -radius, radius, radius * 0.5f, 3.0f * radius) *
-                         glm::lookAt(center - direction * (2.0f * radius), center, up_for(direction)),
+                         directional_view(center, direction, 2.0f * radius),
                      direction, center - direction * (2.0f * radius), true, texel * texel});
     return views;
 }

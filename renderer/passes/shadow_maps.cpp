@@ -108,7 +108,7 @@ void ShadowMaps::render(const PassContext& context, int size) {
             map.far = 3.0f * radius;
             map.texel_world = 2.0f * radius / static_cast<float>(size);
             map.view_projection = glm::ortho(-radius, radius, -radius, radius, radius * 0.5f, map.far) *
-                                  glm::lookAt(center - direction * (2.0f * radius), center, up_for(direction));
+                                  directional_view(center, direction, 2.0f * radius);
             program.set("u_store_distance", 0);
         }
         render_view(context, program, map.view_projection);

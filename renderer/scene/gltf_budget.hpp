@@ -35,9 +35,9 @@ namespace bounce::scene::gltf {
 //    geometry is not counted, nor the file's own bytes and tinygltf's copy of its buffers, which
 //    its length bounds. Measured with stb_image 2.27, a decode stays within its count but for
 //    those and a few hundred KiB of fixed state.
-// Not bounded here: a PNG whose image data inflates to more than its rows need. stb_image grows its
-// buffer by doubling to hold all of it (up to 4 GiB; a 200 KB file declaring 16 x 16 pixels takes
-// 256 MiB); bounding that needs an inflate pass over the data before decoding.
+// A PNG whose image data inflates to more than its rows need (stb_image would grow its buffer to
+// hold all of it: up to 4 GiB from a file of a few hundred KB) is not decoded: gltf_images.cpp
+// inflates the data into a scratch buffer first and stops past the rows' size.
 // Throws ResourceExhausted naming the total and its largest part when the sum is past
 // `max_scene_bytes`; an image's part is what it holds in the peak phase.
 void check_scene_size(const tinygltf::Model& model, const LoadContext& context,

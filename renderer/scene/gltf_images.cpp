@@ -2,13 +2,24 @@
 
 #include "renderer/scene/gltf_validation.hpp"
 
+#include <zlib.h>
+
 #include <algorithm>
+#include <array>
 #include <climits>
 #include <cstring>
 #include <span>
 
 namespace bounce::scene::gltf {
 namespace {
+
+std::uint64_t be16(std::span<const unsigned char> bytes, std::size_t at) {
+    return std::uint64_t{bytes[at]} << 8 | bytes[at + 1];
+}
+
+std::uint64_t be32(std::span<const unsigned char> bytes, std::size_t at) {
+    return be16(bytes, at) << 16 | be16(bytes, at + 2);
+}
 
 // The bytes of image `index` as tinygltf had them: its bufferView's, or its URI's decoded again.
 // Empty when they cannot be had again.
@@ -57,6 +68,52 @@ bool png_chunks_inside(std::span<const unsigned char> bytes) {
     return true;  // a cut-off chunk header: the decoder fails on it without allocating
 }
 
+// What a PNG's image data may inflate to: a filter byte and the packed samples of every row. Adam7
+// passes hold the pixels once between them and add a filter byte and at most one partial byte to
+// each of their rows, fewer than 2 height + 7 rows in all.
+std::uint64_t png_inflated_limit(const ImageHeader& header) {
+    const std::uint64_t row_bytes = (header.width * static_cast<std::uint64_t>(header.channels * header.bit_depth) + 7) / 8;
+    const std::uint64_t rows = header.height * (1 + row_bytes);
+    return header.interlaced ? rows + 2 * (2 * header.height + 7) : rows;
+}
+
+// Whether the IDAT chunks inflate to no more than the rows need. stb_image grows its buffer by
+// doubling until all of the data fits, so a small file whose data inflates far past its declared
+// rows would allocate outside the budget (up to 4 GiB); inflating into a small scratch buffer
+// first costs time, no memory. Chunks are inside the bytes (png_chunks_inside).
+bool png_inflates_within(std::span<const unsigned char> bytes, const ImageHeader& header) {
+    const std::uint64_t limit = png_inflated_limit(header);
+    z_stream stream{};
+    if (inflateInit(&stream) != Z_OK) return false;
+    std::array<unsigned char, 1 << 16> scratch{};
+    std::uint64_t inflated = 0;
+    bool within = true, ended = false;
+    for (std::size_t at = 8; within && !ended && bytes.size() - at >= 12;) {
+        const std::uint64_t length = be32(bytes, at);
+        const bool image_data = std::memcmp(bytes.data() + at + 4, "IDAT", 4) == 0;
+        if (std::memcmp(bytes.data() + at + 4, "IEND", 4) == 0) break;
+        if (image_data) {
+            stream.next_in = const_cast<unsigned char*>(bytes.data() + at + 8);
+            stream.avail_in = static_cast<uInt>(length);
+            while (stream.avail_in > 0 && within) {
+                stream.next_out = scratch.data();
+                stream.avail_out = static_cast<uInt>(scratch.size());
+                const int status = inflate(&stream, Z_NO_FLUSH);
+                inflated += scratch.size() - stream.avail_out;
+                within = inflated <= limit;
+                if (status == Z_STREAM_END) {
+                    ended = true;
+                    break;
+                }
+                if (status != Z_OK) break;  // corrupt data: the decoder fails on it
+            }
+        }
+        at += 12 + static_cast<std::size_t>(length);
+    }
+    inflateEnd(&stream);
+    return within;
+}
+
 // Decodes one image into `image` (tinygltf's defaults: every image expanded to four channels); the
 // reason it has no pixels otherwise.
 std::optional<std::string> decode(tinygltf::Image& image, int index, const ImageHeader& header,
@@ -65,6 +122,10 @@ std::optional<std::string> decode(tinygltf::Image& image, int index, const Image
     // The decoder takes the length as an int.
     if (bytes.size() > static_cast<std::size_t>(INT_MAX)) return "the encoded image is over 2 GiB";
     if (!png_chunks_inside(bytes)) return "a PNG chunk runs past the end of the image";
+    if (header.format == ImageHeader::Format::png && !png_inflates_within(bytes, header)) {
+        return fmt::format("its image data inflates past the {} bytes its {}x{} pixels need", png_inflated_limit(header),
+                           header.width, header.height);
+    }
     // The budget counted what decoding the header it read costs; a file read again may have
     // changed since.
     std::string why;
@@ -94,13 +155,6 @@ std::optional<std::string> decode(tinygltf::Image& image, int index, const Image
 
 namespace {
 
-std::uint64_t be16(std::span<const unsigned char> bytes, std::size_t at) {
-    return std::uint64_t{bytes[at]} << 8 | bytes[at + 1];
-}
-
-std::uint64_t be32(std::span<const unsigned char> bytes, std::size_t at) {
-    return be16(bytes, at) << 16 | be16(bytes, at + 2);
-}
 
 // The IHDR chunk, which must come first, and of the chunks after it what the decoder's allocations
 // depend on: the IDAT chunks' lengths and whether there is a tRNS chunk. Only what stb_image

@@ -14,8 +14,7 @@
 // there is none) has a finite positive far plane and finite view and projection matrices at every
 // aspect a frame can have, every light a usable direction, a finite radiant intensity and (when
 // the scene has anything in it) a finite far plane and finite views, as the shadow and light-view
-// maps build them, and there are at most kMaxLights lights. One known fault outside the scene code
-// is let pass until it is fixed (directional_eye_collapses).
+// maps build them, and there are at most kMaxLights lights.
 //
 // A request may fail only with what the daemon answers as a client fault: protocol::ProtocolError
 // (FieldError included), server::RequestError or bounce::InputError (ResourceExhausted included).
@@ -132,17 +131,6 @@ void check_camera(const scene::Camera& camera, const scene::Aabb& bounds, const 
     }
 }
 
-// A known fault outside the scene code, not checked until it is fixed: the view of a directional
-// light (renderer/passes, light_views and ShadowMaps::render) looks from center - direction * 2r to
-// the centre of the scene's bounds, r their radius; for a scene small against its distance from the
-// origin (a 1 mm object 30 km out, reachable with object.set_transform) that difference rounds to
-// zero and glm::lookAt makes a NaN view. Whether this light's eye rounds onto the centre so.
-bool directional_eye_collapses(const scene::Light& light, const scene::Aabb& bounds) {
-    const glm::vec3 center = bounds.center();
-    const float radius = std::max(0.5f * glm::length(bounds.extent()), 1e-6f);
-    return center - glm::normalize(light.direction) * (2.0f * radius) == center;
-}
-
 // What a render relies on in the scene it draws (see the top of this file). `after` names what
 // was just done to it.
 void check_renderable(const scene::Scene& scene, const std::string& after) {
@@ -168,9 +156,6 @@ void check_renderable(const scene::Scene& scene, const std::string& after) {
         if (bounds.empty()) continue;
         const float far = scene::far_plane_distance(bounds, light.position);
         if (!(std::isfinite(far) && far > 0.0f)) finding(what + ": its far plane is not finite and positive");
-        if (light.type == scene::LightType::directional && directional_eye_collapses(light, bounds)) {
-            continue;  // known, not fixed here: see directional_eye_collapses
-        }
         for (const auto& view : passes::light_views(light, i, bounds, 1024)) {
             if (!finite(view.view_projection)) finding(what + ": a light view is not finite");
         }

@@ -7,6 +7,7 @@
 #include "renderer/image/codec.hpp"
 
 #include <gtest/gtest.h>
+#include <zlib.h>
 #include <nlohmann/json.hpp>
 
 #include <unistd.h>
@@ -308,6 +309,41 @@ TEST(GltfBudget, ManyImagesOfAHugeDeclaredSizeAreRefusedFromTheirHeaders) {
     EXPECT_TRUE(mentions(result.message, "the largest part is image 0 (16384x16384, 8-bit RGBA PNG) at 2.3 GiB"))
         << result.message;
     EXPECT_LT(growth, max_peak_growth);
+}
+
+// A 16 x 16 RGBA PNG whose image data is `inflated` zero bytes, deflated: 1040 bytes are its rows.
+std::vector<std::uint8_t> png_inflating_to(std::size_t inflated) {
+    std::vector<std::uint8_t> png = png_declaring(16);
+    const std::vector<std::uint8_t> zeros(inflated, 0);
+    uLongf size = compressBound(static_cast<uLong>(zeros.size()));
+    std::vector<std::uint8_t> data(size);
+    EXPECT_EQ(compress2(data.data(), &size, zeros.data(), static_cast<uLong>(zeros.size()), 9), Z_OK);
+    data.resize(size);
+    std::vector<std::uint8_t> chunk;
+    put_u32_be(chunk, static_cast<std::uint32_t>(data.size()));
+    chunk.insert(chunk.end(), {'I', 'D', 'A', 'T'});
+    chunk.insert(chunk.end(), data.begin(), data.end());
+    put_u32_be(chunk, crc32(chunk.data() + 4, chunk.size() - 4));
+    png.insert(png.end() - 12, chunk.begin(), chunk.end());  // before IEND
+    return png;
+}
+
+TEST(GltfBudget, APngWhoseDataInflatesPastItsRowsIsNotDecoded) {
+    // The rows of a 16 x 16 RGBA image take 1040 bytes: that much decodes.
+    const Scene fits = import_glb_memory(glb_with_images(png_inflating_to(16 * (1 + 16 * 4)), 1), "fits");
+    ASSERT_EQ(fits.textures.size(), 1u);
+    EXPECT_EQ(fits.textures[0].width, 16);
+    // 64 MiB of data in a file of about 64 KiB: the decoder would grow its buffer to hold all of it.
+    const std::vector<std::uint8_t> bomb = glb_with_images(png_inflating_to(std::size_t{64} << 20), 1);
+    EXPECT_LT(bomb.size(), 100000u);
+    Scene scene;
+    const std::uint64_t growth = peak_growth([&] { scene = import_glb_memory(bomb, "bomb"); });
+    EXPECT_TRUE(scene.textures.empty());
+    bool warned = false;
+    for (const std::string& warning : scene.warnings) warned |= mentions(warning, "inflates past the 1040 bytes");
+    EXPECT_TRUE(warned);
+    // The check inflates into a 64 KiB scratch buffer; decoding would have taken over 64 MiB.
+    EXPECT_LT(growth, std::uint64_t{16} << 20);
 }
 
 TEST(GltfBudget, OneHugeDeclaredImageWithinTheBudgetIsOnlyDecoded) {
