@@ -1,6 +1,7 @@
 // bounced against hostile and careless clients: connections that never authenticate, bodies
 // announced but not sent, budgets, shutdown under load, what errors reveal.
 #include "daemon_support.hpp"
+#include "support/hostile_gltf.hpp"
 
 #include <boost/asio.hpp>
 
@@ -234,6 +235,36 @@ TEST(DaemonHardening, LongBakesHoldNoOtherFramesAndStopWhenNoLongerWanted) {
         ASSERT_EQ(next_for(baker, 203).type, static_cast<std::uint16_t>(MessageType::progress));
     }  // the client disconnects mid-bake
     EXPECT_LT(cpu_seconds_a_second_later(daemon), 0.25) << "the abandoned bake kept running";
+    expect_still_serving(daemon.endpoint(), baseline);
+}
+
+// The three hostile uploads of the attack table, against a real daemon with its default budgets:
+// JSON nested 300,000 deep (a stack overflow in a recursive parser), a 300-byte GLB whose accessor
+// without a bufferView decodes to 44 GiB, and 32 images sharing one PNG that declares 16384^2. Each
+// is refused naming its fault, the daemon's peak resident memory rises by less than 64 MiB (the
+// uploads themselves are under 1 MiB; the attacks took 15 GiB), and it keeps serving.
+TEST(DaemonHardening, HostileUploadsAreRefusedWithoutTheirMemory) {
+    DaemonProcess daemon;
+    const auto baseline = cornell_frame(daemon.endpoint());
+    const long started_kb = daemon.peak_resident_kb();
+    Client client(daemon.endpoint());
+    const auto refused = [&](const std::vector<std::uint8_t>& glb, ErrorCode code, const std::string& says) {
+        try {
+            client.request(MessageType::scene_load, {{"name", "hostile"}}, glb);
+            ADD_FAILURE() << "loaded: " << says;
+        } catch (const ServerError& error) {
+            EXPECT_EQ(error.code(), code) << error.what();
+            EXPECT_NE(std::string(error.what()).find(says), std::string::npos) << error.what();
+        }
+    };
+    refused(hostile::make_glb(hostile::deeply_nested(300000)), ErrorCode::bad_request, "more than 128 levels deep");
+    refused(hostile::make_glb(R"({"asset":{"version":"2.0"},"accessors":[{"componentType":5126,"count":268435455,)"
+                              R"("type":"VEC3"}],"meshes":[{"primitives":[{"attributes":{"POSITION":0}},)"
+                              R"({"attributes":{"POSITION":0}},{"attributes":{"POSITION":0}},{"attributes":{"POSITION":0}}]}]})"),
+            ErrorCode::resource_exhausted, "accessor 0 (POSITION of 4 primitives)");
+    refused(hostile::glb_with_images(hostile::png_declaring(16384), 32), ErrorCode::resource_exhausted,
+            "image 0 (16384x16384");
+    EXPECT_LT(daemon.peak_resident_kb() - started_kb, 64 * 1024);
     expect_still_serving(daemon.endpoint(), baseline);
 }
 
