@@ -78,6 +78,16 @@ Renderer::~Renderer() {
 }
 
 std::unique_ptr<SceneResources> Renderer::upload(const scene::Scene& scene) {
+    if (budget_.bytes > 0) {
+        const std::uint64_t needed = gpu::GpuScene::bytes_for(scene), held = resident_bytes();
+        if (held + needed > budget_.bytes) {
+            throw ResourceExhausted(fmt::format(
+                "scene '{}' would hold {} on the GPU (geometry, and textures with their mipmaps), past the memory "
+                "budget of {} ({}) with {} already resident: unload a scene first",
+                scene.name, gpu::format_bytes(needed), gpu::format_bytes(budget_.bytes), budget_.source,
+                gpu::format_bytes(held)));
+        }
+    }
     auto resources = std::make_unique<SceneResources>(scene);
     resources->live_ = &live_scenes_;
     live_scenes_.insert(resources.get());

@@ -60,6 +60,22 @@ Texture upload(const scene::Texture& source) {
 
 }  // namespace
 
+std::uint64_t GpuScene::bytes_for(const scene::Scene& scene) {
+    std::uint64_t bytes = 0;
+    for (const scene::Mesh& mesh : scene.meshes)
+        for (const scene::Primitive& primitive : mesh.primitives)
+            bytes += primitive.positions.size() * sizeof(Vertex) + primitive.indices.size() * sizeof(std::uint32_t);
+    for (const scene::Texture& texture : scene.textures) {
+        if (texture.width <= 0 || texture.height <= 0 || texture.rgba8.empty()) continue;
+        for (std::uint64_t w = static_cast<std::uint64_t>(texture.width), h = static_cast<std::uint64_t>(texture.height);;
+             w = std::max<std::uint64_t>(1, w / 2), h = std::max<std::uint64_t>(1, h / 2)) {
+            bytes += w * h * 4;
+            if (w == 1 && h == 1) break;
+        }
+    }
+    return bytes;
+}
+
 GpuScene::GpuScene(const scene::Scene& scene) : scene_(&scene) {
     for (const scene::Mesh& mesh : scene.meshes) {
         auto& primitives = meshes_.emplace_back();

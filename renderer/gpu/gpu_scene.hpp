@@ -23,6 +23,9 @@ class GpuScene {
 public:
     // Must be called on the render thread with the context current.
     explicit GpuScene(const scene::Scene& scene);
+    // What the constructor will allocate for `scene`: vertex and index buffers, and every decoded
+    // texture with its full mip chain.
+    static std::uint64_t bytes_for(const scene::Scene& scene);
 
     const scene::Scene& scene() const { return *scene_; }
 

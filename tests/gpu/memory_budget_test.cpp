@@ -4,6 +4,7 @@
 #include "renderer/base/error.hpp"
 #include "renderer/memory_admission.hpp"
 #include "renderer/scene/builtin.hpp"
+#include "renderer/scene/gltf_import.hpp"
 
 #include <gtest/gtest.h>
 
@@ -140,6 +141,27 @@ TEST(MemoryBudget, WhatOtherScenesHoldCountsAndAFrameSizeIsAdvised) {
     }
     first.reset();  // unloading the first scene frees room for the second's frame
     EXPECT_NO_THROW(renderer.render(*second, request));
+}
+
+// A scene's GPU copy is estimated before upload, to the byte (a textured glTF: vertex and index
+// buffers, and its texture with every mip level); past the budget with what is resident, the upload
+// is refused and nothing is allocated.
+TEST(MemoryBudget, ScenesAreCountedBeforeTheyAreUploaded) {
+    Renderer& renderer = shared_renderer();
+    const scene::Scene textured = scene::import_gltf_file("/usr/share/assimp/models/glTF2/BoxTextured-glTF/BoxTextured.gltf");
+    ASSERT_FALSE(textured.textures.empty());
+    const std::uint64_t estimate = gpu::GpuScene::bytes_for(textured);
+    {
+        auto resources = renderer.upload(textured);
+        EXPECT_EQ(resources->resident_bytes(), estimate);
+    }
+    const BudgetScope budget(renderer, renderer.resident_bytes() + estimate - 1);
+    try {
+        renderer.upload(textured);
+        FAIL() << "the upload passed the budget";
+    } catch (const ResourceExhausted& error) {
+        EXPECT_NE(std::string(error.what()).find("unload a scene"), std::string::npos) << error.what();
+    }
 }
 
 }  // namespace
