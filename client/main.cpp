@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
+#include <set>
 #include <fstream>
 #include <iostream>
 #include <map>
@@ -18,6 +20,8 @@ using bounce::protocol::MessageType;
 using nlohmann::json;
 
 constexpr const char* kUsage = R"(usage: bounce [--connect HOST:PORT] [--token-file F] COMMAND ...
+       bounce --version | --help | COMMAND --help
+  (--connect and --token-file default to $BOUNCE_CONNECT and $BOUNCE_TOKEN_FILE, then 127.0.0.1:7878)
   render  --scene S [--method M] [--preset P] [--set KNOB=VALUE ...] [--size WxH]
           [--exposure E] [--tone none|reinhard|aces] [--camera NAME] -o OUT.(png|jpg|exr)
   bake    --scene S [--method cssm] [--preset P] [--set KNOB=VALUE ...]   (progress on stderr)
@@ -33,6 +37,29 @@ constexpr const char* kUsage = R"(usage: bounce [--connect HOST:PORT] [--token-f
 struct UsageError : std::runtime_error {
     using std::runtime_error::runtime_error;
 };
+
+// The options each command takes; any other is a usage error (a typo must not pass silently).
+const std::map<std::string, std::set<std::string>>& command_options() {
+    static const std::set<std::string> frame = {"--scene", "--method", "--preset", "--set", "--size", "--exposure", "--tone"};
+    static const std::map<std::string, std::set<std::string>> options = [] {
+        std::set<std::string> render = frame;
+        render.insert({"--camera", "-o"});
+        return std::map<std::string, std::set<std::string>>{
+            {"render", render},
+            {"bake", frame},
+            {"load", {"--name"}},
+            {"upload", {"--name"}},
+            {"move", {"--scene", "--object", "--translate", "--rotate-deg", "--scale"}},
+            {"light", {"--scene", "--light", "--type", "--position", "--direction", "--color", "--intensity"}},
+            {"describe", {"--scene"}},
+            {"list", {}},
+            {"stats", {}},
+            {"load-test", {"--scene", "--clients", "--frames", "--method", "--size", "--move-every"}}};
+    }();
+    return options;
+}
+
+struct HelpRequested {};
 
 // Flags of one command: --name value pairs (repeatable ones collect), plus positionals.
 struct Args {
@@ -50,11 +77,20 @@ struct Args {
     }
 };
 
-Args parse_args(const std::vector<std::string>& words) {
+Args parse_args(const std::string& command, const std::vector<std::string>& words) {
+    const auto known = command_options().find(command);
+    if (known == command_options().end()) throw UsageError("unknown command '" + command + "'");
     Args args;
     for (std::size_t i = 0; i < words.size(); ++i) {
         const std::string& word = words[i];
+        if (word == "--help" || word == "-h") throw HelpRequested{};
         if (word.rfind("--", 0) == 0 || word == "-o") {
+            if (!known->second.count(word)) {
+                std::string accepted;
+                for (const auto& option : known->second) accepted += (accepted.empty() ? "" : " ") + option;
+                throw UsageError("unknown option " + word + " for " + command +
+                                 (accepted.empty() ? " (it takes none)" : " (it takes: " + accepted + ")"));
+            }
             if (i + 1 >= words.size()) throw UsageError(word + " needs a value");
             args.flags.emplace(word, words[++i]);
         } else {
@@ -205,17 +241,27 @@ int load_test(const bounce::client::Endpoint& endpoint, const std::optional<std:
                          {"seconds", seconds}, {"frames_per_second", latencies.size() / seconds},
                          {"latency_ms", {{"p50", percentile(0.50)}, {"p95", percentile(0.95)},
                                          {"p99", percentile(0.99)}, {"max", latencies.empty() ? 0.0 : latencies.back()}}}};
-    std::cout << report.dump(2) << "\n";
+    std::cout << report.dump() << "\n";
     return error_count == 0 ? 0 : 1;
 }
 
 int run(const std::vector<std::string>& words) {
     bounce::client::Endpoint endpoint;
     std::optional<std::string> token;
+    if (const char* connect = std::getenv("BOUNCE_CONNECT"); connect && *connect) {
+        endpoint = bounce::client::Endpoint::parse(connect);
+    }
+    if (const char* token_file = std::getenv("BOUNCE_TOKEN_FILE"); token_file && *token_file) {
+        token = bounce::protocol::read_token_file(token_file);
+    }
     std::size_t i = 0;
-    for (; i < words.size() && words[i].rfind("--", 0) == 0; i += 2) {
-        if (words[i] == "--help") {
+    for (; i < words.size() && words[i].rfind("-", 0) == 0; i += 2) {
+        if (words[i] == "--help" || words[i] == "-h") {
             std::cout << kUsage;
+            return 0;
+        }
+        if (words[i] == "--version") {
+            std::cout << "bounce " << BOUNCE_VERSION << "\n";
             return 0;
         }
         if (i + 1 >= words.size()) throw UsageError(words[i] + " needs a value");
@@ -229,7 +275,13 @@ int run(const std::vector<std::string>& words) {
     }
     if (i >= words.size()) throw UsageError("no command");
     const std::string command = words[i];
-    const Args args = parse_args({words.begin() + static_cast<std::ptrdiff_t>(i) + 1, words.end()});
+    Args args;
+    try {
+        args = parse_args(command, {words.begin() + static_cast<std::ptrdiff_t>(i) + 1, words.end()});
+    } catch (const HelpRequested&) {
+        std::cout << kUsage;
+        return 0;
+    }
 
     if (command == "load-test") return load_test(endpoint, token, args);
     Client client(endpoint, token);

@@ -139,7 +139,7 @@ protocol::Limits Daemon::limits() const {
 
 nlohmann::json Daemon::hello_body() const {
     const auto l = limits();
-    return {{"server", "bounced/0.1"},
+    return {{"server", "bounced/" BOUNCE_VERSION},
             {"protocol", protocol::kProtocolVersion},
             {"renderer", render_->gpu_info().renderer},
             {"limits", {{"max_json_bytes", l.max_json_bytes}, {"max_attachment_bytes", l.max_attachment_bytes},

@@ -33,6 +33,7 @@ struct Options {
 };
 
 constexpr const char* kUsage = R"(usage: bounced [daemon options]
+       bounced --version
        bounced --render-once OUT.(png|jpg|exr) [render options]
 
 Daemon options:
@@ -114,6 +115,9 @@ Options parse(int argc, char** argv) {
         };
         if (flag == "--help" || flag == "-h") {
             std::fputs(kUsage, stdout);
+            std::exit(0);
+        } else if (flag == "--version") {
+            std::printf("bounced %s\n", BOUNCE_VERSION);
             std::exit(0);
         } else if (flag == "--device") {
             options.device = value();
