@@ -22,8 +22,8 @@ std::string escape_label(std::string_view value) {
 }  // namespace
 
 void Metrics::Histogram::observe(double value) {
-    for (std::size_t i = 0; i < kBucketsMs.size(); ++i) {
-        if (value <= kBucketsMs[i]) ++buckets[i];
+    for (std::size_t i = 0; i < kBuckets.size(); ++i) {
+        if (value <= kBuckets[i]) ++buckets[i];
     }
     ++count;
     sum += value;
@@ -39,11 +39,17 @@ void Metrics::count_error(const std::string& code) {
     ++errors_[code];
 }
 
-void Metrics::count_frame(double render_ms, double total_ms) {
+void Metrics::count_frame(const std::string& method, double render_seconds, double total_seconds) {
     std::lock_guard lock(mutex_);
     ++frames_;
-    render_ms_.observe(render_ms);
-    total_ms_.observe(total_ms);
+    render_seconds_[method].observe(render_seconds);
+    total_seconds_[method].observe(total_seconds);
+}
+
+void Metrics::set_gpu_memory(std::uint64_t budget_bytes, std::uint64_t resident_bytes) {
+    std::lock_guard lock(mutex_);
+    gpu_budget_bytes_ = budget_bytes;
+    gpu_resident_bytes_ = resident_bytes;
 }
 
 void Metrics::set_queue_depth(std::size_t depth) {
@@ -76,18 +82,30 @@ std::map<std::string, std::uint64_t> Metrics::errors() const {
     return errors_;
 }
 
-void Metrics::write_histogram(std::string& out, const char* name, const char* help, const Histogram& histogram) {
+void Metrics::write_histograms(std::string& out, const char* name, const char* help,
+                               const std::map<std::string, Histogram>& by_method) {
     out += fmt::format("# HELP {} {}\n# TYPE {} histogram\n", name, help, name);
-    for (std::size_t i = 0; i < kBucketsMs.size(); ++i) {
-        out += fmt::format("{}_bucket{{le=\"{}\"}} {}\n", name, kBucketsMs[i], histogram.buckets[i]);
+    for (const auto& [method, histogram] : by_method) {
+        const std::string label = escape_label(method);
+        for (std::size_t i = 0; i < kBuckets.size(); ++i) {
+            out += fmt::format("{}_bucket{{method=\"{}\",le=\"{}\"}} {}\n", name, label, kBuckets[i], histogram.buckets[i]);
+        }
+        out += fmt::format("{}_bucket{{method=\"{}\",le=\"+Inf\"}} {}\n{}_sum{{method=\"{}\"}} {}\n{}_count{{method=\"{}\"}} {}\n",
+                           name, label, histogram.count, name, label, histogram.sum, name, label, histogram.count);
     }
-    out += fmt::format("{}_bucket{{le=\"+Inf\"}} {}\n{}_sum {}\n{}_count {}\n", name, histogram.count, name,
-                       histogram.sum, name, histogram.count);
 }
 
 std::string Metrics::prometheus_text() const {
     std::lock_guard lock(mutex_);
     std::string out;
+    out += "# HELP bounce_build_info The daemon's version.\n# TYPE bounce_build_info gauge\n";
+    out += "bounce_build_info{version=\"" BOUNCE_VERSION "\"} 1\n";
+    out += "# HELP bounce_gpu_memory_budget_bytes What every scene's GPU structures may hold (--gpu-memory-budget).\n"
+           "# TYPE bounce_gpu_memory_budget_bytes gauge\n";
+    out += fmt::format("bounce_gpu_memory_budget_bytes {}\n", gpu_budget_bytes_);
+    out += "# HELP bounce_gpu_resident_bytes What every scene's GPU structures hold, after the last frame.\n"
+           "# TYPE bounce_gpu_resident_bytes gauge\n";
+    out += fmt::format("bounce_gpu_resident_bytes {}\n", gpu_resident_bytes_);
     out += "# HELP bounce_frames_total Frames rendered and sent.\n# TYPE bounce_frames_total counter\n";
     out += fmt::format("bounce_frames_total {}\n", frames_);
     out += "# HELP bounce_requests_total Requests received, by message type.\n# TYPE bounce_requests_total counter\n";
@@ -102,8 +120,9 @@ std::string Metrics::prometheus_text() const {
     for (const auto& [scene, bytes] : resident_bytes_) {
         out += fmt::format("bounce_resident_bytes{{scene=\"{}\"}} {}\n", escape_label(scene), bytes);
     }
-    write_histogram(out, "bounce_render_ms", "Render-thread time per frame, milliseconds.", render_ms_);
-    write_histogram(out, "bounce_frame_total_ms", "Receipt to reply per frame, milliseconds.", total_ms_);
+    write_histograms(out, "bounce_render_seconds", "Render time per frame (render thread or CPU pool), seconds.",
+                     render_seconds_);
+    write_histograms(out, "bounce_frame_seconds", "Receipt to reply per frame, seconds.", total_seconds_);
     return out;
 }
 

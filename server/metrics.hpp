@@ -13,7 +13,9 @@ class Metrics {
 public:
     void count_request(const std::string& type);
     void count_error(const std::string& code);
-    void count_frame(double render_ms, double total_ms);
+    // A frame of `method`: its render-thread time and receipt-to-reply time, in seconds.
+    void count_frame(const std::string& method, double render_seconds, double total_seconds);
+    void set_gpu_memory(std::uint64_t budget_bytes, std::uint64_t resident_bytes);
     void set_queue_depth(std::size_t depth);
     void set_resident_bytes(const std::string& scene, std::size_t bytes);
     void forget_scene(const std::string& scene);
@@ -24,15 +26,18 @@ public:
     std::map<std::string, std::uint64_t> errors() const;
 
 private:
-    // Histogram buckets in milliseconds, from interactive to batch latencies.
-    static constexpr std::array<double, 12> kBucketsMs = {1, 2, 5, 10, 20, 50, 100, 200, 500, 1000, 5000, 30000};
+    // Histogram buckets in seconds (Prometheus' base unit), from interactive to batch latencies.
+    static constexpr std::array<double, 12> kBuckets = {0.001, 0.002, 0.005, 0.01, 0.02, 0.05,
+                                                        0.1,   0.2,   0.5,   1,    5,    30};
     struct Histogram {
-        std::array<std::uint64_t, kBucketsMs.size()> buckets{};
+        std::array<std::uint64_t, kBuckets.size()> buckets{};
         std::uint64_t count = 0;
         double sum = 0.0;
         void observe(double value);
     };
-    static void write_histogram(std::string& out, const char* name, const char* help, const Histogram& histogram);
+    // One histogram family, a series per method.
+    static void write_histograms(std::string& out, const char* name, const char* help,
+                                 const std::map<std::string, Histogram>& by_method);
 
     mutable std::mutex mutex_;
     std::map<std::string, std::uint64_t> requests_;
@@ -41,8 +46,9 @@ private:
     std::size_t queue_depth_ = 0;
     std::size_t connections_ = 0;
     std::map<std::string, std::size_t> resident_bytes_;
-    Histogram render_ms_;
-    Histogram total_ms_;
+    std::map<std::string, Histogram> render_seconds_;  // by method
+    std::map<std::string, Histogram> total_seconds_;
+    std::uint64_t gpu_budget_bytes_ = 0, gpu_resident_bytes_ = 0;
 };
 
 }  // namespace bounce::server

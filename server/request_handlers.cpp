@@ -125,6 +125,7 @@ void RequestHandlers::render_on_gpu(const std::shared_ptr<Request>& request, con
     auto result = std::make_shared<const RenderResult>(renderer.render(*entry.resources, frame, request->cancelled.get()));
     clock.rendered = Clock::now();
     daemon_.metrics().set_resident_bytes(order.scene, result->stats.resident_bytes);
+    daemon_.metrics().set_gpu_memory(renderer.memory_budget().bytes, renderer.resident_bytes());
     deliver(request, order, std::move(result), entry.version, clock);
 }
 
@@ -164,7 +165,8 @@ void RequestHandlers::deliver(const std::shared_ptr<Request>& request, const Ren
             auto bytes = image::encode_image(result->frame, format, {order.jpeg_quality, order.exr_half});
             clock.encoded = Clock::now();
             json body = frame_json(*result, scene_version, image::image_format_name(format), clock);
-            daemon_.metrics().count_frame(ms_between(clock.started, clock.rendered), ms_between(clock.received, clock.encoded));
+            daemon_.metrics().count_frame(order.request.method, ms_between(clock.started, clock.rendered) / 1000.0,
+                                          ms_between(clock.received, clock.encoded) / 1000.0);
             request->answer({static_cast<std::uint16_t>(MessageType::frame), request->id(), std::move(body), std::move(bytes)});
         } catch (...) {
             request->fail(std::current_exception());

@@ -27,5 +27,24 @@ TEST(PrometheusText, LabelValuesAreEscaped) {
     EXPECT_TRUE(found) << text;
 }
 
+// Latencies in seconds (Prometheus' base unit), a series per method; the build's version as a label.
+TEST(PrometheusText, FrameTimesAreSecondsByMethodAndTheBuildIsNamed) {
+    Metrics metrics;
+    metrics.count_frame("vct", 0.004, 0.03);
+    metrics.count_frame("reference", 2.0, 2.5);
+    const std::string text = metrics.prometheus_text();
+    for (const std::string expected :
+         {"bounce_build_info{version=\"" BOUNCE_VERSION "\"} 1\n", "# TYPE bounce_render_seconds histogram\n",
+          "bounce_render_seconds_bucket{method=\"vct\",le=\"0.002\"} 0\n",
+          "bounce_render_seconds_bucket{method=\"vct\",le=\"0.005\"} 1\n",
+          "bounce_render_seconds_bucket{method=\"reference\",le=\"1\"} 0\n",
+          "bounce_render_seconds_bucket{method=\"reference\",le=\"5\"} 1\n",
+          "bounce_frame_seconds_bucket{method=\"vct\",le=\"0.05\"} 1\n", "bounce_frame_seconds_count{method=\"reference\"} 1\n",
+          "bounce_frame_seconds_sum{method=\"reference\"} 2.5\n"}) {
+        EXPECT_NE(text.find(expected), std::string::npos) << expected << " not in:\n" << text;
+    }
+    EXPECT_EQ(text.find("_ms"), std::string::npos) << "a metric in milliseconds";
+}
+
 }  // namespace
 }  // namespace bounce::server
