@@ -1,5 +1,6 @@
 #include "renderer/memory_admission.hpp"
 
+#include "renderer/base/bytes.hpp"
 #include "renderer/base/error.hpp"
 #include "renderer/gpu/memory_budget.hpp"
 
@@ -93,13 +94,13 @@ void check_memory_budget(const MemoryCheck& check) {
     // Named when it matters: more than a hundredth of the budget.
     const std::string elsewhere =
         check.held_elsewhere > check.budget / 100 ? fmt::format(", with {} held by resident scenes and methods (unloading scenes frees it)",
-                                               gpu::format_bytes(check.held_elsewhere))
+                                               bytes_text(check.held_elsewhere))
                                  : "";
     throw ResourceExhausted(fmt::format(
         "method '{}' would hold about {} for this frame, past the memory budget of {} ({}){}; the largest structure is "
         "'{}' ({}, sized by {}): {}",
-        check.method.name, gpu::format_bytes(needed), gpu::format_bytes(check.budget), check.budget_source, elsewhere,
-        largest.name, gpu::format_bytes(largest.bytes), largest.scaled_by.empty() ? "the scene" : largest.scaled_by, advice));
+        check.method.name, bytes_text(needed), bytes_text(check.budget), check.budget_source, elsewhere,
+        largest.name, bytes_text(largest.bytes), largest.scaled_by.empty() ? "the scene" : largest.scaled_by, advice));
 }
 
 }  // namespace bounce

@@ -1,5 +1,6 @@
 #include "renderer/renderer.hpp"
 
+#include "renderer/base/bytes.hpp"
 #include "renderer/base/error.hpp"
 #include "renderer/base/log.hpp"
 #include "renderer/memory_admission.hpp"
@@ -84,8 +85,8 @@ std::unique_ptr<SceneResources> Renderer::upload(const scene::Scene& scene) {
             throw ResourceExhausted(fmt::format(
                 "scene '{}' would hold {} on the GPU (geometry, and textures with their mipmaps), past the memory "
                 "budget of {} ({}) with {} already resident: unload a scene first",
-                scene.name, gpu::format_bytes(needed), gpu::format_bytes(budget_.bytes), budget_.source,
-                gpu::format_bytes(held)));
+                scene.name, bytes_text(needed), bytes_text(budget_.bytes), budget_.source,
+                bytes_text(held)));
         }
     }
     auto resources = std::make_unique<SceneResources>(scene);

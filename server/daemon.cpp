@@ -1,5 +1,6 @@
 #include "server/daemon.hpp"
 
+#include "renderer/base/bytes.hpp"
 #include "renderer/base/error.hpp"
 #include "renderer/base/log.hpp"
 #include "renderer/scene/builtin.hpp"
@@ -113,7 +114,7 @@ Daemon::Daemon(DaemonConfig config)
     render_->run_and_wait([this](Renderer& renderer, SceneRegistry& registry) {
         renderer.set_cache_dir(config_.cache_dir);
         if (config_.gpu_memory_budget) renderer.set_memory_budget({*config_.gpu_memory_budget, "--gpu-memory-budget"});
-        log::info("daemon", "GPU memory budget: {} ({})", gpu::format_bytes(renderer.memory_budget().bytes),
+        log::info("daemon", "GPU memory budget: {} ({})", bytes_text(renderer.memory_budget().bytes),
                   renderer.memory_budget().source);
         SceneEntry& entry = registry.put("cornell", scene::make_cornell_box(), "builtin");
         RenderRequest warmup;

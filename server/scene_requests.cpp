@@ -272,28 +272,25 @@ void apply_camera(scene::Scene& scene, const CameraOrder& order) {
 // ------------------------------------------------------------------------------------------------
 // The same on the registry's scenes: each mutation bumps the scene's version.
 
-json set_object_transform(SceneRegistry& registry, const TransformOrder& order) {
+namespace {
+template <typename Order, typename Apply>
+json mutate(SceneRegistry& registry, const Order& order, Apply&& apply) {
     SceneEntry& entry = registry.get(order.scene);
-    apply_transform(*entry.scene, order);
+    apply(*entry.scene, order);
     return mutated(entry);
+}
+}  // namespace
+
+json set_object_transform(SceneRegistry& registry, const TransformOrder& order) {
+    return mutate(registry, order, apply_transform);
 }
 
-json set_light(SceneRegistry& registry, const LightOrder& order) {
-    SceneEntry& entry = registry.get(order.scene);
-    apply_light(*entry.scene, order);
-    return mutated(entry);
-}
+json set_light(SceneRegistry& registry, const LightOrder& order) { return mutate(registry, order, apply_light); }
 
 json remove_light(SceneRegistry& registry, const RemoveLightOrder& order) {
-    SceneEntry& entry = registry.get(order.scene);
-    apply_remove_light(*entry.scene, order);
-    return mutated(entry);
+    return mutate(registry, order, apply_remove_light);
 }
 
-json set_camera(SceneRegistry& registry, const CameraOrder& order) {
-    SceneEntry& entry = registry.get(order.scene);
-    apply_camera(*entry.scene, order);
-    return mutated(entry);
-}
+json set_camera(SceneRegistry& registry, const CameraOrder& order) { return mutate(registry, order, apply_camera); }
 
 }  // namespace bounce::server

@@ -1,5 +1,6 @@
 #include "renderer/gpu/memory_budget.hpp"
 
+#include "renderer/base/bytes.hpp"
 #include "renderer/base/error.hpp"
 #include "renderer/base/log.hpp"
 #include "renderer/gpu/gl.hpp"
@@ -66,11 +67,11 @@ std::uint64_t host_memory() {
 MemoryBudget default_memory_budget(const GpuInfo& info) {
     if (!info.software) {
         if (const auto device = reported_device_memory()) {
-            return {*device / 10 * 9, fmt::format("90% of the {} of device memory the driver reports", format_bytes(*device))};
+            return {*device / 10 * 9, fmt::format("90% of the {} of device memory the driver reports", bytes_text(*device))};
         }
     }
     const std::uint64_t host = host_memory();
-    return {host / 2, fmt::format("half of the {} of host memory{}", format_bytes(host),
+    return {host / 2, fmt::format("half of the {} of host memory{}", bytes_text(host),
                                   info.software ? " (a software rasterizer allocates there)" : " (the driver reports none)")};
 }
 
@@ -86,15 +87,5 @@ void check_out_of_memory(std::string_view work) {
     if (out_of_memory) throw ResourceExhausted(fmt::format("the GPU driver ran out of memory during {}", work));
 }
 
-std::string format_bytes(std::uint64_t bytes) {
-    static const char* units[] = {"B", "KiB", "MiB", "GiB", "TiB", "PiB"};
-    double value = static_cast<double>(bytes);
-    std::size_t unit = 0;
-    while (value >= 1024.0 && unit + 1 < std::size(units)) {
-        value /= 1024.0;
-        ++unit;
-    }
-    return unit == 0 ? fmt::format("{} B", bytes) : fmt::format("{:.{}f} {}", value, value < 10 ? 1 : 0, units[unit]);
-}
 
 }  // namespace bounce::gpu

@@ -34,7 +34,4 @@ MemoryBudget default_memory_budget(const GpuInfo& info);
 // GL_OUT_OF_MEMORY. Other errors are programming faults: logged, not thrown.
 void check_out_of_memory(std::string_view work);
 
-// "1.5 GiB", "640 MiB", "12 KiB", "100 B".
-std::string format_bytes(std::uint64_t bytes);
-
 }  // namespace bounce::gpu

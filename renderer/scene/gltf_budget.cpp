@@ -1,5 +1,7 @@
 #include "renderer/scene/gltf_budget.hpp"
 
+#include "renderer/base/bytes.hpp"
+
 #include "renderer/scene/gltf_images.hpp"
 
 #include <algorithm>
@@ -21,15 +23,6 @@ std::uint64_t times(std::uint64_t a, std::uint64_t b) {
 std::uint64_t plus(std::uint64_t a, std::uint64_t b) {
     std::uint64_t sum = 0;
     return __builtin_add_overflow(a, b, &sum) ? std::numeric_limits<std::uint64_t>::max() : sum;
-}
-
-std::string bytes_text(std::uint64_t bytes) {
-    const auto value = static_cast<double>(bytes);
-    constexpr double kib = 1024.0;
-    if (value >= kib * kib * kib) return fmt::format("{:.1f} GiB", value / (kib * kib * kib));
-    if (value >= kib * kib) return fmt::format("{:.1f} MiB", value / (kib * kib));
-    if (value >= kib) return fmt::format("{:.1f} KiB", value / kib);
-    return fmt::format("{} bytes", bytes);
 }
 
 // ---- images

@@ -99,7 +99,7 @@ TEST(MemoryBudget, ShadowMapsPastTheBudgetAreRefusedWithASizeThatFits) {
     }
     EXPECT_EQ(resources->resident_bytes(), geometry) << "nothing may be allocated for a refused frame";
     EXPECT_NE(message.find("'shadow_maps'"), std::string::npos) << message;
-    EXPECT_NE(message.find("64 MiB"), std::string::npos) << message;
+    EXPECT_NE(message.find("64.0 MiB"), std::string::npos) << message;
     std::smatch match;
     ASSERT_TRUE(std::regex_search(message, match, std::regex("shadow_map_size=([0-9]+) would fit"))) << message;
     const int fits = std::stoi(match[1]);
