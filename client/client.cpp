@@ -1,5 +1,6 @@
 #include "client/client.hpp"
 
+#include <algorithm>
 #include <fstream>
 
 namespace bounce::client {
@@ -12,6 +13,10 @@ Endpoint Endpoint::parse(const std::string& text) {
     if (colon == std::string::npos || colon == 0) throw std::invalid_argument("expected HOST:PORT, got '" + text + "'");
     Endpoint endpoint;
     endpoint.host = text.substr(0, colon);
+    if (endpoint.host.size() >= 2 && endpoint.host.front() == '[' && endpoint.host.back() == ']') {
+        endpoint.host = endpoint.host.substr(1, endpoint.host.size() - 2);
+    }
+    if (endpoint.host.empty()) throw std::invalid_argument("expected HOST:PORT, got '" + text + "'");
     try {
         const int port = std::stoi(text.substr(colon + 1));
         if (port <= 0 || port > 65535) throw std::out_of_range("port");
@@ -22,16 +27,42 @@ Endpoint Endpoint::parse(const std::string& text) {
     return endpoint;
 }
 
+std::string Endpoint::to_string() const {
+    const bool ipv6 = host.find(':') != std::string::npos;
+    return (ipv6 ? "[" + host + "]" : host) + ":" + std::to_string(port);
+}
+
+std::vector<Endpoint> resolve_endpoints(const std::string& connect) {
+    asio::io_context io;
+    asio::ip::tcp::resolver resolver(io);
+    std::vector<Endpoint> endpoints;
+    std::size_t start = 0;
+    while (start <= connect.size()) {
+        const auto comma = connect.find(',', start);
+        const std::string entry = connect.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+        start = comma == std::string::npos ? connect.size() + 1 : comma + 1;
+        if (entry.empty()) throw std::invalid_argument("empty endpoint in '" + connect + "'");
+        const Endpoint named = Endpoint::parse(entry);
+        boost::system::error_code error;
+        const auto results = resolver.resolve(named.host, std::to_string(named.port), error);
+        if (error) throw ConnectionError("cannot resolve " + named.host + ": " + error.message());
+        for (const auto& result : results) {
+            endpoints.push_back({result.endpoint().address().to_string(), result.endpoint().port()});
+        }
+    }
+    std::sort(endpoints.begin(), endpoints.end(),
+              [](const Endpoint& a, const Endpoint& b) { return a.to_string() < b.to_string(); });
+    endpoints.erase(std::unique(endpoints.begin(), endpoints.end()), endpoints.end());
+    return endpoints;
+}
+
 Client::Client(const Endpoint& endpoint, std::optional<std::string> token) : socket_(io_) {
     asio::ip::tcp::resolver resolver(io_);
     boost::system::error_code error;
     const auto endpoints = resolver.resolve(endpoint.host, std::to_string(endpoint.port), error);
-    if (error) throw std::runtime_error("cannot resolve " + endpoint.host + ": " + error.message());
+    if (error) throw ConnectionError("cannot resolve " + endpoint.host + ": " + error.message());
     asio::connect(socket_, endpoints, error);
-    if (error) {
-        throw std::runtime_error("cannot connect to " + endpoint.host + ":" + std::to_string(endpoint.port) + ": " +
-                                 error.message());
-    }
+    if (error) throw ConnectionError("cannot connect to " + endpoint.to_string() + ": " + error.message());
     socket_.set_option(asio::ip::tcp::no_delay(true));
     nlohmann::json body = {{"client", "bounce/0.1"}, {"protocol", protocol::kProtocolVersion}};
     if (token) body["token"] = *token;
@@ -49,7 +80,7 @@ Client::~Client() {
 void Client::send_raw(std::span<const std::uint8_t> bytes) {
     boost::system::error_code error;
     asio::write(socket_, asio::buffer(bytes.data(), bytes.size()), error);
-    if (error) throw std::runtime_error("send failed: " + error.message());
+    if (error) throw ConnectionError("send failed: " + error.message());
 }
 
 protocol::Message Client::read() {
@@ -57,11 +88,11 @@ protocol::Message Client::read() {
         std::array<std::uint8_t, protocol::kHeaderSize> header_bytes{};
         boost::system::error_code error;
         asio::read(socket_, asio::buffer(header_bytes), error);
-        if (error) throw std::runtime_error("connection closed by the daemon: " + error.message());
+        if (error) throw ConnectionError("connection closed by the daemon: " + error.message());
         const protocol::Header header = protocol::decode_header(header_bytes, limits_);
         std::vector<std::uint8_t> body(static_cast<std::size_t>(header.json_length) + header.attachment_length);
         asio::read(socket_, asio::buffer(body), error);
-        if (error) throw std::runtime_error("connection closed mid-frame: " + error.message());
+        if (error) throw ConnectionError("connection closed mid-frame: " + error.message());
         protocol::Message message;
         message.type = header.type;
         message.request_id = header.request_id;

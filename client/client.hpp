@@ -32,12 +32,28 @@ private:
     bool retryable_;
 };
 
+// The daemon could not be reached, or the connection broke: nothing was answered, and another
+// daemon (or a retry later) may serve the request.
+class ConnectionError : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
 struct Endpoint {
     std::string host = "127.0.0.1";
     std::uint16_t port = 7878;
-    // "HOST:PORT"; throws std::invalid_argument naming the problem.
+    // "HOST:PORT" or "[IPV6]:PORT"; throws std::invalid_argument naming the problem.
     static Endpoint parse(const std::string& text);
+    // "HOST:PORT", IPv6 addresses in brackets.
+    std::string to_string() const;
+    bool operator==(const Endpoint&) const = default;
 };
+
+// Every daemon a connect string names: comma-separated HOST:PORT entries, each resolved to all of
+// its addresses (a Kubernetes headless Service's name gives one per pod). Each endpoint's host is
+// a numeric address, so that every client keys a daemon the same way; duplicates removed, sorted.
+// Throws ConnectionError when a name does not resolve, std::invalid_argument when malformed.
+std::vector<Endpoint> resolve_endpoints(const std::string& connect);
 
 class Client {
 public:
@@ -48,7 +64,7 @@ public:
     const nlohmann::json& hello() const { return hello_; }
 
     // Sends a request and returns its reply (`ok`, `frame`, `hello` or `pong`); throws ServerError
-    // for an `error` reply and std::runtime_error when the connection fails. `progress` events of
+    // for an `error` reply and ConnectionError when the connection fails. `progress` events of
     // the request (a bake's) go to `on_progress` when given.
     protocol::Message request(protocol::MessageType type, nlohmann::json body = nlohmann::json::object(),
                               std::vector<std::uint8_t> attachment = {},

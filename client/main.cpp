@@ -1,11 +1,15 @@
 // bounce: the command-line client of bounced (the interface scripts depend on; README lists it).
-#include "client/client.hpp"
+// Arguments are parsed by CLI11: every command answers --help, unknown options are errors and
+// --flag=value works. With several daemons (--connect a:7878,b:7878, or a name that resolves to
+// several addresses) every scene goes to one of them by rendezvous hashing (client/router.hpp).
+#include "client/router.hpp"
+
+#include <CLI/CLI.hpp>
 
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
-#include <set>
 #include <fstream>
 #include <iostream>
 #include <map>
@@ -14,91 +18,25 @@
 
 namespace {
 
-using bounce::client::Client;
+using bounce::client::ConnectionError;
+using bounce::client::Router;
 using bounce::client::ServerError;
+using bounce::protocol::ErrorCode;
 using bounce::protocol::MessageType;
 using nlohmann::json;
 
-constexpr const char* kUsage = R"(usage: bounce [--connect HOST:PORT] [--token-file F] COMMAND ...
-       bounce --version | --help | COMMAND --help
-  (--connect and --token-file default to $BOUNCE_CONNECT and $BOUNCE_TOKEN_FILE, then 127.0.0.1:7878)
-  render  --scene S [--method M] [--preset P] [--set KNOB=VALUE ...] [--size WxH]
-          [--exposure E] [--tone none|reinhard|aces] [--camera NAME] -o OUT.(png|jpg|exr)
-  bake    --scene S [--method cssm] [--preset P] [--set KNOB=VALUE ...]   (progress on stderr)
-  load    PATH --name S
-  upload  FILE.glb --name S
-  move    --scene S --object O [--translate X,Y,Z] [--rotate-deg RX,RY,RZ] [--scale K]
-  light   --scene S --light L [--type point|spot|directional] [--position X,Y,Z]
-          [--direction X,Y,Z] [--color R,G,B] [--intensity I]
-  describe --scene S | list | stats
-  load-test --scene S --clients N --frames M [--method M] [--size WxH] [--move-every K]
-)";
+// Exit codes (README, "The client"): scripts retry 3 and 4, never 1 or 2.
+enum ExitCode : int {
+    kOk = 0,
+    kRefused = 1,      // the daemon refused the request (bad input, not found, ...), or a load test saw errors
+    kUsage = 2,        // the command line is wrong
+    kUnreachable = 3,  // no daemon could be reached, or the connection broke
+    kRetryable = 4,    // the daemon is busy, timed out or shutting down: the same request may succeed later
+};
 
 struct UsageError : std::runtime_error {
     using std::runtime_error::runtime_error;
 };
-
-// The options each command takes; any other is a usage error (a typo must not pass silently).
-const std::map<std::string, std::set<std::string>>& command_options() {
-    static const std::set<std::string> frame = {"--scene", "--method", "--preset", "--set", "--size", "--exposure", "--tone"};
-    static const std::map<std::string, std::set<std::string>> options = [] {
-        std::set<std::string> render = frame;
-        render.insert({"--camera", "-o"});
-        return std::map<std::string, std::set<std::string>>{
-            {"render", render},
-            {"bake", frame},
-            {"load", {"--name"}},
-            {"upload", {"--name"}},
-            {"move", {"--scene", "--object", "--translate", "--rotate-deg", "--scale"}},
-            {"light", {"--scene", "--light", "--type", "--position", "--direction", "--color", "--intensity"}},
-            {"describe", {"--scene"}},
-            {"list", {}},
-            {"stats", {}},
-            {"load-test", {"--scene", "--clients", "--frames", "--method", "--size", "--move-every"}}};
-    }();
-    return options;
-}
-
-struct HelpRequested {};
-
-// Flags of one command: --name value pairs (repeatable ones collect), plus positionals.
-struct Args {
-    std::multimap<std::string, std::string> flags;
-    std::vector<std::string> positional;
-
-    std::optional<std::string> get(const std::string& name) const {
-        const auto it = flags.find(name);
-        return it == flags.end() ? std::nullopt : std::optional(it->second);
-    }
-    std::string require(const std::string& name) const {
-        const auto value = get(name);
-        if (!value) throw UsageError("missing " + name);
-        return *value;
-    }
-};
-
-Args parse_args(const std::string& command, const std::vector<std::string>& words) {
-    const auto known = command_options().find(command);
-    if (known == command_options().end()) throw UsageError("unknown command '" + command + "'");
-    Args args;
-    for (std::size_t i = 0; i < words.size(); ++i) {
-        const std::string& word = words[i];
-        if (word == "--help" || word == "-h") throw HelpRequested{};
-        if (word.rfind("--", 0) == 0 || word == "-o") {
-            if (!known->second.count(word)) {
-                std::string accepted;
-                for (const auto& option : known->second) accepted += (accepted.empty() ? "" : " ") + option;
-                throw UsageError("unknown option " + word + " for " + command +
-                                 (accepted.empty() ? " (it takes none)" : " (it takes: " + accepted + ")"));
-            }
-            if (i + 1 >= words.size()) throw UsageError(word + " needs a value");
-            args.flags.emplace(word, words[++i]);
-        } else {
-            args.positional.push_back(word);
-        }
-    }
-    return args;
-}
 
 double parse_number(const std::string& text, const std::string& what) {
     try {
@@ -125,106 +63,151 @@ std::vector<double> parse_numbers(const std::string& text, std::size_t count, co
 
 std::pair<int, int> parse_size(const std::string& text) {
     int width = 0, height = 0;
-    if (std::sscanf(text.c_str(), "%dx%d", &width, &height) != 2) throw UsageError("--size expects WxH, got '" + text + "'");
+    char end = 0;
+    if (std::sscanf(text.c_str(), "%dx%d%c", &width, &height, &end) != 2) {
+        throw UsageError("--size expects WxH, got '" + text + "'");
+    }
     return {width, height};
 }
 
-std::string format_of(const std::string& path) {
+// The format an output path asks for; `-` (stdout) takes --format, PNG by default.
+std::string format_of(const std::string& path, const std::string& format) {
+    if (!format.empty()) return format == "jpg" ? "jpeg" : format;
+    if (path == "-") return "png";
     const auto dot = path.rfind('.');
     std::string extension = dot == std::string::npos ? "" : path.substr(dot + 1);
     std::transform(extension.begin(), extension.end(), extension.begin(), ::tolower);
     if (extension == "png" || extension == "exr") return extension;
     if (extension == "jpg" || extension == "jpeg") return "jpeg";
-    throw UsageError("-o must end in .png, .jpg or .exr, got '" + path + "'");
+    throw UsageError("-o must end in .png, .jpg or .exr (or be - with --format), got '" + path + "'");
 }
 
-json render_body(const Args& args) {
-    json body = {{"scene", args.require("--scene")}};
-    if (auto v = args.get("--method")) body["method"] = *v;
-    if (auto v = args.get("--preset")) body["preset"] = *v;
-    if (auto v = args.get("--size")) {
-        const auto [w, h] = parse_size(*v);
-        body["width"] = w;
-        body["height"] = h;
+void write_output(const std::string& path, const std::vector<std::uint8_t>& bytes) {
+    if (path == "-") {
+        std::cout.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+        std::cout.flush();
+        if (!std::cout) throw std::runtime_error("cannot write the image to stdout");
+        return;
     }
-    if (auto v = args.get("--exposure")) body["exposure"] = parse_number(*v, "--exposure");
-    if (auto v = args.get("--tone")) body["tone"] = *v;
-    json knobs = json::object();
-    const auto [begin, end] = args.flags.equal_range("--set");
-    for (auto it = begin; it != end; ++it) {
-        const auto equals = it->second.find('=');
-        if (equals == std::string::npos) throw UsageError("--set expects KNOB=VALUE, got '" + it->second + "'");
-        knobs[it->second.substr(0, equals)] = parse_number(it->second.substr(equals + 1), "--set");
-    }
-    if (!knobs.empty()) body["knobs"] = knobs;
-    return body;
-}
-
-void write_file(const std::string& path, const std::vector<std::uint8_t>& bytes) {
     const std::string temporary = path + ".tmp";
     {
         std::ofstream out(temporary, std::ios::binary);
         out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
         if (!out) throw std::runtime_error("cannot write " + path);
     }
-    std::rename(temporary.c_str(), path.c_str());
+    if (std::rename(temporary.c_str(), path.c_str()) != 0) throw std::runtime_error("cannot write " + path);
 }
 
 std::vector<std::uint8_t> read_file(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
-    if (!in) throw std::runtime_error("cannot read " + path);
+    if (!in) throw UsageError("cannot read " + path);
     return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
-int load_test(const bounce::client::Endpoint& endpoint, const std::optional<std::string>& token, const Args& args) {
-    const std::string scene = args.require("--scene");
-    const int clients = static_cast<int>(parse_number(args.require("--clients"), "--clients"));
-    const int frames = static_cast<int>(parse_number(args.require("--frames"), "--frames"));
-    const int move_every = static_cast<int>(parse_number(args.get("--move-every").value_or("0"), "--move-every"));
-    if (clients < 1 || clients > 1024 || frames < 1) throw UsageError("--clients 1..1024 and --frames >= 1");
-    json body = render_body(args);
-    body["format"] = "png";
+// What every frame-producing command takes (render, bake, load-test).
+struct FrameOptions {
+    std::string scene, method, preset, size, tone;
+    double exposure = 0.0;
+    CLI::Option* exposure_given = nullptr;
+    std::vector<std::string> knobs;
 
+    void add_to(CLI::App& command) {
+        command.add_option("--scene", scene, "scene name")->required();
+        command.add_option("--method", method, "direct, vct, isr, cssm or reference");
+        command.add_option("--preset", preset, "draft, low, medium, high or ultra");
+        command.add_option("--set", knobs, "override one knob: KNOB=VALUE (repeatable)")
+            ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+        command.add_option("--size", size, "frame size WxH");
+        exposure_given = command.add_option("--exposure", exposure, "exposure in stops (PNG/JPEG)");
+        command.add_option("--tone", tone, "none, reinhard or aces");
+    }
+
+    json body() const {
+        json body = {{"scene", scene}};
+        if (!method.empty()) body["method"] = method;
+        if (!preset.empty()) body["preset"] = preset;
+        if (!size.empty()) {
+            const auto [w, h] = parse_size(size);
+            body["width"] = w;
+            body["height"] = h;
+        }
+        if (exposure_given && exposure_given->count() > 0) body["exposure"] = exposure;
+        if (!tone.empty()) body["tone"] = tone;
+        json values = json::object();
+        for (const std::string& knob : knobs) {
+            const auto equals = knob.find('=');
+            if (equals == std::string::npos) throw UsageError("--set expects KNOB=VALUE, got '" + knob + "'");
+            values[knob.substr(0, equals)] = parse_number(knob.substr(equals + 1), "--set");
+        }
+        if (!values.empty()) body["knobs"] = values;
+        return body;
+    }
+};
+
+// Where a scene can be loaded from again, for a daemon that does not have it (restarted, or the
+// scene moved when its daemon went down).
+struct SourceOptions {
+    std::string path, file;
+
+    void add_to(CLI::App& command) {
+        auto* path_option = command.add_option("--source", path, "if the daemon lacks the scene, load it from PATH (under its --scene-root)");
+        command.add_option("--source-file", file, "if the daemon lacks the scene, upload FILE.glb")->excludes(path_option);
+    }
+    void apply(Router& router, const std::string& scene) const {
+        if (!path.empty()) router.remember(scene, {path, {}});
+        if (!file.empty()) router.remember(scene, {std::nullopt, read_file(file)});
+    }
+};
+
+struct LoadTestReport {
     std::mutex mutex;
     std::vector<double> latencies;
     std::map<std::string, int> errors;
+};
+
+int load_test(const std::vector<bounce::client::Endpoint>& endpoints, const std::optional<std::string>& token,
+              const FrameOptions& frame, int clients, int frames, int move_every) {
+    json body = frame.body();
+    body["format"] = "png";
     std::string object;
     {
-        Client probe(endpoint, token);
-        const auto description = probe.request(MessageType::scene_describe, {{"name", scene}}).body;
+        Router probe(endpoints, token);
+        const auto description = probe.request(frame.scene, MessageType::scene_describe, {{"name", frame.scene}}).body;
         if (!description["objects"].empty()) object = description["objects"].back()["name"];
     }
+    LoadTestReport report;
     const auto start = std::chrono::steady_clock::now();
     std::vector<std::thread> threads;
     for (int c = 0; c < clients; ++c) {
         threads.emplace_back([&, c] {
             try {
-                Client client(endpoint, token);
+                Router router(endpoints, token);
                 for (int f = 0; f < frames; ++f) {
                     if (move_every > 0 && f % move_every == move_every - 1 && !object.empty()) {
                         const double offset = 0.01 * ((c + f) % 5);
-                        client.request(MessageType::object_set_transform,
-                                       {{"scene", scene}, {"object", object}, {"translation", {offset, 0.0, 0.0}}});
+                        router.request(frame.scene, MessageType::object_set_transform,
+                                       {{"scene", frame.scene}, {"object", object}, {"translation", {offset, 0.0, 0.0}}});
                     }
                     const auto sent = std::chrono::steady_clock::now();
                     try {
-                        client.request(MessageType::render, body);
+                        router.request(frame.scene, MessageType::render, body);
                         const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - sent).count();
-                        std::lock_guard lock(mutex);
-                        latencies.push_back(ms);
+                        std::lock_guard lock(report.mutex);
+                        report.latencies.push_back(ms);
                     } catch (const ServerError& error) {
-                        std::lock_guard lock(mutex);
-                        ++errors[std::string(bounce::protocol::error_code_name(error.code()))];
+                        std::lock_guard lock(report.mutex);
+                        ++report.errors[std::string(bounce::protocol::error_code_name(error.code()))];
                     }
                 }
             } catch (const std::exception& error) {
-                std::lock_guard lock(mutex);
-                ++errors[std::string("connection: ") + error.what()];
+                std::lock_guard lock(report.mutex);
+                ++report.errors[std::string("connection: ") + error.what()];
             }
         });
     }
     for (auto& thread : threads) thread.join();
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    auto& latencies = report.latencies;
     std::sort(latencies.begin(), latencies.end());
     auto percentile = [&](double p) {
         if (latencies.empty()) return 0.0;
@@ -233,123 +216,214 @@ int load_test(const bounce::client::Endpoint& endpoint, const std::optional<std:
     };
     json error_json = json::object();
     int error_count = 0;
-    for (const auto& [code, count] : errors) {
+    for (const auto& [code, count] : report.errors) {
         error_json[code] = count;
         error_count += count;
     }
-    const json report = {{"clients", clients}, {"frames", latencies.size()}, {"errors", error_json},
-                         {"seconds", seconds}, {"frames_per_second", latencies.size() / seconds},
-                         {"latency_ms", {{"p50", percentile(0.50)}, {"p95", percentile(0.95)},
-                                         {"p99", percentile(0.99)}, {"max", latencies.empty() ? 0.0 : latencies.back()}}}};
-    std::cout << report.dump() << "\n";
-    return error_count == 0 ? 0 : 1;
+    const json summary = {{"clients", clients}, {"frames", latencies.size()}, {"errors", error_json},
+                          {"seconds", seconds}, {"frames_per_second", latencies.size() / seconds},
+                          {"latency_ms", {{"p50", percentile(0.50)}, {"p95", percentile(0.95)},
+                                          {"p99", percentile(0.99)}, {"max", latencies.empty() ? 0.0 : latencies.back()}}}};
+    std::cout << summary.dump() << "\n";
+    return error_count == 0 ? kOk : kRefused;
 }
 
-int run(const std::vector<std::string>& words) {
-    bounce::client::Endpoint endpoint;
-    std::optional<std::string> token;
-    if (const char* connect = std::getenv("BOUNCE_CONNECT"); connect && *connect) {
-        endpoint = bounce::client::Endpoint::parse(connect);
+// A request about no one scene, to every daemon: one daemon prints its reply as it is; several
+// print an object keyed by endpoint. Exit 3 when any daemon could not be reached.
+int print_from_every_daemon(Router& router, MessageType type) {
+    const auto answers = router.broadcast(type);
+    int code = kOk;
+    if (answers.size() == 1) {
+        if (const auto* failure = std::get_if<std::string>(&answers.front().reply)) throw ConnectionError(*failure);
+        std::cout << std::get<bounce::protocol::Message>(answers.front().reply).body.dump(2) << "\n";
+        return code;
     }
-    if (const char* token_file = std::getenv("BOUNCE_TOKEN_FILE"); token_file && *token_file) {
-        token = bounce::protocol::read_token_file(token_file);
-    }
-    std::size_t i = 0;
-    for (; i < words.size() && words[i].rfind("-", 0) == 0; i += 2) {
-        if (words[i] == "--help" || words[i] == "-h") {
-            std::cout << kUsage;
-            return 0;
-        }
-        if (words[i] == "--version") {
-            std::cout << "bounce " << BOUNCE_VERSION << "\n";
-            return 0;
-        }
-        if (i + 1 >= words.size()) throw UsageError(words[i] + " needs a value");
-        if (words[i] == "--connect") {
-            endpoint = bounce::client::Endpoint::parse(words[i + 1]);
-        } else if (words[i] == "--token-file") {
-            token = bounce::protocol::read_token_file(words[i + 1]);
+    json all = json::object();
+    for (const auto& answer : answers) {
+        if (const auto* failure = std::get_if<std::string>(&answer.reply)) {
+            all[answer.endpoint.to_string()] = {{"error", *failure}};
+            code = kUnreachable;
         } else {
-            throw UsageError("unknown option " + words[i]);
+            all[answer.endpoint.to_string()] = std::get<bounce::protocol::Message>(answer.reply).body;
         }
     }
-    if (i >= words.size()) throw UsageError("no command");
-    const std::string command = words[i];
-    Args args;
+    std::cout << all.dump(2) << "\n";
+    return code;
+}
+
+int run(int argc, char** argv) {
+    CLI::App app{"bounce: the client of bounced, the Bounce render daemon (docs/protocol.md)", "bounce"};
+    app.require_subcommand(1);
+    app.fallthrough();  // --connect and --token-file may follow the command too
+    // A flag given twice takes its last value, so scripts can append to a default command line.
+    app.option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
+    app.footer(
+        "Exit codes: 0 done; 1 refused by the daemon (or a load test saw errors); 2 usage error;\n"
+        "3 no daemon reachable or the connection broke; 4 busy, timeout or shutting down (retry later).");
+
+    std::string connect = "127.0.0.1:7878";
+    if (const char* value = std::getenv("BOUNCE_CONNECT"); value && *value) connect = value;
+    std::string token_file;
+    if (const char* value = std::getenv("BOUNCE_TOKEN_FILE"); value && *value) token_file = value;
+    app.add_option("--connect", connect,
+                   "HOST:PORT[,HOST:PORT...]; a name that resolves to several addresses gives one daemon each "
+                   "[$BOUNCE_CONNECT, else 127.0.0.1:7878]");
+    app.add_option("--token-file", token_file, "file holding the daemons' token [$BOUNCE_TOKEN_FILE]");
+    app.set_version_flag("--version", std::string("bounce ") + BOUNCE_VERSION, "print the version and exit");
+
+    // Each command binds its own options (CLI11 keeps one Option per command).
+    FrameOptions render_frame, bake_frame, test_frame;
+    SourceOptions render_source, bake_source;
+    std::string output, format, camera;
+    auto* render = app.add_subcommand("render", "render a frame to a file (-o -: stdout); prints its stats as JSON");
+    render_frame.add_to(*render);
+    render_source.add_to(*render);
+    render->add_option("-o,--output", output, "OUT.png, OUT.jpg, OUT.exr, or - for stdout")->required();
+    render->add_option("--format", format, "png, jpeg or exr (default: from -o's extension; png for -)")
+        ->check(CLI::IsMember({"png", "jpeg", "jpg", "exr"}));
+    render->add_option("--camera", camera, "one of the scene's named cameras");
+
+    auto* bake = app.add_subcommand("bake", "bake a method's structures (cssm by default), progress on stderr");
+    bake_frame.add_to(*bake);
+    bake_source.add_to(*bake);
+
+    std::string file, name;
+    auto* load = app.add_subcommand("load", "load a scene file by path under the daemon's --scene-root");
+    load->add_option("path", file, "PATH under the scene root")->required();
+    load->add_option("--name", name, "the scene's name")->required();
+    auto* upload = app.add_subcommand("upload", "send a .glb file and load it");
+    upload->add_option("file", file, "FILE.glb")->required();
+    upload->add_option("--name", name, "the scene's name")->required();
+    auto* unload = app.add_subcommand("unload", "drop a scene from its daemon");
+    unload->add_option("--scene", name, "scene name")->required();
+
+    std::string scene, object, light, type, translate, rotate, position, direction, color;
+    double scale = 1.0, intensity = 0.0;
+    auto* move = app.add_subcommand("move", "set an object's transform");
+    move->add_option("--scene", scene, "scene name")->required();
+    move->add_option("--object", object, "object name or index")->required();
+    move->add_option("--translate", translate, "X,Y,Z");
+    move->add_option("--rotate-deg", rotate, "RX,RY,RZ in degrees");
+    auto* scale_given = move->add_option("--scale", scale, "uniform scale");
+
+    auto* light_command = app.add_subcommand("light", "add or change a light");
+    light_command->add_option("--scene", scene, "scene name")->required();
+    light_command->add_option("--light", light, "light name or index")->required();
+    light_command->add_option("--type", type, "point, spot or directional")
+        ->check(CLI::IsMember({"point", "spot", "directional"}));
+    light_command->add_option("--position", position, "X,Y,Z");
+    light_command->add_option("--direction", direction, "X,Y,Z");
+    light_command->add_option("--color", color, "R,G,B");
+    auto* intensity_given = light_command->add_option("--intensity", intensity, "intensity (docs/methods.md, Units)");
+
+    auto* describe = app.add_subcommand("describe", "a scene's objects, lights, cameras and resident structures");
+    describe->add_option("--scene", scene, "scene name")->required();
+    auto* list = app.add_subcommand("list", "the scenes of every daemon");
+    auto* stats = app.add_subcommand("stats", "every daemon's counters");
+
+    int clients = 1, frames = 1, move_every = 0;
+    auto* load_test_command = app.add_subcommand("load-test", "N clients render M frames each; prints one JSON line");
+    test_frame.add_to(*load_test_command);
+    load_test_command->add_option("--clients", clients, "concurrent clients")->required()->check(CLI::Range(1, 1024));
+    load_test_command->add_option("--frames", frames, "frames per client")->required()->check(CLI::Range(1, 1000000));
+    load_test_command->add_option("--move-every", move_every, "move an object every K frames (0: never)")
+        ->check(CLI::Range(0, 1000000));
+
     try {
-        args = parse_args(command, {words.begin() + static_cast<std::ptrdiff_t>(i) + 1, words.end()});
-    } catch (const HelpRequested&) {
-        std::cout << kUsage;
-        return 0;
+        app.parse(argc, argv);
+    } catch (const CLI::RequiredError& error) {
+        // CLI11 reads an unknown command as a stray argument; name it instead.
+        const auto remaining = app.remaining();
+        if (app.get_subcommands().empty() && !remaining.empty()) {
+            throw UsageError("unknown command '" + remaining.front() +
+                             "' (commands: render bake load upload unload move light describe list stats load-test)");
+        }
+        const int code = app.exit(error);
+        return code == 0 ? kOk : kUsage;
+    } catch (const CLI::ParseError& error) {
+        const int code = app.exit(error);
+        return code == 0 ? kOk : kUsage;
     }
 
-    if (command == "load-test") return load_test(endpoint, token, args);
-    Client client(endpoint, token);
-    if (command == "render") {
-        const std::string out = args.require("-o");
-        json body = render_body(args);
-        body["format"] = format_of(out);
-        if (auto camera = args.get("--camera")) body["camera"] = *camera;
-        const auto reply = client.request(MessageType::render, body);
-        write_file(out, reply.attachment);
-        std::cout << reply.body.dump() << "\n";
-    } else if (command == "bake") {
-        json body = render_body(args);
-        if (!args.get("--method")) body["method"] = "cssm";
-        const auto reply = client.request(MessageType::bake, body, {}, [](const json& progress) {
+    std::optional<std::string> token;
+    if (!token_file.empty()) token = bounce::protocol::read_token_file(token_file);
+    std::vector<bounce::client::Endpoint> endpoints;
+    try {
+        endpoints = bounce::client::resolve_endpoints(connect);
+    } catch (const std::invalid_argument& error) {
+        throw UsageError(std::string("--connect: ") + error.what());
+    }
+    if (*load_test_command) return load_test(endpoints, token, test_frame, clients, frames, move_every);
+    Router router(endpoints, token);
+
+    if (*render) {
+        json body = render_frame.body();
+        body["format"] = format_of(output, format);
+        if (!camera.empty()) body["camera"] = camera;
+        render_source.apply(router, render_frame.scene);
+        const auto reply = router.request(render_frame.scene, MessageType::render, body);
+        write_output(output, reply.attachment);
+        (output == "-" ? std::cerr : std::cout) << reply.body.dump() << "\n";
+    } else if (*bake) {
+        json body = bake_frame.body();
+        if (bake_frame.method.empty()) body["method"] = "cssm";
+        bake_source.apply(router, bake_frame.scene);
+        const auto reply = router.request(bake_frame.scene, MessageType::bake, body, {}, [](const json& progress) {
             std::cerr << "bake: " << progress.value("stage", "") << " "
                       << static_cast<int>(100.0 * progress.value("fraction", 0.0)) << "%\n";
         });
         std::cout << reply.body.dump() << "\n";
-    } else if (command == "load" || command == "upload") {
-        if (args.positional.size() != 1) throw UsageError(command + " takes one file");
-        json body = {{"name", args.require("--name")}};
-        std::vector<std::uint8_t> attachment;
-        if (command == "load") {
-            body["path"] = args.positional[0];
-        } else {
-            attachment = read_file(args.positional[0]);
-        }
-        std::cout << client.request(MessageType::scene_load, body, std::move(attachment)).body.dump() << "\n";
-    } else if (command == "move") {
-        json body = {{"scene", args.require("--scene")}, {"object", args.require("--object")}};
-        if (auto v = args.get("--translate")) body["translation"] = parse_numbers(*v, 3, "--translate");
-        if (auto v = args.get("--rotate-deg")) body["rotation_deg"] = parse_numbers(*v, 3, "--rotate-deg");
-        if (auto v = args.get("--scale")) body["scale"] = parse_number(*v, "--scale");
-        std::cout << client.request(MessageType::object_set_transform, body).body.dump() << "\n";
-    } else if (command == "light") {
-        json body = {{"scene", args.require("--scene")}, {"light", args.require("--light")}};
-        if (auto v = args.get("--type")) body["type"] = *v;
-        if (auto v = args.get("--position")) body["position"] = parse_numbers(*v, 3, "--position");
-        if (auto v = args.get("--direction")) body["direction"] = parse_numbers(*v, 3, "--direction");
-        if (auto v = args.get("--color")) body["color"] = parse_numbers(*v, 3, "--color");
-        if (auto v = args.get("--intensity")) body["intensity"] = parse_number(*v, "--intensity");
-        std::cout << client.request(MessageType::light_set, body).body.dump() << "\n";
-    } else if (command == "describe") {
-        std::cout << client.request(MessageType::scene_describe, {{"name", args.require("--scene")}}).body.dump(2) << "\n";
-    } else if (command == "list") {
-        std::cout << client.request(MessageType::scene_list).body.dump(2) << "\n";
-    } else if (command == "stats") {
-        std::cout << client.request(MessageType::stats).body.dump(2) << "\n";
-    } else {
-        throw UsageError("unknown command '" + command + "'");
+    } else if (*load) {
+        std::cout << router.load(name, file).body.dump() << "\n";
+    } else if (*upload) {
+        std::cout << router.upload(name, read_file(file)).body.dump() << "\n";
+    } else if (*unload) {
+        std::cout << router.request(name, MessageType::scene_unload, {{"name", name}}).body.dump() << "\n";
+    } else if (*move) {
+        json body = {{"scene", scene}, {"object", object}};
+        if (!translate.empty()) body["translation"] = parse_numbers(translate, 3, "--translate");
+        if (!rotate.empty()) body["rotation_deg"] = parse_numbers(rotate, 3, "--rotate-deg");
+        if (scale_given->count() > 0) body["scale"] = scale;
+        std::cout << router.request(scene, MessageType::object_set_transform, body).body.dump() << "\n";
+    } else if (*light_command) {
+        json body = {{"scene", scene}, {"light", light}};
+        if (!type.empty()) body["type"] = type;
+        if (!position.empty()) body["position"] = parse_numbers(position, 3, "--position");
+        if (!direction.empty()) body["direction"] = parse_numbers(direction, 3, "--direction");
+        if (!color.empty()) body["color"] = parse_numbers(color, 3, "--color");
+        if (intensity_given->count() > 0) body["intensity"] = intensity;
+        std::cout << router.request(scene, MessageType::light_set, body).body.dump() << "\n";
+    } else if (*describe) {
+        std::cout << router.request(scene, MessageType::scene_describe, {{"name", scene}}).body.dump(2) << "\n";
+    } else if (*list) {
+        return print_from_every_daemon(router, MessageType::scene_list);
+    } else if (*stats) {
+        return print_from_every_daemon(router, MessageType::stats);
     }
-    return 0;
+    return kOk;
+}
+
+bool retryable(const ServerError& error) {
+    return error.retryable() || error.code() == ErrorCode::busy || error.code() == ErrorCode::timeout ||
+           error.code() == ErrorCode::shutting_down;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
     try {
-        return run({argv + 1, argv + argc});
+        return run(argc, argv);
     } catch (const UsageError& error) {
-        std::cerr << "bounce: " << error.what() << "\n\n" << kUsage;
-        return 2;
+        std::cerr << "bounce: " << error.what() << "\nRun with --help for more information.\n";
+        return kUsage;
     } catch (const ServerError& error) {
         std::cerr << "bounce: " << bounce::protocol::error_code_name(error.code()) << ": " << error.what() << "\n";
-        return 1;
+        return retryable(error) ? kRetryable : kRefused;
+    } catch (const ConnectionError& error) {
+        std::cerr << "bounce: " << error.what() << "\n";
+        return kUnreachable;
     } catch (const std::exception& error) {
         std::cerr << "bounce: " << error.what() << "\n";
-        return 1;
+        return kRefused;
     }
 }

@@ -95,6 +95,8 @@ public:
     void request_started();
     void request_finished();
     void forget(Session* session);
+    // Numbers connections in the logs (request ids read CONNECTION-REQUEST).
+    std::uint64_t next_connection_number() { return ++connections_accepted_; }
 
 private:
     void accept();
@@ -124,6 +126,7 @@ private:
     std::set<std::shared_ptr<Session>> sessions_;
     std::deque<std::weak_ptr<Session>> unauthenticated_;  // oldest first
     std::atomic<std::size_t> ops_connections_{0};
+    std::atomic<std::uint64_t> connections_accepted_{0};
     std::chrono::steady_clock::time_point drain_deadline_;
 };
 

@@ -8,10 +8,13 @@
 #include "renderer/scene/gltf_import.hpp"
 #include "server/daemon.hpp"
 
+#include <CLI/CLI.hpp>
+
 #include <cctype>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -32,51 +35,8 @@ struct Options {
     bounce::server::DaemonConfig daemon;
 };
 
-constexpr const char* kUsage = R"(usage: bounced [daemon options]
-       bounced --version
-       bounced --render-once OUT.(png|jpg|exr) [render options]
-
-Daemon options:
-  --listen HOST:PORT        address to serve on (port 0: any free port)   [127.0.0.1:7878]
-  --port-file F             write the bound port (and the ops port) to F once listening
-  --scene-root DIR          scene.load paths resolve inside DIR             [loading by path is off]
-  --cache-dir DIR           where baked structures are cached
-  --token-file F            clients must send this token (required off loopback)
-  --max-clients N           concurrent connections                          [64]
-  --max-message-bytes N     largest frame a client may send                 [268435456]
-  --max-pixels N            largest width*height a render may ask for       [16777216]
-  --max-in-flight N         pending requests per connection                 [8]
-  --queue N                 render jobs waiting across all clients          [64]
-  --metrics-listen HOST:PORT  ops HTTP: /healthz /readyz /metrics           [off]
-  --heartbeat-ms N          ping idle clients; drop them after 3 intervals  [15000]
-  --max-inflight-bytes N    request bodies held across all clients          [1073741824]
-  --max-scene-bytes N       a scene's decoded size (geometry and images)    [2147483648]
-  --max-scenes N            scenes resident at once                         [64]
-  --gpu-memory-budget N     what every scene's GPU structures may hold together; frames that
-                            would pass it are refused (resource_exhausted)  [90% of the device's
-                            memory, or half the host's for a software rasterizer]
-  --max-unauthenticated N   connections yet to authenticate (with a token)  [16]
-  --auth-timeout-ms N       time a connection has to authenticate           [10000]
-  --drain-seconds N         on SIGTERM, finish in-flight work for at most N s, then cancel it;
-                            a second signal exits at once                   [10]
-  --device D                auto, software or an EGL device index           [auto, or $BOUNCE_DEVICE]
-  --log-level L             debug, info, warn, error                        [info]
-Byte counts (the -bytes flags, --gpu-memory-budget) take a K, M, G or T suffix (powers of 1024).
-
-Render options (--render-once renders one frame and exits):
-  --scene NAME|FILE     built-in scene name (cornell) or a .gltf/.glb file   [cornell]
-  --method M            any method, reference included (direct)             [direct]
-  --preset P            draft, low, medium, high, ultra                      [medium]
-  --set KNOB=VALUE      override one knob of the method (repeatable)
-  --size WxH            frame size                                           [512x512]
-  --exposure EV         exposure in stops for PNG/JPEG                       [0]
-  --tone CURVE          none, reinhard, aces                                 [aces]
-  --device D            auto, software or an EGL device index                [auto, or $BOUNCE_DEVICE]
-  --log-level L         debug, info, warn, error                             [info]
-)";
-
 [[noreturn]] void usage_error(const std::string& message) {
-    std::fprintf(stderr, "bounced: %s\n\n%s", message.c_str(), kUsage);
+    std::fprintf(stderr, "bounced: %s\nRun with --help for more information.\n", message.c_str());
     std::exit(2);
 }
 
@@ -104,101 +64,145 @@ unsigned long long bytes(const std::string& flag, const std::string& text, unsig
     return scaled;
 }
 
+// The daemon's limits, read as text and checked after parsing so that each refusal names the flag,
+// its range and the value given (and byte counts take their suffixes).
+struct Limit {
+    const char* flag;
+    const char* help;
+    unsigned long long min, max;
+    bool is_bytes;
+    std::function<void(unsigned long long, bounce::server::DaemonConfig&)> apply;
+    std::string text{};
+};
+
+std::vector<Limit> daemon_limits() {
+    using Config = bounce::server::DaemonConfig;
+    using std::chrono::milliseconds;
+    return {
+        {"--max-clients", "concurrent connections [64]", 1, 100000, false,
+         [](auto v, Config& c) { c.max_clients = v; }},
+        {"--max-message-bytes", "largest frame a client may send [256M]", 1024, 4294967295ull, true,
+         [](auto v, Config& c) { c.max_message_bytes = v; }},
+        {"--max-pixels", "largest width*height a render may ask for [16777216]", 1, 268435456, false,
+         [](auto v, Config& c) { c.max_pixels = v; }},
+        {"--max-in-flight", "pending requests per connection [8]", 1, 1024, false,
+         [](auto v, Config& c) { c.max_in_flight = v; }},
+        {"--queue", "render jobs waiting across all clients [64]", 1, 100000, false,
+         [](auto v, Config& c) { c.queue_capacity = v; }},
+        {"--heartbeat-ms", "ping idle clients; drop them after 3 intervals [15000]", 10, 3600000, false,
+         [](auto v, Config& c) { c.heartbeat = milliseconds(v); }},
+        {"--max-inflight-bytes", "request bodies held across all clients [1G]", 1u << 20, 1ull << 40, true,
+         [](auto v, Config& c) { c.max_inflight_bytes = v; }},
+        {"--max-scene-bytes", "a scene's decoded size, geometry and images [2G]", 1024, 1ull << 40, true,
+         [](auto v, Config& c) { c.max_scene_bytes = v; }},
+        {"--max-scenes", "scenes resident at once [64]", 1, 100000, false, [](auto v, Config& c) { c.max_scenes = v; }},
+        {"--gpu-memory-budget",
+         "what every scene's GPU structures may hold together; frames past it are refused (resource_exhausted) "
+         "[90% of the device's memory, or half the host's for a software rasterizer]",
+         1u << 20, 1ull << 50, true, [](auto v, Config& c) { c.gpu_memory_budget = v; }},
+        {"--max-unauthenticated", "connections yet to authenticate, with a token [16]", 1, 100000, false,
+         [](auto v, Config& c) { c.max_unauthenticated = v; }},
+        {"--auth-timeout-ms", "time a connection has to authenticate [10000]", 10, 3600000, false,
+         [](auto v, Config& c) { c.auth_timeout = milliseconds(v); }},
+        {"--drain-seconds", "on SIGTERM, finish in-flight work for at most N s, then cancel it; a second signal "
+                            "exits at once [10]",
+         0, 3600, false, [](auto v, Config& c) { c.drain_timeout = std::chrono::seconds(v); }},
+    };
+}
+
 Options parse(int argc, char** argv) {
     Options options;
-    std::vector<std::string> args(argv + 1, argv + argc);
-    for (std::size_t i = 0; i < args.size(); ++i) {
-        const std::string& flag = args[i];
-        auto value = [&]() -> const std::string& {
-            if (i + 1 >= args.size()) usage_error(flag + " needs a value");
-            return args[++i];
-        };
-        if (flag == "--help" || flag == "-h") {
-            std::fputs(kUsage, stdout);
-            std::exit(0);
-        } else if (flag == "--version") {
-            std::printf("bounced %s\n", BOUNCE_VERSION);
-            std::exit(0);
-        } else if (flag == "--device") {
-            options.device = value();
-        } else if (flag == "--scene") {
-            options.scene = value();
-        } else if (flag == "--method") {
-            options.method = value();
-        } else if (flag == "--preset") {
-            options.preset = value();
-        } else if (flag == "--set") {
-            const std::string& assignment = value();
-            const auto equals = assignment.find('=');
-            if (equals == std::string::npos) usage_error("--set expects KNOB=VALUE, got '" + assignment + "'");
-            try {
-                options.knobs[assignment.substr(0, equals)] = std::stod(assignment.substr(equals + 1));
-            } catch (const std::exception&) {
-                usage_error("--set " + assignment + ": the value is not a number");
-            }
-        } else if (flag == "--size") {
-            const std::string& size = value();
-            if (std::sscanf(size.c_str(), "%dx%d", &options.width, &options.height) != 2) {
-                usage_error("--size expects WxH, got '" + size + "'");
-            }
-        } else if (flag == "--exposure") {
-            try {
-                options.exposure = std::stof(value());
-            } catch (const std::exception&) {
-                usage_error("--exposure expects a number");
-            }
-        } else if (flag == "--tone") {
-            options.tone = value();
-        } else if (flag == "--render-once") {
-            options.render_once = value();
-        } else if (flag == "--log-level") {
-            bounce::log::set_level(bounce::log::parse_level(value()));
-        } else if (flag == "--listen") {
-            const std::string& listen = value();
-            const auto colon = listen.rfind(':');
-            if (colon == std::string::npos) usage_error("--listen expects HOST:PORT, got '" + listen + "'");
-            options.daemon.listen_host = listen.substr(0, colon);
-            options.daemon.listen_port = static_cast<std::uint16_t>(number(flag, listen.substr(colon + 1), 0, 65535));
-        } else if (flag == "--port-file") {
-            options.daemon.port_file = value();
-        } else if (flag == "--scene-root") {
-            options.daemon.scene_root = value();
-        } else if (flag == "--cache-dir") {
-            options.daemon.cache_dir = value();
-        } else if (flag == "--token-file") {
-            options.daemon.token_file = value();
-        } else if (flag == "--max-clients") {
-            options.daemon.max_clients = number(flag, value(), 1, 100000);
-        } else if (flag == "--max-message-bytes") {
-            options.daemon.max_message_bytes = bytes(flag, value(), 1024, 4294967295ull);
-        } else if (flag == "--max-pixels") {
-            options.daemon.max_pixels = number(flag, value(), 1, 268435456);
-        } else if (flag == "--max-in-flight") {
-            options.daemon.max_in_flight = number(flag, value(), 1, 1024);
-        } else if (flag == "--queue") {
-            options.daemon.queue_capacity = number(flag, value(), 1, 100000);
-        } else if (flag == "--metrics-listen") {
-            options.daemon.metrics_listen = value();
-        } else if (flag == "--max-inflight-bytes") {
-            options.daemon.max_inflight_bytes = bytes(flag, value(), 1u << 20, 1ull << 40);
-        } else if (flag == "--gpu-memory-budget") {
-            options.daemon.gpu_memory_budget = bytes(flag, value(), 1u << 20, 1ull << 50);
-        } else if (flag == "--max-scene-bytes") {
-            options.daemon.max_scene_bytes = bytes(flag, value(), 1024, 1ull << 40);
-        } else if (flag == "--max-scenes") {
-            options.daemon.max_scenes = number(flag, value(), 1, 100000);
-        } else if (flag == "--max-unauthenticated") {
-            options.daemon.max_unauthenticated = number(flag, value(), 1, 100000);
-        } else if (flag == "--auth-timeout-ms") {
-            options.daemon.auth_timeout = std::chrono::milliseconds(number(flag, value(), 10, 3600000));
-        } else if (flag == "--drain-seconds") {
-            options.daemon.drain_timeout = std::chrono::seconds(number(flag, value(), 0, 3600));
-        } else if (flag == "--heartbeat-ms") {
-            options.daemon.heartbeat = std::chrono::milliseconds(number(flag, value(), 10, 3600000));
-        } else {
-            usage_error("unknown flag '" + flag + "'");
+    CLI::App app{"bounced: the Bounce render daemon (docs/protocol.md). With --render-once it renders one frame "
+                 "to a file and exits, with no network at all.",
+                 "bounced"};
+    app.set_version_flag("--version", std::string("bounced ") + BOUNCE_VERSION, "print the version and exit");
+    // A flag given twice takes its last value, so wrappers can append to a default command line.
+    app.option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
+    app.footer("Byte counts (the -bytes flags, --gpu-memory-budget) take a K, M, G or T suffix (powers of 1024).");
+
+    std::string listen, device, log_level = "info", log_format = "text", size;
+    std::string port_file, scene_root, cache_dir, token_file, metrics_listen;
+    std::vector<std::string> knobs;
+    std::vector<Limit> limits = daemon_limits();
+    const char* daemon_group = "Daemon";
+    app.add_option("--listen", listen, "HOST:PORT to serve on (port 0: any free port) [127.0.0.1:7878]")->group(daemon_group);
+    app.add_option("--port-file", port_file, "write the bound port (and the ops port) to F once listening")
+        ->group(daemon_group);
+    app.add_option("--scene-root", scene_root, "scene.load paths resolve inside DIR [loading by path is off]")
+        ->group(daemon_group);
+    app.add_option("--cache-dir", cache_dir, "where baked structures are cached")->group(daemon_group);
+    app.add_option("--token-file", token_file, "clients must send this token (required off loopback)")
+        ->group(daemon_group);
+    app.add_option("--metrics-listen", metrics_listen, "ops HTTP on HOST:PORT: /healthz /readyz /metrics [off]")
+        ->group(daemon_group);
+    for (Limit& limit : limits) {
+        app.add_option(limit.flag, limit.text, limit.help)->type_name(limit.is_bytes ? "BYTES" : "N")->group(daemon_group);
+    }
+    app.add_option("--log-format", log_format, "text, or json: one object a line, with request ids [text]")
+        ->check(CLI::IsMember({"text", "json"}))
+        ->group(daemon_group);
+
+    const char* render_group = "Render once";
+    app.add_option("--render-once", options.render_once, "render one frame to OUT.(png|jpg|exr) and exit")->group(render_group);
+    app.add_option("--scene", options.scene, "built-in scene name (cornell) or a .gltf/.glb file [cornell]")->group(render_group);
+    app.add_option("--method", options.method, "any method, reference included [direct]")->group(render_group);
+    app.add_option("--preset", options.preset, "draft, low, medium, high, ultra [medium]")->group(render_group);
+    app.add_option("--set", knobs, "override one knob of the method: KNOB=VALUE (repeatable)")
+        ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll)->group(render_group);
+    app.add_option("--size", size, "frame size WxH [512x512]")->group(render_group);
+    app.add_option("--exposure", options.exposure, "exposure in stops for PNG/JPEG [0]")->group(render_group);
+    app.add_option("--tone", options.tone, "none, reinhard, aces [aces]")->group(render_group);
+
+    app.add_option("--device", device, "auto, software or an EGL device index [auto, or $BOUNCE_DEVICE]");
+    app.add_option("--log-level", log_level, "debug, info, warn, error [info]")
+        ->check(CLI::IsMember({"debug", "info", "warn", "error"}));
+
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::ParseError& error) {
+        const int code = app.exit(error);
+        std::exit(code == 0 ? 0 : 2);
+    }
+
+    bounce::log::set_level(bounce::log::parse_level(log_level));
+    bounce::log::set_format(bounce::log::parse_format(log_format));
+    if (!device.empty()) options.device = device;
+    if (!listen.empty()) {
+        const auto colon = listen.rfind(':');
+        if (colon == std::string::npos) usage_error("--listen expects HOST:PORT, got '" + listen + "'");
+        options.daemon.listen_host = listen.substr(0, colon);
+        options.daemon.listen_port = static_cast<std::uint16_t>(number("--listen", listen.substr(colon + 1), 0, 65535));
+    }
+    for (const Limit& limit : limits) {
+        if (limit.text.empty()) continue;
+        limit.apply(limit.is_bytes ? bytes(limit.flag, limit.text, limit.min, limit.max)
+                                   : number(limit.flag, limit.text, limit.min, limit.max),
+                    options.daemon);
+    }
+    for (const std::string& assignment : knobs) {
+        const auto equals = assignment.find('=');
+        if (equals == std::string::npos) usage_error("--set expects KNOB=VALUE, got '" + assignment + "'");
+        try {
+            std::size_t end = 0;
+            const std::string value = assignment.substr(equals + 1);
+            options.knobs[assignment.substr(0, equals)] = std::stod(value, &end);
+            if (end != value.size()) throw std::invalid_argument("trailing text");
+        } catch (const std::exception&) {
+            usage_error("--set " + assignment + ": the value is not a number");
         }
     }
+    if (!size.empty()) {
+        char end = 0;
+        if (std::sscanf(size.c_str(), "%dx%d%c", &options.width, &options.height, &end) != 2) {
+            usage_error("--size expects WxH, got '" + size + "'");
+        }
+    }
+    // Empty means "not given" for every path and address (an empty value is no path either).
+    if (!port_file.empty()) options.daemon.port_file = port_file;
+    if (!scene_root.empty()) options.daemon.scene_root = scene_root;
+    if (!cache_dir.empty()) options.daemon.cache_dir = cache_dir;
+    if (!token_file.empty()) options.daemon.token_file = token_file;
+    if (!metrics_listen.empty()) options.daemon.metrics_listen = metrics_listen;
     options.daemon.device = options.device;
     return options;
 }

@@ -56,7 +56,7 @@ void Request::fail(std::exception_ptr error) {
                    std::nullopt};
     }
     if (failure.code == protocol::ErrorCode::internal) {
-        log::error("request", "request {} ({}) failed: {}", id(), type_name(), failure.message);
+        log::error("request", "request {} ({}) failed: {}", log_id, type_name(), failure.message);
     }
     channel_->send_error(id(), failure);
     channel_->end_request(id());

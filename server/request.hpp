@@ -46,6 +46,8 @@ public:
     const protocol::Message& message() const { return message_; }
     std::string_view type_name() const { return protocol::message_type_name(message_.type); }
 
+    // The request's id in logs (log::RequestScope), unique across connections.
+    std::string log_id;
     // Set once admitted (parse_order), before the request is queued.
     std::optional<Order> order;
     const Clock::time_point received = Clock::now();

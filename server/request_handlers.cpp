@@ -1,5 +1,6 @@
 #include "server/request_handlers.hpp"
 
+#include "renderer/base/log.hpp"
 #include "renderer/image/codec.hpp"
 #include "server/daemon.hpp"
 #include "server/scene_requests.hpp"
@@ -67,6 +68,7 @@ void RequestHandlers::admit(const std::shared_ptr<Request>& request) {
 
 // Runs on the render thread.
 void RequestHandlers::execute(const std::shared_ptr<Request>& request, Renderer& renderer, SceneRegistry& registry) {
+    const log::RequestScope scope(request->log_id);
     daemon_.metrics().set_queue_depth(daemon_.render_service().queue_depth());
     try {
         request->check_still_wanted();
@@ -144,6 +146,7 @@ void RequestHandlers::render_on_cpu(const std::shared_ptr<Request>& request, con
     auto slot = std::make_shared<CpuSlot>(daemon_);
     const std::uint64_t version = entry.version;
     boost::asio::post(daemon_.cpu_pool(), [this, request, order, frame, snapshot, version, slot] {
+        const log::RequestScope scope(request->log_id);
         try {
             request->check_still_wanted();
             FrameClock clock{request->received, Clock::now(), {}, {}};
@@ -160,6 +163,7 @@ void RequestHandlers::render_on_cpu(const std::shared_ptr<Request>& request, con
 void RequestHandlers::deliver(const std::shared_ptr<Request>& request, const RenderOrder& order,
                               std::shared_ptr<const RenderResult> result, std::uint64_t scene_version, FrameClock clock) {
     boost::asio::post(daemon_.encode_pool(), [this, request, order, result = std::move(result), scene_version, clock]() mutable {
+        const log::RequestScope scope(request->log_id);
         try {
             const auto format = image::parse_image_format(order.format);
             auto bytes = image::encode_image(result->frame, format, {order.jpeg_quality, order.exr_half});

@@ -22,8 +22,50 @@ Session::Session(Daemon& daemon, asio::ip::tcp::socket socket)
       socket_(std::move(socket)),
       heartbeat_(socket_.get_executor()),
       auth_deadline_(socket_.get_executor()),
-      body_memory_(daemon.inflight_bytes()) {
+      body_memory_(daemon.inflight_bytes()),
+      connection_number_(daemon.next_connection_number()) {
     authorized_ = !daemon_.token().has_value();
+    boost::system::error_code error;
+    const auto remote = socket_.remote_endpoint(error);
+    peer_ = error ? "?" : fmt::format("{}:{}", remote.address().to_string(), remote.port());
+}
+
+std::string Session::log_id(std::uint64_t request_id) const { return fmt::format("{}-{}", connection_number_, request_id); }
+
+void Session::begin_access(const protocol::Message& message) {
+    if (message.type == static_cast<std::uint16_t>(MessageType::ping) ||
+        message.type == static_cast<std::uint16_t>(MessageType::pong)) {
+        return;  // liveness, not requests
+    }
+    Access access;
+    access.type = std::string(protocol::message_type_name(message.type));
+    if (message.body.is_object()) {
+        for (const char* key : {"scene", "name"}) {
+            const auto it = message.body.find(key);
+            if (it != message.body.end() && it->is_string()) {
+                access.scene = it->get<std::string>().substr(0, 256);
+                break;
+            }
+        }
+    }
+    access.bytes_in = protocol::kHeaderSize + message.attachment.size() + message.body.dump().size();
+    access.received = Clock::now();
+    access_.emplace(message.request_id, std::move(access));  // a duplicate id keeps the first
+}
+
+void Session::end_access(std::uint64_t request_id, std::string_view status, std::size_t bytes_out) {
+    const auto it = access_.find(request_id);
+    if (it == access_.end()) return;
+    const Access& access = it->second;
+    if (log::level() <= log::Level::info) {
+        const double ms = std::chrono::duration<double, std::milli>(Clock::now() - access.received).count();
+        log::write(log::Level::info, "access", "request",
+                   {{"request_id", log_id(request_id)}, {"peer", peer_}, {"type", access.type}, {"scene", access.scene},
+                    {"status", std::string(status)}, {"ms", ms},
+                    {"bytes_in", static_cast<std::int64_t>(access.bytes_in)},
+                    {"bytes_out", static_cast<std::int64_t>(bytes_out)}});
+    }
+    access_.erase(it);
 }
 
 void Session::start() {
@@ -153,6 +195,8 @@ void Session::body_complete(const protocol::Header& header) {
 // its error, never escapes the strand.
 void Session::dispatch(protocol::Message message) {
     const std::uint64_t id = message.request_id;
+    begin_access(message);
+    const log::RequestScope scope(log_id(id));
     try {
         daemon_.metrics().count_request(std::string(protocol::message_type_name(message.type)));
         if (!protocol::is_known_message_type(message.type)) {
@@ -239,6 +283,7 @@ void Session::submit(protocol::Message message) {
         return;
     }
     auto request = std::make_shared<Request>(shared_from_this(), std::move(message));
+    request->log_id = log_id(id);
     if (!request->message().attachment.empty()) request->memory = std::move(body_memory_);  // held while it runs
     body_memory_ = ByteBudget::Reservation(daemon_.inflight_bytes());
     pending_[id] = {request->cancelled};
@@ -266,7 +311,7 @@ void Session::finish(std::uint64_t request_id) {
 void Session::fail(std::uint64_t request_id, ErrorCode code, const std::string& message,
                    std::optional<std::string> field) {
     daemon_.metrics().count_error(std::string(protocol::error_code_name(code)));
-    log::debug("session", "request {} error {}: {}", request_id, protocol::error_code_name(code), message);
+    log::debug("session", "request {} error {}: {}", log_id(request_id), protocol::error_code_name(code), message);
     send(protocol::make_error(request_id, code, message, std::move(field)));
 }
 
@@ -281,7 +326,17 @@ void Session::broken_frame(const protocol::ProtocolError& error) {
 
 void Session::send(protocol::Message message) {
     auto bytes = protocol::encode(message);
-    asio::post(socket_.get_executor(), [self = shared_from_this(), bytes = std::move(bytes)]() mutable {
+    // Replies that end a request: everything but progress events and the daemon's own pings.
+    std::string status;
+    switch (static_cast<MessageType>(message.type)) {
+        case MessageType::error: status = message.body.value("code", "error"); break;
+        case MessageType::progress:
+        case MessageType::ping: break;
+        default: status = "ok"; break;
+    }
+    asio::post(socket_.get_executor(), [self = shared_from_this(), bytes = std::move(bytes), status = std::move(status),
+                                        id = message.request_id]() mutable {
+        if (!status.empty()) self->end_access(id, status, bytes.size());
         self->enqueue(std::move(bytes));
     });
 }

@@ -38,6 +38,18 @@ private:
     struct Pending {
         std::shared_ptr<std::atomic<bool>> cancelled;
     };
+    // What the access line of a request says about it, from its arrival to its final reply.
+    struct Access {
+        std::string type;
+        std::string scene;
+        std::size_t bytes_in = 0;
+        Clock::time_point received;
+    };
+    // The request id in logs: connection number and the client's request id, unique in a run.
+    std::string log_id(std::uint64_t request_id) const;
+    void begin_access(const protocol::Message& message);
+    // One access line per request, when its final reply (not progress, not ping) is queued.
+    void end_access(std::uint64_t request_id, std::string_view status, std::size_t bytes_out);
 
     void read_header();
     void read_body(const protocol::Header& header);
@@ -73,6 +85,9 @@ private:
     bool closed_ = false;
     bool authorized_ = false;
     std::map<std::uint64_t, Pending> pending_;
+    std::map<std::uint64_t, Access> access_;
+    const std::uint64_t connection_number_;
+    std::string peer_;
     Clock::time_point last_heard_ = Clock::now();
 };
 

@@ -1,5 +1,6 @@
 #include "daemon_process.hpp"
 
+#include <fcntl.h>
 #include <signal.h>
 #include <spawn.h>
 #include <sys/wait.h>
@@ -17,7 +18,7 @@ extern char** environ;
 
 namespace bounce::test {
 
-DaemonProcess::DaemonProcess(std::vector<std::string> extra) {
+DaemonProcess::DaemonProcess(std::vector<std::string> extra, bool capture_log) {
     std::random_device random;
     directory_ = std::filesystem::temp_directory_path() / ("bounced-test-" + std::to_string(random()));
     std::filesystem::create_directories(directory_);
@@ -28,9 +29,13 @@ DaemonProcess::DaemonProcess(std::vector<std::string> extra) {
     std::vector<char*> argv;
     for (auto& arg : args) argv.push_back(arg.data());
     argv.push_back(nullptr);
-    if (posix_spawn(&pid_, BOUNCED_PATH, nullptr, nullptr, argv.data(), environ) != 0) {
-        throw std::runtime_error("cannot start " + std::string(BOUNCED_PATH));
-    }
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    const std::string log = log_path().string();
+    if (capture_log) posix_spawn_file_actions_addopen(&actions, 2, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    const int spawned = posix_spawn(&pid_, BOUNCED_PATH, &actions, nullptr, argv.data(), environ);
+    posix_spawn_file_actions_destroy(&actions);
+    if (spawned != 0) throw std::runtime_error("cannot start " + std::string(BOUNCED_PATH));
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
     while (std::chrono::steady_clock::now() < deadline) {
         int status = 0;

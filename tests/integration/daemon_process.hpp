@@ -13,8 +13,8 @@ namespace bounce::test {
 class DaemonProcess {
 public:
     // Starts bounced with `extra` flags plus --listen 127.0.0.1:0 and a port file; waits until it
-    // listens (or throws with its exit status).
-    explicit DaemonProcess(std::vector<std::string> extra = {});
+    // listens (or throws with its exit status). With `capture_log` its stderr goes to log_path().
+    explicit DaemonProcess(std::vector<std::string> extra = {}, bool capture_log = false);
     ~DaemonProcess();  // SIGTERM, then SIGKILL after 20 s
 
     client::Endpoint endpoint() const { return {"127.0.0.1", port_}; }
@@ -37,6 +37,7 @@ public:
     void kill_hard();
     bool running() const;
     const std::filesystem::path& directory() const { return directory_; }
+    std::filesystem::path log_path() const { return directory_ / "log"; }
 
 private:
     int pid_ = -1;
