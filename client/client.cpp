@@ -46,7 +46,12 @@ std::vector<Endpoint> resolve_endpoints(const std::string& connect) {
         boost::system::error_code error;
         const auto results = resolver.resolve(named.host, std::to_string(named.port), error);
         if (error) throw ConnectionError("cannot resolve " + named.host + ": " + error.message());
+        // A name with IPv4 addresses gives those only: a dual-stack host is one daemon, and
+        // "localhost" must not add a [::1] the daemon does not listen on.
+        const bool has_ipv4 = std::any_of(results.begin(), results.end(),
+                                          [](const auto& result) { return result.endpoint().address().is_v4(); });
         for (const auto& result : results) {
+            if (result.endpoint().address().is_v4() != has_ipv4) continue;
             endpoints.push_back({result.endpoint().address().to_string(), result.endpoint().port()});
         }
     }

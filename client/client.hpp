@@ -50,8 +50,9 @@ struct Endpoint {
 };
 
 // Every daemon a connect string names: comma-separated HOST:PORT entries, each resolved to all of
-// its addresses (a Kubernetes headless Service's name gives one per pod). Each endpoint's host is
-// a numeric address, so that every client keys a daemon the same way; duplicates removed, sorted.
+// its addresses (a Kubernetes headless Service's name gives one per pod; IPv4 ones only where a
+// name has both families). Each endpoint's host is a numeric address, so that every client keys a
+// daemon the same way; duplicates removed, sorted.
 // Throws ConnectionError when a name does not resolve, std::invalid_argument when malformed.
 std::vector<Endpoint> resolve_endpoints(const std::string& connect);
 

@@ -346,7 +346,13 @@ int run(int argc, char** argv) {
     }
 
     std::optional<std::string> token;
-    if (!token_file.empty()) token = bounce::protocol::read_token_file(token_file);
+    if (!token_file.empty()) {
+        try {
+            token = bounce::protocol::read_token_file(token_file);
+        } catch (const std::exception& error) {
+            throw UsageError(std::string("--token-file: ") + error.what());
+        }
+    }
     std::vector<bounce::client::Endpoint> endpoints;
     try {
         endpoints = bounce::client::resolve_endpoints(connect);

@@ -1,6 +1,7 @@
 #include "client/router.hpp"
 
 #include <algorithm>
+#include <utility>
 
 namespace bounce::client {
 
@@ -121,7 +122,10 @@ protocol::Message Router::request(const std::string& scene, protocol::MessageTyp
     std::string tried;
     for (const Endpoint& endpoint : rendezvous_order(endpoints_, scene)) {
         if (down_.count(endpoint.to_string())) continue;
-        try {
+        // A connection kept from an earlier request may have been closed by the daemon since (its
+        // idle timeout): one fresh connection is tried before the daemon counts as down.
+        bool reused = clients_.count(endpoint.to_string()) != 0;
+        for (;;) try {
             Client& client = connect(endpoint);
             try {
                 auto reply = client.request(type, body, attachment, on_progress);
@@ -140,8 +144,19 @@ protocol::Message Router::request(const std::string& scene, protocol::MessageTyp
                 return reply;
             }
         } catch (const ConnectionError& error) {
+            if (std::exchange(reused, false)) {
+                clients_.erase(endpoint.to_string());
+                continue;
+            }
             mark_down(endpoint);
             tried += (tried.empty() ? "" : "; ") + endpoint.to_string() + ": " + error.what();
+            break;
+        } catch (const ServerError& error) {
+            if (error.code() != protocol::ErrorCode::shutting_down) throw;
+            // Draining before it exits: its scenes go where they will live next.
+            mark_down(endpoint);
+            tried += (tried.empty() ? "" : "; ") + endpoint.to_string() + ": shutting down";
+            break;
         }
     }
     throw ConnectionError("no daemon reachable for scene '" + scene + "' (" + tried + ")");

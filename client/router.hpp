@@ -47,8 +47,9 @@ public:
     // another client).
     void remember(const std::string& scene, SceneSource source);
 
-    // A request about one scene, sent to its daemon. A daemon that cannot be reached is marked
-    // down and the next in the scene's order is tried. When the daemon answers that it has no
+    // A request about one scene, sent to its daemon. A daemon that cannot be reached (after one
+    // fresh connection, when a kept one broke) or that is shutting down is marked down and the
+    // next in the scene's order is tried. When the daemon answers that it has no
     // such scene and the source is known, the scene is loaded there, the scene's recorded changes
     // are applied again, and the request is sent once more. Throws ServerError for the daemon's
     // refusal, ConnectionError when none can be reached.
