@@ -235,17 +235,19 @@ void Daemon::start_metrics_server() {
     }
     metrics_acceptor_.emplace(io_, tcp::endpoint(asio::ip::make_address(host == "localhost" ? "127.0.0.1" : host), port));
     log::info("daemon", "ops HTTP on {}:{} (/healthz /readyz /metrics){}", host, metrics_acceptor_->local_endpoint().port(),
-              needs_token ? ", bearer token required" : "");
+              needs_token ? ", bearer token required for /metrics" : "");
     auto route = [this, needs_token](const http::request<http::string_body>& request) -> std::pair<unsigned, std::string> {
+        // Health needs no token: it tells nothing but up or ready, and orchestrators' HTTP probes
+        // (Kubernetes httpGet, load balancers) cannot carry a secret.
+        const std::string target(request.target());
+        if (target == "/healthz") return {200, "ok\n"};
+        if (target == "/readyz") return ready_ ? std::pair<unsigned, std::string>{200, "ready\n"}
+                                               : std::pair<unsigned, std::string>{503, "not ready\n"};
         if (needs_token) {
             const auto header = request[http::field::authorization];
             const std::string given = header.starts_with("Bearer ") ? std::string(header.substr(7)) : std::string();
             if (!protocol::same_token(given, *token_)) return {401, "unauthorized\n"};
         }
-        const std::string target(request.target());
-        if (target == "/healthz") return {200, "ok\n"};
-        if (target == "/readyz") return ready_ ? std::pair<unsigned, std::string>{200, "ready\n"}
-                                               : std::pair<unsigned, std::string>{503, "not ready\n"};
         if (target == "/metrics") {
             metrics_.set_queue_depth(render_->queue_depth());
             return {200, metrics_.prometheus_text()};

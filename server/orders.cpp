@@ -1,6 +1,7 @@
 #include "server/orders.hpp"
 
 #include "renderer/image/codec.hpp"
+#include "renderer/methods/registry.hpp"
 #include "server/request_error.hpp"
 
 #include <glm/gtc/type_ptr.hpp>
@@ -192,7 +193,20 @@ RenderOrder parse_render(const json& body, std::uint64_t max_pixels) {
     if (const auto version = protocol::get_optional_integer(body, "min_scene_version", 0, INT64_MAX)) {
         order.min_scene_version = static_cast<std::uint64_t>(*version);
     }
-    order.plan = plan_frame(request);  // method, preset, knobs and size, refused here rather than queued
+    // Method, preset, knobs and size, refused here rather than queued, naming the field at fault.
+    try {
+        order.plan = plan_frame(request);
+    } catch (const ResourceExhausted&) {
+        throw;
+    } catch (const InputError& error) {
+        const auto& registry = methods::MethodRegistry::builtin();
+        const auto methods = registry.names();
+        const auto& presets = methods::preset_names();
+        const char* field = std::find(methods.begin(), methods.end(), request.method) == methods.end()   ? "method"
+                            : std::find(presets.begin(), presets.end(), request.preset) == presets.end() ? "preset"
+                                                                                                         : "knobs";
+        throw FieldError(field, error.what());
+    }
     return order;
 }
 

@@ -351,9 +351,11 @@ TEST(Daemon, BadRequestsGetTheRightErrorAndServingContinues) {
     expect_error([&] { client.request(MessageType::render, {{"scene", "cornell"}, {"width", 0}}); },
                  ErrorCode::bad_request, "width");
     expect_error([&] { client.request(MessageType::render, {{"scene", "cornell"}, {"method", "magic"}}); },
-                 ErrorCode::bad_request);
+                 ErrorCode::bad_request, "method");
+    expect_error([&] { client.request(MessageType::render, {{"scene", "cornell"}, {"preset", "best"}}); },
+                 ErrorCode::bad_request, "preset");
     expect_error([&] { client.request(MessageType::render, {{"scene", "cornell"}, {"knobs", {{"bogus", 1}}}}); },
-                 ErrorCode::bad_request);
+                 ErrorCode::bad_request, "knobs");
     expect_error([&] { client.request(MessageType::render, {{"scene", "cornell"}, {"width", 16384}, {"height", 16384}}); },
                  ErrorCode::too_large, "width");
     // NaN cannot be written in JSON; a client sends null or a number past float range instead.

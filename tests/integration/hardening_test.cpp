@@ -269,9 +269,10 @@ TEST(DaemonHardening, HostileUploadsAreRefusedWithoutTheirMemory) {
 }
 
 // One HTTP/1.1 GET on the ops port; the whole response (the daemon closes after it).
-std::string http_get(std::uint16_t port, const std::string& target) {
+std::string http_get(std::uint16_t port, const std::string& target, const std::string& bearer = "") {
     RawConnection connection({"127.0.0.1", port});
-    const std::string request = "GET " + target + " HTTP/1.1\r\nHost: localhost\r\n\r\n";
+    const std::string request = "GET " + target + " HTTP/1.1\r\nHost: localhost\r\n" +
+                                (bearer.empty() ? "" : "Authorization: Bearer " + bearer + "\r\n") + "\r\n";
     connection.send(std::vector<std::uint8_t>(request.begin(), request.end()));
     std::string response;
     std::array<char, 4096> buffer{};
@@ -310,6 +311,25 @@ TEST(DaemonHardening, OpsHttpEscapesLabelsCapsConnectionsAndNeedsATokenOffLoopba
     EXPECT_EQ(http_get(daemon.ops_port(), "/healthz").rfind("HTTP/1.1 200", 0), 0u);
 
     EXPECT_THROW(DaemonProcess({"--metrics-listen", "0.0.0.0:0"}), std::runtime_error);
+}
+
+// Off loopback the metrics need the token as a bearer, but health does not: Kubernetes' HTTP probes
+// cannot send a secret. (Bound to every interface; the test speaks to it on loopback only.)
+TEST(DaemonHardening, OffLoopbackMetricsNeedTheTokenAndHealthDoesNot) {
+    const auto token_file = std::filesystem::temp_directory_path() / ("bounce-ops-token-" + std::to_string(::getpid()));
+    const std::string token = "correct-horse-battery-staple";
+    std::ofstream(token_file) << token << "\n";
+    DaemonProcess daemon({"--token-file", token_file.string(), "--metrics-listen", "0.0.0.0:0"});
+    ASSERT_GT(daemon.ops_port(), 0);
+    EXPECT_EQ(http_get(daemon.ops_port(), "/healthz").rfind("HTTP/1.1 200", 0), 0u);
+    EXPECT_EQ(http_get(daemon.ops_port(), "/readyz").rfind("HTTP/1.1 200", 0), 0u);
+    EXPECT_EQ(http_get(daemon.ops_port(), "/metrics").rfind("HTTP/1.1 401", 0), 0u);
+    EXPECT_EQ(http_get(daemon.ops_port(), "/metrics", "wrong-token-of-some-length").rfind("HTTP/1.1 401", 0), 0u);
+    const std::string metrics = http_get(daemon.ops_port(), "/metrics", token);
+    EXPECT_EQ(metrics.rfind("HTTP/1.1 200", 0), 0u) << metrics.substr(0, 200);
+    EXPECT_NE(metrics.find("bounce_build_info"), std::string::npos);
+    EXPECT_EQ(http_get(daemon.ops_port(), "/nothing", token).rfind("HTTP/1.1 404", 0), 0u);
+    std::filesystem::remove(token_file);
 }
 
 // not_found names the scene asked for and no other client's.

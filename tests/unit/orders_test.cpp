@@ -27,6 +27,17 @@ std::string refused_field(MessageType type, json body) {
     return "";
 }
 
+// A method, preset or knob the registry does not know is refused naming that field.
+TEST(Orders, UnknownMethodPresetAndKnobNameTheirField) {
+    const json render = {{"scene", "s"}};
+    EXPECT_EQ(refused_field(MessageType::render, render), "");
+    EXPECT_EQ(refused_field(MessageType::render, {{"scene", "s"}, {"method", "magic"}}), "method");
+    EXPECT_EQ(refused_field(MessageType::render, {{"scene", "s"}, {"method", "vct"}, {"preset", "best"}}), "preset");
+    EXPECT_EQ(refused_field(MessageType::render, {{"scene", "s"}, {"knobs", {{"bogus", 1}}}}), "knobs");
+    EXPECT_EQ(refused_field(MessageType::render, {{"scene", "s"}, {"method", "vct"}, {"knobs", {{"resolution", 1e9}}}}),
+              "knobs");
+}
+
 TEST(Orders, NumbersHoldAtTheirDocumentedEdgesAndAreRefusedPastThem) {
     const json transform = {{"scene", "s"}, {"object", "o"}};
     auto with = [](json body, const char* field, json value) {
@@ -72,7 +83,7 @@ TEST(Orders, NumbersHoldAtTheirDocumentedEdgesAndAreRefusedPastThem) {
     EXPECT_EQ(refused_field(MessageType::render, with(render, "exposure", 64)), "");
     EXPECT_EQ(refused_field(MessageType::render, with(render, "exposure", 65)), "exposure");
     EXPECT_EQ(refused_field(MessageType::render, with(render, "width", 0)), "width");
-    EXPECT_EQ(refused_field(MessageType::render, with(render, "knobs", {{"spp", 1}})), "(no field)");  // not direct's
+    EXPECT_EQ(refused_field(MessageType::render, with(render, "knobs", {{"spp", 1}})), "knobs");  // not direct's
 }
 
 TEST(Orders, RendersArePlannedAndBakesOfCpuMethodsRefused) {
