@@ -122,6 +122,8 @@ Daemon::Daemon(DaemonConfig config)
         renderer.render(*entry.resources, warmup);
     });
     log::info("daemon", "renderer ready: {}", render_->gpu_info().summary());
+    metrics_.set_identity(render_->gpu_info().renderer, render_->gpu_info().software, config_.queue_capacity,
+                          config_.max_clients);
 }
 
 Daemon::~Daemon() {

@@ -153,7 +153,9 @@ Options parse(int argc, char** argv) {
     app.add_option("--exposure", options.exposure, "exposure in stops for PNG/JPEG [0]")->group(render_group);
     app.add_option("--tone", options.tone, "none, reinhard, aces [aces]")->group(render_group);
 
-    app.add_option("--device", device, "auto, software or an EGL device index [auto, or $BOUNCE_DEVICE]");
+    app.add_option("--device", device,
+                   "auto (a GPU, else the software rasterizer), hardware (a GPU or refuse to start), software, "
+                   "or an EGL device index [auto, or $BOUNCE_DEVICE]");
     app.add_option("--log-level", log_level, "debug, info, warn, error [info]")
         ->check(CLI::IsMember({"debug", "info", "warn", "error"}));
 

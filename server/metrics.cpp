@@ -95,11 +95,25 @@ void Metrics::write_histograms(std::string& out, const char* name, const char* h
     }
 }
 
+void Metrics::set_identity(std::string renderer, bool software, std::size_t queue_capacity, std::size_t max_clients) {
+    std::lock_guard lock(mutex_);
+    renderer_ = std::move(renderer);
+    software_ = software;
+    queue_capacity_ = queue_capacity;
+    max_clients_ = max_clients;
+}
+
 std::string Metrics::prometheus_text() const {
     std::lock_guard lock(mutex_);
     std::string out;
-    out += "# HELP bounce_build_info The daemon's version.\n# TYPE bounce_build_info gauge\n";
-    out += "bounce_build_info{version=\"" BOUNCE_VERSION "\"} 1\n";
+    out += "# HELP bounce_build_info The daemon's version and the renderer it runs on.\n# TYPE bounce_build_info gauge\n";
+    out += fmt::format("bounce_build_info{{version=\"{}\",renderer=\"{}\",software=\"{}\"}} 1\n", BOUNCE_VERSION,
+                       escape_label(renderer_), software_ ? "true" : "false");
+    out += "# HELP bounce_queue_capacity Render jobs that may wait (--queue); past it requests get busy.\n"
+           "# TYPE bounce_queue_capacity gauge\n";
+    out += fmt::format("bounce_queue_capacity {}\n", queue_capacity_);
+    out += "# HELP bounce_max_clients Connections the daemon accepts (--max-clients).\n# TYPE bounce_max_clients gauge\n";
+    out += fmt::format("bounce_max_clients {}\n", max_clients_);
     out += "# HELP bounce_gpu_memory_budget_bytes What every scene's GPU structures may hold (--gpu-memory-budget).\n"
            "# TYPE bounce_gpu_memory_budget_bytes gauge\n";
     out += fmt::format("bounce_gpu_memory_budget_bytes {}\n", gpu_budget_bytes_);

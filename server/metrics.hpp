@@ -20,6 +20,8 @@ public:
     void set_resident_bytes(const std::string& scene, std::size_t bytes);
     void forget_scene(const std::string& scene);
     void set_connections(std::size_t connections);
+    // What the daemon runs on and its configured limits, exported so that alerts need no copy of them.
+    void set_identity(std::string renderer, bool software, std::size_t queue_capacity, std::size_t max_clients);
 
     std::string prometheus_text() const;
     std::uint64_t frames() const;
@@ -49,6 +51,9 @@ private:
     std::map<std::string, Histogram> render_seconds_;  // by method
     std::map<std::string, Histogram> total_seconds_;
     std::uint64_t gpu_budget_bytes_ = 0, gpu_resident_bytes_ = 0;
+    std::string renderer_;
+    bool software_ = false;
+    std::size_t queue_capacity_ = 0, max_clients_ = 0;
 };
 
 }  // namespace bounce::server

@@ -99,6 +99,12 @@ int pick_device(const DeviceChoice& choice, const std::vector<EglDeviceInfo>& de
                 if (d.software) return d.index;
             BOUNCE_FAIL("--device software: no Mesa software EGL device (install libegl-mesa0 and "
                         "libgl1-mesa-dri); found {}", describe_all(devices));
+        case DeviceChoice::Kind::hardware:
+            for (const auto& d : devices)
+                if (!d.software) return d.index;
+            BOUNCE_FAIL("--device hardware: no hardware EGL device (for NVIDIA: the driver's libEGL_nvidia.so.0 "
+                        "and glvnd's 10_nvidia.json; in a container, NVIDIA_DRIVER_CAPABILITIES with graphics); "
+                        "found {}", describe_all(devices));
         case DeviceChoice::Kind::automatic:
             for (const auto& d : devices)
                 if (!d.software) return d.index;
@@ -132,10 +138,11 @@ std::string gl_string(GLenum name) {
 DeviceChoice DeviceChoice::parse(std::string_view text) {
     if (text == "auto") return {};
     if (text == "software") return {Kind::software, -1};
+    if (text == "hardware") return {Kind::hardware, -1};
     int index = -1;
     const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), index);
     if (error != std::errc() || end != text.data() + text.size() || index < 0) {
-        throw InputError(fmt::format("invalid device '{}': expected auto, software or a device index", text));
+        throw InputError(fmt::format("invalid device '{}': expected auto, software, hardware or a device index", text));
     }
     return {Kind::index, index};
 }
@@ -150,6 +157,7 @@ std::string DeviceChoice::to_string() const {
     switch (kind) {
         case Kind::automatic: return "auto";
         case Kind::software: return "software";
+        case Kind::hardware: return "hardware";
         case Kind::index: return std::to_string(index);
     }
     return "auto";

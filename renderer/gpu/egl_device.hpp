@@ -12,11 +12,13 @@ namespace bounce::gpu {
 // Which EGL device to use: `auto` prefers a hardware device and falls back to Mesa's software
 // device; `software` demands the software device; an index picks one device from the enumeration.
 struct DeviceChoice {
-    enum class Kind { automatic, software, index };
+    // hardware: the first device that is not a software rasterizer, or fail (a GPU node whose
+    // driver libraries are missing must not quietly serve from llvmpipe).
+    enum class Kind { automatic, software, hardware, index };
     Kind kind = Kind::automatic;
     int index = -1;
 
-    // Parses "auto", "software" or a device index; throws InputError otherwise.
+    // Parses "auto", "software", "hardware" or a device index; throws InputError otherwise.
     static DeviceChoice parse(std::string_view text);
     // The --device flag when given, else the BOUNCE_DEVICE environment variable, else auto.
     static DeviceChoice resolve(const std::optional<std::string>& flag);

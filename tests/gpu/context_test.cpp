@@ -30,6 +30,7 @@ TEST(Context, IsOpenGl45CoreAndNamesItsRenderer) {
 TEST(Context, DeviceChoiceParsing) {
     EXPECT_EQ(gpu::DeviceChoice::parse("auto").kind, gpu::DeviceChoice::Kind::automatic);
     EXPECT_EQ(gpu::DeviceChoice::parse("software").kind, gpu::DeviceChoice::Kind::software);
+    EXPECT_EQ(gpu::DeviceChoice::parse("hardware").kind, gpu::DeviceChoice::Kind::hardware);
     EXPECT_EQ(gpu::DeviceChoice::parse("3").index, 3);
     EXPECT_THROW(gpu::DeviceChoice::parse("gpu0"), InputError);
     EXPECT_THROW(gpu::DeviceChoice::parse("-1"), InputError);
@@ -41,6 +42,25 @@ TEST(Context, OutOfRangeDeviceIndexNamesWhatWasFound) {
         FAIL() << "device 99 should not exist";
     } catch (const Error& error) {
         EXPECT_NE(std::string(error.what()).find("out of range: found [0]"), std::string::npos) << error.what();
+    }
+    shared_renderer();  // the shared context is still usable afterwards
+}
+
+// --device hardware takes a real GPU or refuses to start, naming what it found: a GPU node whose
+// driver libraries are missing must not serve from the software rasterizer unnoticed.
+TEST(Context, HardwareDeviceIsAGpuOrARefusalNamingWhatWasFound) {
+    const auto& found = shared_renderer().gpu_info().devices_found;
+    const bool any_hardware = std::any_of(found.begin(), found.end(), [](const auto& d) { return !d.software; });
+    if (any_hardware) {
+        EXPECT_FALSE(gpu::EglContext::create(gpu::DeviceChoice::parse("hardware"))->info().software);
+    } else {
+        try {
+            gpu::EglContext::create(gpu::DeviceChoice::parse("hardware"));
+            FAIL() << "no hardware device here, yet --device hardware made a context";
+        } catch (const Error& error) {
+            EXPECT_NE(std::string(error.what()).find("no hardware EGL device"), std::string::npos) << error.what();
+            EXPECT_NE(std::string(error.what()).find("found [0] software"), std::string::npos) << error.what();
+        }
     }
     shared_renderer();  // the shared context is still usable afterwards
 }

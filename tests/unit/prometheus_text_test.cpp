@@ -27,14 +27,17 @@ TEST(PrometheusText, LabelValuesAreEscaped) {
     EXPECT_TRUE(found) << text;
 }
 
-// Latencies in seconds (Prometheus' base unit), a series per method; the build's version as a label.
+// Latencies in seconds (Prometheus' base unit), a series per method; the build's version and
+// renderer as labels; the queue and client limits, so alerts need no copy of the flags.
 TEST(PrometheusText, FrameTimesAreSecondsByMethodAndTheBuildIsNamed) {
     Metrics metrics;
+    metrics.set_identity("llvmpipe (LLVM 15.0.6, 256 bits)", true, 64, 32);
     metrics.count_frame("vct", 0.004, 0.03);
     metrics.count_frame("reference", 2.0, 2.5);
     const std::string text = metrics.prometheus_text();
     for (const std::string expected :
-         {"bounce_build_info{version=\"" BOUNCE_VERSION "\"} 1\n", "# TYPE bounce_render_seconds histogram\n",
+         {"bounce_build_info{version=\"" BOUNCE_VERSION "\",renderer=\"llvmpipe (LLVM 15.0.6, 256 bits)\",software=\"true\"} 1\n",
+          "bounce_queue_capacity 64\n", "bounce_max_clients 32\n", "# TYPE bounce_render_seconds histogram\n",
           "bounce_render_seconds_bucket{method=\"vct\",le=\"0.002\"} 0\n",
           "bounce_render_seconds_bucket{method=\"vct\",le=\"0.005\"} 1\n",
           "bounce_render_seconds_bucket{method=\"reference\",le=\"1\"} 0\n",
