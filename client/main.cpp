@@ -314,7 +314,7 @@ int run(int argc, char** argv) {
     light_command->add_option("--position", position, "X,Y,Z");
     light_command->add_option("--direction", direction, "X,Y,Z");
     light_command->add_option("--color", color, "R,G,B");
-    auto* intensity_given = light_command->add_option("--intensity", intensity, "intensity (docs/methods.md, Units)");
+    auto* intensity_given = light_command->add_option("--intensity", intensity, "candela (point, spot) or lux (directional)");
 
     auto* describe = app.add_subcommand("describe", "a scene's objects, lights, cameras and resident structures");
     describe->add_option("--scene", scene, "scene name")->required();

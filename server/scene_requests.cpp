@@ -3,6 +3,7 @@
 #include "protocol/protocol.hpp"
 #include "renderer/scene/builtin.hpp"
 #include "renderer/scene/gltf_import.hpp"
+#include "renderer/scene/units.hpp"
 #include "server/frame_json.hpp"
 #include "server/request_error.hpp"
 
@@ -44,7 +45,8 @@ json describe_light(const scene::Light& light) {
     static const char* types[] = {"point", "spot", "directional"};
     return {{"name", light.name}, {"type", types[static_cast<int>(light.type)]}, {"position", vec3_json(light.position)},
             {"direction", vec3_json(light.direction)}, {"color", vec3_json(light.color)},
-            {"intensity", light.intensity}, {"inner_cone_deg", glm::degrees(light.inner_cone)},
+            {"intensity", scene::photometric_from_radiometric(light.intensity)},  // cd or lux, as light.set takes
+            {"inner_cone_deg", glm::degrees(light.inner_cone)},
             {"outer_cone_deg", glm::degrees(light.outer_cone)}};
 }
 
@@ -211,12 +213,15 @@ void apply_light(scene::Scene& scene, const LightOrder& order) {
     auto& lights = scene.lights;
     const auto existing = scene.find_light(order.light);
     scene::Light light = existing ? lights[*existing] : scene::Light{};
+    // A new light has glTF's default intensity, 1 cd (or 1 lx): a light set over the protocol means
+    // what the same numbers in a file mean.
+    if (!existing) light.intensity = static_cast<float>(scene::radiometric_from_photometric(1.0));
     light.name = order.light;
     if (order.type) light.type = *order.type;
     if (order.position) light.position = *order.position;
     if (order.direction) light.direction = *order.direction;
     if (order.color) light.color = *order.color;
-    if (order.intensity) light.intensity = *order.intensity;
+    if (order.intensity) light.intensity = static_cast<float>(scene::radiometric_from_photometric(*order.intensity));
     if (order.inner_cone) light.inner_cone = *order.inner_cone;
     if (order.outer_cone) light.outer_cone = *order.outer_cone;
     if (light.inner_cone > light.outer_cone) {

@@ -2,6 +2,7 @@
 
 #include "renderer/scene/gltf_accessors.hpp"
 #include "renderer/scene/mesh_utils.hpp"
+#include "renderer/scene/units.hpp"
 
 #include <glm/gtc/type_ptr.hpp>
 #include <glm/gtx/string_cast.hpp>
@@ -157,6 +158,8 @@ private:
             material.base_color = to_vec(pbr.baseColorFactor, glm::vec4(1.0f), where + " baseColorFactor");
             material.metallic = as_float(pbr.metallicFactor, where + " metallicFactor");
             material.roughness = as_float(pbr.roughnessFactor, where + " roughnessFactor");
+            // Emission in nits (cd/m^2, KHR_materials_emissive_strength's unit for factor times
+            // texture times strength), converted to radiance below.
             material.emissive = to_vec(source.emissiveFactor, glm::vec3(0.0f), where + " emissiveFactor");
             if (const tinygltf::Value* strength =
                     extension_object(source.extensions, "KHR_materials_emissive_strength")) {
@@ -167,6 +170,7 @@ private:
                                        where));
                 }
             }
+            material.emissive *= static_cast<float>(radiometric_from_photometric(1.0));
             if (const tinygltf::Value* specular =
                     extension_object(source.extensions, "KHR_materials_specular")) {
                 material.specular =
@@ -667,13 +671,12 @@ private:
             reject(fmt::format("{} has the color {}, outside [0, {:g}]", what, glm::to_string(light.color),
                                max_light_color));
         }
-        // The number is taken as is and read radiometrically: W/sr for point and spot lights,
-        // W/m^2 for directional ones (KHR_lights_punctual's photometric units are not converted).
+        // KHR_lights_punctual's units: candela for point and spot lights, lux for directional ones.
         if (!(source.intensity >= 0.0 && source.intensity <= max_light_intensity)) {
             reject(fmt::format("{} has the intensity {:g}, outside [0, {:g}]", what, source.intensity,
                                max_light_intensity));
         }
-        light.intensity = static_cast<float>(source.intensity);
+        light.intensity = static_cast<float>(radiometric_from_photometric(source.intensity));
         light.position = glm::vec3(world[3]);
         // The light shines along the node's local -Z.
         light.direction =

@@ -2,11 +2,16 @@
 // blocker's shadow where geometry puts it, and emission. Tolerance: 1% relative at pixel centres
 // (the G-buffer stores positions in float and normals/material in half precision).
 #include "gpu_fixture.hpp"
+#include "renderer/scene/gltf_import.hpp"
 #include "renderer/scene/shading.hpp"
+
+#include <unistd.h>
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <numbers>
 
 namespace bounce::test {
@@ -203,6 +208,52 @@ TEST(DirectAnalytic, DoublingIntensityDoublesRadiance) {
     const auto b = render_scene(doubled.scene, doubled.request);
     for (std::size_t i = 0; i < a.frame.rgba.size(); i += 4) {
         EXPECT_NEAR(b.frame.rgba[i], 2.0f * a.frame.rgba[i], 1e-5f + 1e-5f * a.frame.rgba[i]);
+    }
+}
+
+// Lights as a glTF file gives them, in KHR_lights_punctual's photometric units: a point and a spot
+// light in candela, a sun in lux, converted at 683 lm/W. The closed forms below are written from
+// the file's numbers alone: albedo / pi * (I / 683) cos(theta) / d^2 and albedo / pi * (E / 683)
+// cos(theta). Tolerance as above (1%).
+TEST(DirectAnalytic, FileLightsAreInCandelaAndLux) {
+    const auto path = std::filesystem::temp_directory_path() / ("bounce-lights-" + std::to_string(::getpid()) + ".gltf");
+    std::ofstream(path) << R"({"asset": {"version": "2.0"}, "extensionsUsed": ["KHR_lights_punctual"],
+      "extensions": {"KHR_lights_punctual": {"lights": [
+        {"type": "point", "intensity": 1366},
+        {"type": "spot", "intensity": 2049, "spot": {"innerConeAngle": 0.6, "outerConeAngle": 0.7}},
+        {"type": "directional", "intensity": 2000}]}},
+      "scene": 0, "scenes": [{"nodes": [0, 1, 2]}],
+      "nodes": [
+        {"name": "bulb", "translation": [0.3, 1.0, -0.2], "extensions": {"KHR_lights_punctual": {"light": 0}}},
+        {"name": "torch", "translation": [0.0, 1.0, 0.0], "rotation": [-0.7071067811865476, 0, 0, 0.7071067811865476],
+         "extensions": {"KHR_lights_punctual": {"light": 1}}},
+        {"name": "sun", "rotation": [-0.7071067811865476, 0, 0, 0.7071067811865476],
+         "extensions": {"KHR_lights_punctual": {"light": 2}}}]})";
+    const scene::Scene file = scene::import_gltf_file(path);
+    std::filesystem::remove(path);
+    ASSERT_EQ(file.lights.size(), 3u);
+    const float albedo = 0.5f;
+    const float pi = std::numbers::pi_v<float>;
+    struct Case {
+        const scene::Light& light;
+        glm::vec3 position;  // of the light; unused for the sun
+        float photometric;   // cd or lx, as in the file
+        bool directional;
+    };
+    for (const Case& c : {Case{file.lights[0], {0.3f, 1.0f, -0.2f}, 1366.0f, false},
+                          Case{file.lights[1], {0.0f, 1.0f, 0.0f}, 2049.0f, false},
+                          Case{file.lights[2], {}, 2000.0f, true}}) {
+        const auto setup = plane_under(matte(glm::vec3(albedo)), c.light);
+        const auto result = render_scene(setup.scene, setup.request);
+        const glm::vec3 p = pixel_on_ground(*setup.request.camera, kSize, kSize, 48, 48);
+        float expected = albedo / pi * c.photometric / 683.0f;  // the sun shines straight down
+        if (!c.directional) {
+            const glm::vec3 to_light = c.position - p;
+            const float d2 = glm::dot(to_light, to_light);
+            expected *= to_light.y / std::sqrt(d2) / d2;
+        }
+        EXPECT_NEAR(result.frame.at(48, 48).r, expected, kRelativeTolerance * expected) << c.light.name;
+        expect_matches_closed_form(setup, result);
     }
 }
 

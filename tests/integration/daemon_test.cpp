@@ -1,9 +1,11 @@
 // A real bounced on an ephemeral loopback port, driven through the client library.
 #include "daemon_support.hpp"
+#include "support/hostile_gltf.hpp"
 
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -109,13 +111,72 @@ TEST(Daemon, MovingABlockChangesTheFrameWhereItWasAndIs) {
                  ErrorCode::bad_request, "min_scene_version");
 }
 
+// A matte 2 m square on y = 0 under a 1000 cd point light, seen from above, as a GLB.
+std::vector<std::uint8_t> lit_square_glb() {
+    std::vector<std::uint8_t> bin;
+    const auto put_float = [&](float value) {
+        std::uint32_t bits;
+        std::memcpy(&bits, &value, 4);
+        hostile::put_u32(bin, bits);
+    };
+    for (const float x : {-1.0f, 1.0f})
+        for (const float z : {-1.0f, 1.0f}) {
+            put_float(x), put_float(0.0f), put_float(z);
+        }
+    for (int i = 0; i < 4; ++i) put_float(0.0f), put_float(1.0f), put_float(0.0f);
+    for (const std::uint16_t index : {0, 1, 2, 2, 1, 3}) bin.push_back(index & 0xff), bin.push_back(index >> 8);
+    return hostile::make_glb(R"({"asset": {"version": "2.0"}, "extensionsUsed": ["KHR_lights_punctual"],
+      "extensions": {"KHR_lights_punctual": {"lights": [{"type": "point", "color": [1, 0.8, 0.6], "intensity": 1000}]}},
+      "scene": 0, "scenes": [{"nodes": [0, 1, 2]}],
+      "nodes": [{"name": "square", "mesh": 0},
+                {"name": "bulb", "translation": [0.2, 1.5, -0.3], "extensions": {"KHR_lights_punctual": {"light": 0}}},
+                {"name": "above", "camera": 0, "translation": [0, 3, 0],
+                 "rotation": [-0.7071067811865476, 0, 0, 0.7071067811865476]}],
+      "cameras": [{"type": "perspective", "perspective": {"yfov": 0.7, "znear": 0.1}}],
+      "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "NORMAL": 1}, "indices": 2, "material": 0}]}],
+      "materials": [{"pbrMetallicRoughness": {"baseColorFactor": [0.6, 0.6, 0.6, 1], "metallicFactor": 0, "roughnessFactor": 1}}],
+      "buffers": [{"byteLength": 108}],
+      "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 48}, {"buffer": 0, "byteOffset": 48, "byteLength": 48},
+                      {"buffer": 0, "byteOffset": 96, "byteLength": 12}],
+      "accessors": [{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [-1, 0, -1], "max": [1, 0, 1]},
+                    {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC3"},
+                    {"bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR"}]})",
+                             bin);
+}
+
+// One convention for files and for light.set: the file's light, removed and set again over the
+// protocol with the numbers the file gives (candela), renders the same frame; describe answers in
+// the same units.
+TEST(Daemon, ALightSetWithAFilesNumbersGivesTheFilesFrame) {
+    DaemonProcess daemon;
+    Client client(daemon.endpoint());
+    client.request(MessageType::scene_load, {{"name", "square"}}, lit_square_glb());
+    const json request = {{"scene", "square"}, {"width", 32}, {"height", 32}, {"format", "exr"}};
+    const auto from_file = render(client, request);
+    const auto description = client.request(MessageType::scene_describe, {{"name", "square"}}).body;
+    EXPECT_NEAR(description["lights"][0]["intensity"].get<double>(), 1000.0, 1e-3);
+    client.request(MessageType::light_remove, {{"scene", "square"}, {"light", "bulb"}});
+    client.request(MessageType::light_set, {{"scene", "square"}, {"light", "bulb"}, {"type", "point"},
+                                            {"position", {0.2, 1.5, -0.3}}, {"color", {1, 0.8, 0.6}},
+                                            {"intensity", 1000}});
+    const auto from_protocol = render(client, request);
+    ASSERT_EQ(from_file.pixels.size(), from_protocol.pixels.size());
+    double lit = 0.0;
+    for (std::size_t i = 0; i < from_file.pixels.size(); ++i) {
+        EXPECT_NEAR(from_protocol.pixels[i], from_file.pixels[i], 1e-6f + 1e-6f * from_file.pixels[i]) << i;
+        lit += from_file.pixels[i];
+    }
+    EXPECT_GT(lit, 0.0);
+}
+
 TEST(Daemon, DoublingLightIntensityDoublesRadiance) {
     DaemonProcess daemon;
     Client client(daemon.endpoint());
     const json request = {{"scene", "cornell"}, {"width", 48}, {"height", 48}, {"format", "exr"}};
-    client.request(MessageType::light_set, {{"scene", "cornell"}, {"light", "ceiling_light"}, {"intensity", 0.5}});
+    // Candela, as in files: 341.5 cd and 683 cd are 0.5 and 1 W/sr.
+    client.request(MessageType::light_set, {{"scene", "cornell"}, {"light", "ceiling_light"}, {"intensity", 341.5}});
     const auto single = render(client, request);
-    client.request(MessageType::light_set, {{"scene", "cornell"}, {"light", "ceiling_light"}, {"intensity", 1.0}});
+    client.request(MessageType::light_set, {{"scene", "cornell"}, {"light", "ceiling_light"}, {"intensity", 683.0}});
     const auto doubled = render(client, request);
     int compared = 0;
     for (std::size_t i = 0; i < single.pixels.size(); ++i) {

@@ -290,20 +290,22 @@ TEST(GltfImportOwn, UnknownOptionalExtensionWarns) {
 
 TEST(GltfImportOwn, PunctualLightsInWorldSpace) {
     // The parent "rig" moves by (10, 0, 0) and turns 90 degrees about +Y, which maps local -Z to -X.
+    // Intensities are KHR_lights_punctual's candela (point, spot) and lux (directional), held as
+    // W/sr and W/m^2 at 683 lm/W.
     const Scene scene = import_gltf_file(own_dir / "lights.gltf");
     ASSERT_EQ(scene.lights.size(), 3u);
     const Light& point = scene.lights[0];
     EXPECT_EQ(point.name, "bulb");
     EXPECT_EQ(point.type, LightType::point);
-    EXPECT_FLOAT_EQ(point.intensity, 5.0f);
+    EXPECT_FLOAT_EQ(point.intensity, 5.0f / 683.0f);
     expect_near(point.color, {1.0f, 0.9f, 0.8f});
     expect_near(point.position, {13.0f, 2.0f, 0.0f});
 
     const Light& spot = scene.lights[1];
     EXPECT_EQ(spot.name, "torch");
     EXPECT_EQ(spot.type, LightType::spot);
-    EXPECT_FLOAT_EQ(spot.intensity, 20.0f);
-    expect_near(spot.radiant(), {20.0f, 10.0f, 5.0f});
+    EXPECT_FLOAT_EQ(spot.intensity, 20.0f / 683.0f);
+    expect_near(spot.radiant(), glm::vec3(20.0f, 10.0f, 5.0f) / 683.0f, 1e-7f);
     expect_near(spot.position, {10.0f, 0.0f, -1.0f});
     expect_near(spot.direction, {-1.0f, 0.0f, 0.0f});
     EXPECT_FLOAT_EQ(spot.inner_cone, 0.2f);
@@ -312,7 +314,7 @@ TEST(GltfImportOwn, PunctualLightsInWorldSpace) {
     const Light& sun = scene.lights[2];
     EXPECT_EQ(sun.name, "sun");  // the node's name when the light has none
     EXPECT_EQ(sun.type, LightType::directional);
-    EXPECT_FLOAT_EQ(sun.intensity, 3.0f);
+    EXPECT_FLOAT_EQ(sun.intensity, 3.0f / 683.0f);
     expect_near(sun.color, glm::vec3(1.0f));
     expect_near(sun.direction, {0.0f, -1.0f, 0.0f});
 }
@@ -322,7 +324,7 @@ TEST(GltfImportOwn, EmissiveStrengthAndSpecular) {
     ASSERT_EQ(scene.materials.size(), 1u);
     const Material& material = scene.materials[0];
     EXPECT_EQ(material.name, "lamp");
-    expect_near(material.emissive, {4.0f, 2.0f, 1.0f});
+    expect_near(material.emissive, glm::vec3(4.0f, 2.0f, 1.0f) / 683.0f, 1e-7f);  // nits -> W/(m^2 sr)
     EXPECT_FLOAT_EQ(material.specular, 0.5f);
     EXPECT_FLOAT_EQ(material.roughness, 0.3f);
     EXPECT_FLOAT_EQ(material.metallic, 0.0f);
