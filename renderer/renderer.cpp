@@ -97,7 +97,7 @@ std::unique_ptr<SceneResources> Renderer::upload(const scene::Scene& scene) {
 }
 
 std::uint64_t Renderer::resident_bytes() const {
-    std::uint64_t bytes = output_.bytes() + tonemap_.bytes();
+    std::uint64_t bytes = output_.bytes() + tonemap_.bytes() + brdf_tables_.bytes();
     for (const SceneResources* resources : live_scenes_) bytes += resources->resident_bytes();
     return bytes;
 }
@@ -176,6 +176,7 @@ void Renderer::with_frame(SceneResources& resources, const RenderRequest& reques
     gpu::check_out_of_memory("earlier GL work");  // so what follows is this frame's alone
 
     ensure_output(request.width, request.height);
+    brdf_tables_.bind();
 
     const scene::Camera camera = camera_for(scene, request);
     const float aspect = static_cast<float>(request.width) / static_cast<float>(request.height);

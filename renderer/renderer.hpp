@@ -5,6 +5,7 @@
 // to render_on_cpu() on any other thread.
 #pragma once
 
+#include "renderer/gpu/brdf_tables.hpp"
 #include "renderer/gpu/egl_device.hpp"
 #include "renderer/gpu/memory_budget.hpp"
 #include "renderer/image/frame.hpp"
@@ -142,6 +143,7 @@ private:
     gpu::ShaderCache shaders_;
     gpu::StateCache state_;
     gpu::GpuTimers timers_;
+    gpu::BrdfTables brdf_tables_;  // bound for every frame: every method's BRDF reads them
     passes::TonemapPass tonemap_;
     void ensure_output(int width, int height);
     void fill_stats(FrameStats& stats, const RenderRequest& request, const methods::KnobValues& knobs,

@@ -20,6 +20,20 @@ float schlick_weight(float v_dot_h) {
 float dielectric_fresnel(float specular, float cos_angle) {
     return specular * (kDielectricF0 + (1.0f - kDielectricF0) * schlick_weight(cos_angle));
 }
+
+// The dielectric lobe's directional albedo from its (A, B) split: specular (F0 A + B).
+float dielectric_albedo(float specular, const glm::vec2& ab) { return specular * (kDielectricF0 * ab.x + ab.y); }
+
+// What the diffuse base may reflect, between the specular directional albedos on the way in and
+// out, normalized so that a white base reflects exactly what the specular lobe leaves
+// (docs/methods.md, "BRDF": albedo scaling, reciprocal).
+float diffuse_weight(const SurfaceMaterial& m, float n_dot_l, float n_dot_v) {
+    if (m.specular <= 0.0f) return 1.0f;
+    const float e_l = dielectric_albedo(m.specular, specular_albedo_ab(n_dot_l, m.roughness));
+    const float e_v = dielectric_albedo(m.specular, specular_albedo_ab(n_dot_v, m.roughness));
+    const float e_avg = dielectric_albedo(m.specular, specular_average_ab(m.roughness));
+    return (1.0f - e_l) * (1.0f - e_v) / std::max(1.0f - e_avg, 1e-4f);
+}
 }  // namespace
 
 SurfaceMaterial SurfaceMaterial::from(const Material& material) {
@@ -54,11 +68,9 @@ glm::vec3 evaluate_brdf(const SurfaceMaterial& m, const glm::vec3& n, const glm:
     const float specular_lobe = ggx_distribution(n_dot_h, alpha) * smith_visibility(n_dot_l, n_dot_v, alpha);
     const float fw = schlick_weight(v_dot_h);
 
-    // The diffuse part keeps what specular reflection leaves on the way in and on the way out;
-    // weighting it by 1 - F(v.h) instead (glTF's mix) creates energy at grazing view.
-    const float diffuse_weight = (1.0f - dielectric_fresnel(m.specular, n_dot_l)) *
-                                 (1.0f - dielectric_fresnel(m.specular, n_dot_v));
-    const glm::vec3 dielectric = diffuse_weight * m.base_color / kPi +
+    // glTF's mix weights the diffuse part by 1 - F(v.h); albedo scaling weights it by what the
+    // specular lobe leaves in each direction instead, which conserves energy and is reciprocal.
+    const glm::vec3 dielectric = diffuse_weight(m, n_dot_l, n_dot_v) * m.base_color / kPi +
                                  glm::vec3(dielectric_fresnel(m.specular, v_dot_h) * specular_lobe);
     const glm::vec3 metal = (m.base_color + (glm::vec3(1.0f) - m.base_color) * fw) * specular_lobe;
     return glm::mix(dielectric, metal, m.metallic);
@@ -111,8 +123,9 @@ TexturedMaterial textured_material(const Scene& scene, const Material& material,
 }
 
 glm::vec3 diffuse_albedo(const SurfaceMaterial& m) {
-    const float mean_fresnel = m.specular * (kDielectricF0 + (1.0f - kDielectricF0) / 21.0f);
-    return (1.0f - mean_fresnel) * (1.0f - mean_fresnel) * (1.0f - m.metallic) * m.base_color;
+    // The diffuse weight's cosine-weighted mean over both directions is (1 - E_avg)^2 / (1 - E_avg).
+    const float e_avg = m.specular > 0.0f ? dielectric_albedo(m.specular, specular_average_ab(m.roughness)) : 0.0f;
+    return (1.0f - e_avg) * (1.0f - m.metallic) * m.base_color;
 }
 
 void orthonormal_basis(const glm::vec3& n, glm::vec3& t, glm::vec3& b) {
@@ -202,46 +215,100 @@ LightIncidence light_incidence(const Light& light, const glm::vec3& p) {
     return result;
 }
 
+namespace {
+// The specular lobe's (A, B) at one view cosine and roughness, by GGX importance sampling of the
+// half vector on Hammersley points.
+glm::vec2 specular_albedo_ab_integral(float n_dot_v, float roughness, int samples_per_entry) {
+    const float alpha = ggx_alpha(roughness);
+    const glm::vec3 v(std::sqrt(std::max(0.0f, 1.0f - n_dot_v * n_dot_v)), 0.0f, n_dot_v);
+    double a = 0.0, b = 0.0;
+    for (int i = 0; i < samples_per_entry; ++i) {
+        // Hammersley points; h with density D(h) cos(theta_h).
+        const float u1 = (static_cast<float>(i) + 0.5f) / static_cast<float>(samples_per_entry);
+        std::uint32_t bits = static_cast<std::uint32_t>(i);
+        bits = (bits << 16u) | (bits >> 16u);
+        bits = ((bits & 0x55555555u) << 1u) | ((bits & 0xAAAAAAAAu) >> 1u);
+        bits = ((bits & 0x33333333u) << 2u) | ((bits & 0xCCCCCCCCu) >> 2u);
+        bits = ((bits & 0x0F0F0F0Fu) << 4u) | ((bits & 0xF0F0F0F0u) >> 4u);
+        bits = ((bits & 0x00FF00FFu) << 8u) | ((bits & 0xFF00FF00u) >> 8u);
+        const float u2 = static_cast<float>(bits) * 2.3283064365386963e-10f;
+        const float tan2 = alpha * alpha * u1 / (1.0f - u1);
+        const float cos_h = 1.0f / std::sqrt(1.0f + tan2);
+        const float sin_h = std::sqrt(std::max(0.0f, 1.0f - cos_h * cos_h));
+        const float phi = 2.0f * 3.14159265358979f * u2;
+        const glm::vec3 h(sin_h * std::cos(phi), sin_h * std::sin(phi), cos_h);
+        const float v_dot_h = glm::dot(v, h);
+        const glm::vec3 l = 2.0f * v_dot_h * h - v;
+        if (l.z <= 0.0f || v_dot_h <= 0.0f) continue;
+        // D V cos_l / pdf(l), pdf(l) = D cos_h / (4 v.h): the D cancels.
+        const float weight = smith_visibility(l.z, n_dot_v, alpha) * l.z * 4.0f * v_dot_h / cos_h;
+        const float m = 1.0f - v_dot_h;
+        const float fresnel_weight = m * m * m * m * m;
+        a += weight * (1.0f - fresnel_weight);
+        b += weight * fresnel_weight;
+    }
+    return glm::vec2(static_cast<float>(a / samples_per_entry), static_cast<float>(b / samples_per_entry));
+}
+
+float cell_centre(int index, int size) { return (static_cast<float>(index) + 0.5f) / static_cast<float>(size); }
+
+// Bilinear weights and clamped indices of `x` in [0, 1] over `size` cell centres, as GL_LINEAR
+// with GL_CLAMP_TO_EDGE filters.
+struct Tap {
+    int i0, i1;
+    float t;
+};
+Tap tap(float x, int size) {
+    const float position = std::clamp(x, 0.0f, 1.0f) * static_cast<float>(size) - 0.5f;
+    const float floor = std::floor(position);
+    return {std::clamp(static_cast<int>(floor), 0, size - 1), std::clamp(static_cast<int>(floor) + 1, 0, size - 1),
+            position - floor};
+}
+}  // namespace
+
 std::vector<glm::vec2> specular_albedo_table(int size, int samples_per_entry) {
     std::vector<glm::vec2> table(static_cast<std::size_t>(size) * static_cast<std::size_t>(size));
-    const glm::vec3 n(0.0f, 0.0f, 1.0f);
     for (int row = 0; row < size; ++row) {
-        const float roughness = (static_cast<float>(row) + 0.5f) / static_cast<float>(size);
-        const float alpha = ggx_alpha(roughness);
         for (int column = 0; column < size; ++column) {
-            const float n_dot_v = (static_cast<float>(column) + 0.5f) / static_cast<float>(size);
-            const glm::vec3 v(std::sqrt(std::max(0.0f, 1.0f - n_dot_v * n_dot_v)), 0.0f, n_dot_v);
-            double a = 0.0, b = 0.0;
-            for (int i = 0; i < samples_per_entry; ++i) {
-                // Hammersley points; h with density D(h) cos(theta_h).
-                const float u1 = (static_cast<float>(i) + 0.5f) / static_cast<float>(samples_per_entry);
-                std::uint32_t bits = static_cast<std::uint32_t>(i);
-                bits = (bits << 16u) | (bits >> 16u);
-                bits = ((bits & 0x55555555u) << 1u) | ((bits & 0xAAAAAAAAu) >> 1u);
-                bits = ((bits & 0x33333333u) << 2u) | ((bits & 0xCCCCCCCCu) >> 2u);
-                bits = ((bits & 0x0F0F0F0Fu) << 4u) | ((bits & 0xF0F0F0F0u) >> 4u);
-                bits = ((bits & 0x00FF00FFu) << 8u) | ((bits & 0xFF00FF00u) >> 8u);
-                const float u2 = static_cast<float>(bits) * 2.3283064365386963e-10f;
-                const float tan2 = alpha * alpha * u1 / (1.0f - u1);
-                const float cos_h = 1.0f / std::sqrt(1.0f + tan2);
-                const float sin_h = std::sqrt(std::max(0.0f, 1.0f - cos_h * cos_h));
-                const float phi = 2.0f * 3.14159265358979f * u2;
-                const glm::vec3 h(sin_h * std::cos(phi), sin_h * std::sin(phi), cos_h);
-                const float v_dot_h = glm::dot(v, h);
-                const glm::vec3 l = 2.0f * v_dot_h * h - v;
-                if (l.z <= 0.0f || v_dot_h <= 0.0f) continue;
-                // D V cos_l / pdf(l), pdf(l) = D cos_h / (4 v.h): the D cancels.
-                const float weight = smith_visibility(l.z, n_dot_v, alpha) * l.z * 4.0f * v_dot_h / cos_h;
-                const float m = 1.0f - v_dot_h;
-                const float fresnel_weight = m * m * m * m * m;
-                a += weight * (1.0f - fresnel_weight);
-                b += weight * fresnel_weight;
-            }
             table[static_cast<std::size_t>(row * size + column)] =
-                glm::vec2(static_cast<float>(a / samples_per_entry), static_cast<float>(b / samples_per_entry));
+                specular_albedo_ab_integral(cell_centre(column, size), cell_centre(row, size), samples_per_entry);
         }
     }
     return table;
+}
+
+std::vector<glm::vec2> specular_average_table(int size, int mu_steps, int samples_per_entry) {
+    std::vector<glm::vec2> table(static_cast<std::size_t>(size));
+    for (int row = 0; row < size; ++row) {
+        glm::vec2 sum(0.0f);
+        for (int k = 0; k < mu_steps; ++k) {
+            const float mu = cell_centre(k, mu_steps);
+            sum += 2.0f * mu * specular_albedo_ab_integral(mu, cell_centre(row, size), samples_per_entry);
+        }
+        table[static_cast<std::size_t>(row)] = sum / static_cast<float>(mu_steps);
+    }
+    return table;
+}
+
+const BrdfTables& brdf_tables() {
+    static const BrdfTables tables{specular_albedo_table(BrdfTables::kSize, 1024),
+                                   specular_average_table(BrdfTables::kSize, 128, 256)};
+    return tables;
+}
+
+glm::vec2 specular_albedo_ab(float n_dot_v, float roughness) {
+    const auto& table = brdf_tables().albedo;
+    constexpr int size = BrdfTables::kSize;
+    const Tap column = tap(n_dot_v, size), row = tap(roughness, size);
+    const auto at = [&](int r, int c) { return table[static_cast<std::size_t>(r * size + c)]; };
+    return glm::mix(glm::mix(at(row.i0, column.i0), at(row.i0, column.i1), column.t),
+                    glm::mix(at(row.i1, column.i0), at(row.i1, column.i1), column.t), row.t);
+}
+
+glm::vec2 specular_average_ab(float roughness) {
+    const auto& table = brdf_tables().average;
+    const Tap row = tap(roughness, BrdfTables::kSize);
+    return glm::mix(table[static_cast<std::size_t>(row.i0)], table[static_cast<std::size_t>(row.i1)], row.t);
 }
 
 }  // namespace bounce::scene

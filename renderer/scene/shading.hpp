@@ -44,8 +44,9 @@ struct TexturedMaterial {
 TexturedMaterial textured_material(const Scene& scene, const Material& material, const glm::vec2& uv0,
                                    const glm::vec2& uv1);
 
-// The diffuse lobe's hemispherical albedo with Fresnel's mean over the hemisphere on the way in and out:
-// what a diffuse-only transport (radiosity) reflects. Twin of diffuse_albedo in brdf.glsl.
+// The diffuse lobe's albedo averaged over incoming and outgoing directions (cosine-weighted): what
+// a diffuse-only transport (radiosity) reflects, (1 - E_avg)(1 - metallic) base. Twin of
+// diffuse_albedo in brdf.glsl.
 glm::vec3 diffuse_albedo(const SurfaceMaterial& material);
 
 // Importance sampling of f(l, v) cos: a mixture of GGX normal-distribution sampling (the specular
@@ -65,6 +66,24 @@ float brdf_pdf(const SurfaceMaterial& material, const glm::vec3& n, const glm::v
 // = F0 A + B (Fw: Schlick's weight of v.h). Row-major, `size` x `size`, rows by roughness, columns
 // by n.v, both sampled at cell centres; by GGX importance sampling of the half vector.
 std::vector<glm::vec2> specular_albedo_table(int size, int samples_per_entry);
+// Per roughness row (cell centres as above), the (A, B) split of the lobe's cosine-weighted mean
+// albedo over view directions, E_avg = 2 integral of E(mu) mu dmu, by midpoint quadrature over
+// `mu_steps` view cosines of `samples_per_entry` samples each.
+std::vector<glm::vec2> specular_average_table(int size, int mu_steps, int samples_per_entry);
+
+// The tables the BRDF's energy compensation reads (docs/methods.md, "BRDF"), computed once: the
+// GPU gets the same numbers as textures (gpu::BrdfTables) and samples them with the same bilinear
+// filter as these lookups.
+struct BrdfTables {
+    static constexpr int kSize = 32;
+    std::vector<glm::vec2> albedo;   // kSize x kSize: rows by roughness, columns by n.v
+    std::vector<glm::vec2> average;  // kSize: by roughness
+};
+const BrdfTables& brdf_tables();
+// (A, B) at a view cosine and roughness, and their hemispherical means at a roughness, filtered
+// bilinearly (clamped to the edges) as a GL_LINEAR sampler does.
+glm::vec2 specular_albedo_ab(float n_dot_v, float roughness);
+glm::vec2 specular_average_ab(float roughness);
 
 // An orthonormal basis (t, b, n) for a unit n, continuous except at n = (0, 0, -1).
 void orthonormal_basis(const glm::vec3& n, glm::vec3& t, glm::vec3& b);

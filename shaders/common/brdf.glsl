@@ -1,8 +1,14 @@
-// The one BRDF every method uses (docs/methods.md; C++ twin: renderer/scene/shading.cpp).
+// The one BRDF every method uses (docs/methods.md, "BRDF"; [ggx], [kulla]; C++ twin:
+// renderer/scene/shading.cpp).
 // glTF metallic-roughness with KHR_materials_specular: Lambertian diffuse and a GGX lobe
 // (height-correlated Smith visibility, Schlick Fresnel); the diffuse part is weighted by what the
-// specular interface transmits in and out, so energy is conserved.
+// specular lobe leaves in each direction (albedo scaling), so energy is conserved and rough
+// dielectrics stay Lambertian.
+#include "common/shared_layout.h"
 #include "common/math.glsl"
+
+layout(binding = BOUNCE_UNIT_BRDF_ALBEDO) uniform sampler2D u_brdf_albedo;    // (A, B) by n.v, roughness
+layout(binding = BOUNCE_UNIT_BRDF_AVERAGE) uniform sampler2D u_brdf_average;  // (A, B) means by roughness
 
 struct SurfaceMaterial {
     vec3 base_color;
@@ -40,19 +46,33 @@ float dielectric_fresnel(float specular, float cos_angle) {
     return specular * (DIELECTRIC_F0 + (1.0 - DIELECTRIC_F0) * schlick_weight(cos_angle));
 }
 
-// The Lambertian part of evaluate_brdf: what the specular interface transmits on the way in and on
-// the way out (weighting by 1 - F(v.h) instead, glTF's mix, creates energy at grazing view).
+// The dielectric lobe's directional albedo E = specular (F0 A + B), and its cosine-weighted mean.
+float dielectric_albedo(float specular, vec2 ab) { return specular * (DIELECTRIC_F0 * ab.x + ab.y); }
+vec2 specular_albedo_ab(float n_dot_v, float roughness) {
+    return texture(u_brdf_albedo, vec2(saturate(n_dot_v), saturate(roughness))).rg;
+}
+vec2 specular_average_ab(float roughness) { return texture(u_brdf_average, vec2(saturate(roughness), 0.5)).rg; }
+
+// The Lambertian part of evaluate_brdf, weighted by (1 - E(n.l)) (1 - E(n.v)) / (1 - E_avg): what
+// the specular lobe leaves in each direction, normalized so that a white base reflects all of it
+// (glTF's 1 - F(v.h) weight instead reflects more than it receives at grazing view, and the
+// smooth interface's 1 - F(n.l) darkens rough matte surfaces at grazing light).
 vec3 diffuse_brdf(SurfaceMaterial m, float n_dot_l, float n_dot_v) {
-    float transmitted = (1.0 - dielectric_fresnel(m.specular, n_dot_l)) * (1.0 - dielectric_fresnel(m.specular, n_dot_v));
-    return transmitted * (1.0 - m.metallic) * m.base_color * INV_PI;
+    float weight = 1.0;
+    if (m.specular > 0.0) {
+        float e_l = dielectric_albedo(m.specular, specular_albedo_ab(n_dot_l, m.roughness));
+        float e_v = dielectric_albedo(m.specular, specular_albedo_ab(n_dot_v, m.roughness));
+        float e_avg = dielectric_albedo(m.specular, specular_average_ab(m.roughness));
+        weight = (1.0 - e_l) * (1.0 - e_v) / max(1.0 - e_avg, 1e-4);
+    }
+    return weight * (1.0 - m.metallic) * m.base_color * INV_PI;
 }
 
 // The diffuse reflectance seen from nowhere in particular (voxels keep no view direction): the
-// Lambertian part with both Fresnel factors at their cosine-weighted hemispherical mean,
-// F0 + (1 - F0) / 21 for Schlick's approximation.
+// diffuse weight's cosine-weighted mean over both directions, 1 - E_avg.
 vec3 diffuse_albedo(SurfaceMaterial m) {
-    float mean_fresnel = m.specular * (DIELECTRIC_F0 + (1.0 - DIELECTRIC_F0) / 21.0);
-    return (1.0 - mean_fresnel) * (1.0 - mean_fresnel) * (1.0 - m.metallic) * m.base_color;
+    float e_avg = m.specular > 0.0 ? dielectric_albedo(m.specular, specular_average_ab(m.roughness)) : 0.0;
+    return (1.0 - e_avg) * (1.0 - m.metallic) * m.base_color;
 }
 
 // The specular part of evaluate_brdf integrated over the hemisphere (its directional albedo), from
@@ -87,7 +107,10 @@ vec3 evaluate_brdf(SurfaceMaterial m, vec3 n, vec3 v, vec3 l) {
 // mirror direction), with Smith visibility at the cone's most grazing n.l (kept above 0.1) and
 // Fresnel at 1 (metal) or at the specular factor (dielectric).
 float brdf_bound(SurfaceMaterial m, vec3 n, vec3 v, vec3 l_axis, float cone) {
-    float diffuse = max(m.base_color.r, max(m.base_color.g, m.base_color.b)) * (1.0 - m.metallic) * INV_PI;
+    // The diffuse weight is at most 1 / (1 - E_avg) (both directional albedos at 0).
+    float e_avg = m.specular > 0.0 ? dielectric_albedo(m.specular, specular_average_ab(m.roughness)) : 0.0;
+    float diffuse = max(m.base_color.r, max(m.base_color.g, m.base_color.b)) * (1.0 - m.metallic) * INV_PI /
+                    max(1.0 - e_avg, 1e-4);
     float fresnel = mix(m.specular, 1.0, m.metallic);
     if (fresnel <= 0.0) return diffuse;
     vec3 mirror = reflect(-v, n);

@@ -23,6 +23,10 @@
 #define BOUNCE_UNIT_SHADOW_2D 8
 #define BOUNCE_UNIT_SHADOW_CUBE 9
 #define BOUNCE_UNIT_HDR_INPUT 10
+// Texture units: the BRDF's energy-compensation tables (gpu::BrdfTables binds them for every frame;
+// methods leave these units alone).
+#define BOUNCE_UNIT_BRDF_ALBEDO 14   // RG32F, (A, B) of the specular lobe by n.v (x) and roughness (y)
+#define BOUNCE_UNIT_BRDF_AVERAGE 15  // RG32F, their cosine-weighted means by roughness (x)
 
 // G-buffer colour attachments.
 #define BOUNCE_GBUFFER_POSITION 0   // RGBA32F: world position, w = 1 where geometry was drawn

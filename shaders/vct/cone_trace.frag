@@ -14,10 +14,6 @@ layout(binding = BOUNCE_UNIT_GBUFFER_NORMAL) uniform sampler2D u_gbuffer_normal;
 layout(binding = BOUNCE_UNIT_GBUFFER_ALBEDO) uniform sampler2D u_gbuffer_albedo;
 layout(binding = BOUNCE_UNIT_GBUFFER_EMISSIVE) uniform sampler2D u_gbuffer_emissive;
 
-#ifdef SPECULAR_CONE
-layout(binding = VCT_UNIT_SPECULAR_ALBEDO) uniform sampler2D u_specular_albedo;  // (A, B) by n.v, roughness
-#endif
-
 uniform vec3 u_camera_position;
 uniform bool u_ambient_occlusion;
 
@@ -54,7 +50,7 @@ void main() {
         float alpha = ggx_alpha(material.roughness);
         float half_angle = clamp(2.0 * atan(sqrt(sqrt(2.0) - 1.0) * alpha), 0.005, 1.05);
         ConeResult cone = trace_cone(p, n, r, tan(half_angle));
-        vec2 ab = texture(u_specular_albedo, vec2(saturate(dot(n, v)), material.roughness)).rg;
+        vec2 ab = specular_albedo_ab(dot(n, v), material.roughness);
         indirect += specular_albedo(material, ab) * cone.radiance;
     }
 #endif

@@ -37,7 +37,6 @@
 #define VCT_IMAGE_DIRECTIONAL_POOL 1
 #define VCT_UNIT_POOL 11
 #define VCT_UNIT_DIRECTIONAL_POOL 12
-#define VCT_UNIT_SPECULAR_ALBEDO 13
 
 // Brick side in voxels: vertex-centred 3x3x3 bricks, voxel centres on node corners (paper §4.1).
 #define VCT_BRICK 3

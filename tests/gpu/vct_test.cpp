@@ -102,12 +102,6 @@ TEST(Vct, SpecularConeOnGlossySurfaces) {
                 error.rel_mse, error.mean_test, without.rel_mse, without.mean_test, error.mean_reference);
     EXPECT_LT(error.rel_mse, without.rel_mse);
     EXPECT_LT(std::abs(error.mean_test - error.mean_reference), std::abs(without.mean_test - without.mean_reference));
-    auto holds_table = [](const RenderResult& result) {
-        return std::any_of(result.stats.resident.begin(), result.stats.resident.end(),
-                           [](const auto& s) { return s.name == "vct.specular_albedo"; });
-    };
-    EXPECT_TRUE(holds_table(with_cone));
-    EXPECT_FALSE(holds_table(render_vct(scene::make_cornell_box(), "medium")));
 }
 
 // The dense variant runs the same pipeline over full lattices: it must render the same light

@@ -105,10 +105,6 @@ public:
                                octree_.grid().lattice_max() + 1, octree_.anisotropic() ? ", inner levels six times" : "")
                  : fmt::format("{} bricks of 3x3x3 RGBA16F voxels, one per node{}", counts.nodes,
                                octree_.anisotropic() ? ", and six directional bricks per inner node" : "")}};
-        if (specular_albedo_) {
-            structures.push_back({"specular_albedo", specular_albedo_.bytes(),
-                                  "the specular lobe's directional albedo for the specular cone (a material is glossy)"});
-        }
         return structures;
     }
 
@@ -198,19 +194,10 @@ private:
     void trace(const FrameContext& frame, bool ambient_occlusion) {
         gpu::GpuTimers::Scope timing(frame.timers, "vct_cone_trace");
         std::vector<std::string> defines = octree_.program_defines();
-        // No specular cone, and no albedo table, where no material has a specular lobe.
+        // No specular cone where no material has a specular lobe.
         const bool specular = frame.knob_int("specular") != 0 && frame.scene.has_glossy_material();
         if (specular) {
-            defines.push_back("SPECULAR_CONE");
-            if (!specular_albedo_) {
-                constexpr int kSize = 32;
-                const std::vector<glm::vec2> table = scene::specular_albedo_table(kSize, 1024);
-                specular_albedo_ = gpu::Texture({GL_TEXTURE_2D, GL_RG32F, kSize, kSize});
-                glTextureSubImage2D(specular_albedo_.id(), 0, 0, 0, kSize, kSize, GL_RG, GL_FLOAT, table.data());
-                specular_albedo_.set_filter(GL_LINEAR, GL_LINEAR);
-                specular_albedo_.set_wrap(GL_CLAMP_TO_EDGE);
-            }
-            glBindTextureUnit(VCT_UNIT_SPECULAR_ALBEDO, specular_albedo_.id());
+            defines.push_back("SPECULAR_CONE");  // weighted by the BRDF's own albedo table (brdf.glsl)
         }
         const gpu::ShaderProgram& program =
             frame.shaders.get({"common/fullscreen.vert", "vct/cone_trace.frag", defines});
@@ -237,7 +224,6 @@ private:
     passes::LightViewMaps light_views_;
     SparseVoxelOctree octree_;
     passes::FullscreenTriangle triangle_;
-    gpu::Texture specular_albedo_;
     int resolution_ = 0;
     std::vector<glm::mat4> build_transforms_;  // every object's transform at the last static build
     std::vector<bool> dynamic_;                // objects that have moved since
