@@ -118,6 +118,7 @@ void GpuScene::bind_material(const ShaderProgram& program, int material_index) c
         const bool usable = ref.valid() && ref.texture < static_cast<int>(textures_.size()) &&
                             static_cast<bool>(textures_[ref.texture]);
         program.set(uv_uniform, usable ? ref.uv_set : -1);
+        program.set(std::string(uv_uniform) + "_transform", ref.uv_transform);
         if (usable) {
             glBindTextureUnit(unit, textures_[ref.texture].id());
             glBindSampler(unit, material_sampler_.id());

@@ -188,6 +188,41 @@ private:
         }
     }
 
+    // KHR_texture_transform's matrix, translation(offset) * rotation * scale, as its specification
+    // composes it; its texCoord overrides the textureInfo's. Members of the wrong type or count,
+    // or past the range of a float, refuse the file (the Khronos validator reports them as errors).
+    glm::mat3 texture_transform(const tinygltf::Value& value, const std::string& where, int& tex_coord) {
+        if (!value.IsObject()) reject(fmt::format("{} must be an object", where));
+        const auto pair = [&](const char* key, glm::vec2 fallback) {
+            if (!value.Has(key)) return fallback;
+            const tinygltf::Value& array = value.Get(key);
+            if (!array.IsArray() || array.ArrayLen() != 2 || !array.Get(0).IsNumber() || !array.Get(1).IsNumber()) {
+                reject(fmt::format("{} {} must be an array of 2 numbers", where, key));
+            }
+            return glm::vec2(as_float(array.Get(0).GetNumberAsDouble(), where + " " + key),
+                             as_float(array.Get(1).GetNumberAsDouble(), where + " " + key));
+        };
+        const glm::vec2 offset = pair("offset", glm::vec2(0.0f));
+        const glm::vec2 scale = pair("scale", glm::vec2(1.0f));
+        float rotation = 0.0f;
+        if (value.Has("rotation")) {
+            if (!value.Get("rotation").IsNumber()) reject(fmt::format("{} rotation must be a number", where));
+            rotation = as_float(value.Get("rotation").GetNumberAsDouble(), where + " rotation");
+        }
+        if (value.Has("texCoord")) {
+            const tinygltf::Value& set = value.Get("texCoord");
+            if (!set.IsInt() || set.GetNumberAsInt() < 0) {
+                reject(fmt::format("{} texCoord must be a non-negative integer", where));
+            }
+            tex_coord = set.GetNumberAsInt();
+        }
+        const float c = std::cos(rotation), s = std::sin(rotation);
+        const glm::mat3 translation(1, 0, 0, 0, 1, 0, offset.x, offset.y, 1);
+        const glm::mat3 rotate(c, s, 0, -s, c, 0, 0, 0, 1);  // columns, as the specification writes them
+        const glm::mat3 scaling(scale.x, 0, 0, 0, scale.y, 0, 0, 0, 1);
+        return translation * rotate * scaling;
+    }
+
     // A texture reference; on any problem the reference is none, so the factor alone applies.
     // An image used both as sRGB and as linear data becomes two Textures, one per colour space.
     template <typename Info>
@@ -198,13 +233,14 @@ private:
             reject(fmt::format("{} refers to texture {} (there are {})", where, info.index,
                                model_.textures.size()));
         }
-        if (info.extensions.count("KHR_texture_transform") != 0) {
-            warnings_.add(fmt::format("{}: KHR_texture_transform is not applied", where));
+        int tex_coord = info.texCoord;
+        if (const auto transform = info.extensions.find("KHR_texture_transform"); transform != info.extensions.end()) {
+            ref.uv_transform = texture_transform(transform->second, where + " KHR_texture_transform", tex_coord);
         }
-        if (info.texCoord > 1) {
+        if (tex_coord > 1) {
             warnings_.add(
                 fmt::format("{} uses TEXCOORD_{}; only 0 and 1 are supported, the texture is ignored", where,
-                            info.texCoord));
+                            tex_coord));
             return ref;
         }
         const int image_index = model_.textures[static_cast<std::size_t>(info.index)].source;
@@ -228,7 +264,7 @@ private:
             scene_.textures.push_back(std::move(*texture));
             textures_made_[key] = ref.texture;
         }
-        ref.uv_set = info.texCoord;
+        ref.uv_set = tex_coord;
         return ref;
     }
 
@@ -469,9 +505,10 @@ private:
             return;
         }
         const Material& material = scene_.material(primitive.material);
-        const std::vector<glm::vec2>& uvs =
-            material.normal_texture.uv_set == 1 ? primitive.uv1 : primitive.uv0;
+        std::vector<glm::vec2> uvs = material.normal_texture.uv_set == 1 ? primitive.uv1 : primitive.uv0;
         if (material.normal_texture.valid() && uvs.size() == vertex_count) {
+            // The tangent frame follows the normal map's own (transformed) texture space.
+            for (glm::vec2& uv : uvs) uv = material.normal_texture.transform(uv);
             primitive.tangents = uv_tangents(primitive, uvs);
             return;
         }

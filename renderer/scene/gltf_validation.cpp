@@ -15,8 +15,7 @@
 namespace bounce::scene::gltf {
 namespace {
 
-// Required extensions Bounce can honour (KHR_texture_transform loads, but the transform is not applied:
-// the scene model has no UV transform; a warning says so).
+// Required extensions Bounce honours.
 const std::set<std::string, std::less<>> supported_extensions = {
     "KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_materials_specular",
     "KHR_texture_transform"};
@@ -221,15 +220,15 @@ private:
         });
     }
 
-    // `extensions` must be an object. A malformed extension value is ignored with a warning: an
-    // unknown extension must not break a file, and a known one then simply does not apply.
+    // `extensions` must be an object of objects (glTF's schema; the Khronos validator reports
+    // anything else as an error): a malformed value is refused, known extension or not, rather
+    // than a known one quietly not applying.
     void extensions(const Json& object, const std::string& path) {
         const Json* map = member(object, path, "extensions", Kind::object);
         if (map == nullptr) return;
         for (const auto& [name, value] : map->items()) {
             if (!value.is_object()) {
-                warnings_.add(fmt::format("{}.{} must be an object (found {}); the extension is ignored",
-                                          join(path, "extensions"), name, found(value)));
+                reject(fmt::format("{}.{} must be an object (found {})", join(path, "extensions"), name, found(value)));
             }
         }
     }

@@ -59,7 +59,10 @@ struct Texture {
 struct TextureRef {
     int texture = -1;  // -1: none
     int uv_set = 0;    // 0 or 1
+    // KHR_texture_transform: uv' = (uv_transform * (uv, 1)).xy, translation * rotation * scale.
+    glm::mat3 uv_transform{1.0f};
     bool valid() const { return texture >= 0; }
+    glm::vec2 transform(const glm::vec2& uv) const { return glm::vec2(uv_transform * glm::vec3(uv, 1.0f)); }
 };
 
 // glTF metallic-roughness material plus KHR_materials_emissive_strength and the

@@ -106,7 +106,7 @@ TexturedMaterial textured_material(const Scene& scene, const Material& material,
     auto texture = [&](const TextureRef& ref) -> const Texture* {
         return ref.valid() && ref.texture < static_cast<int>(scene.textures.size()) ? &scene.textures[ref.texture] : nullptr;
     };
-    auto uv = [&](const TextureRef& ref) { return ref.uv_set == 1 ? uv1 : uv0; };
+    auto uv = [&](const TextureRef& ref) { return ref.transform(ref.uv_set == 1 ? uv1 : uv0); };
     if (const Texture* t = texture(material.base_color_texture)) {
         result.surface.base_color *= glm::vec3(sample_texture(*t, uv(material.base_color_texture)));
     }

@@ -20,6 +20,13 @@ uniform int u_base_color_uv;
 uniform int u_metallic_roughness_uv;
 uniform int u_normal_uv;
 uniform int u_emissive_uv;
+// KHR_texture_transform per texture (identity when the file gives none): uv' = (M (uv, 1)).xy.
+uniform mat3 u_base_color_uv_transform;
+uniform mat3 u_metallic_roughness_uv_transform;
+uniform mat3 u_normal_uv_transform;
+uniform mat3 u_emissive_uv_transform;
+
+vec2 texture_uv(vec2 uv[2], int set, mat3 transform) { return (transform * vec3(uv[clamp(set, 0, 1)], 1.0)).xy; }
 
 struct SurfacePoint {
     vec3 normal;  // shading normal, towards the viewer for double-sided surfaces seen from behind
@@ -36,21 +43,22 @@ SurfacePoint evaluate_surface(vec3 interpolated_normal, vec4 tangent, vec2 uv[2]
     if (u_double_sided && !front_facing) n = -n;
 
     vec4 base = u_base_color;
-    if (u_base_color_uv >= 0) base *= texture(u_base_color_map, uv[clamp(u_base_color_uv, 0, 1)]);
+    if (u_base_color_uv >= 0) base *= texture(u_base_color_map, texture_uv(uv, u_base_color_uv, u_base_color_uv_transform));
     s.metallic = u_metallic;
     s.roughness = u_roughness;
     if (u_metallic_roughness_uv >= 0) {
-        vec4 mr = texture(u_metallic_roughness_map, uv[clamp(u_metallic_roughness_uv, 0, 1)]);
+        vec4 mr = texture(u_metallic_roughness_map,
+                          texture_uv(uv, u_metallic_roughness_uv, u_metallic_roughness_uv_transform));
         s.roughness *= mr.g;
         s.metallic *= mr.b;
     }
     vec3 emissive = u_emissive;
-    if (u_emissive_uv >= 0) emissive *= texture(u_emissive_map, uv[clamp(u_emissive_uv, 0, 1)]).rgb;
+    if (u_emissive_uv >= 0) emissive *= texture(u_emissive_map, texture_uv(uv, u_emissive_uv, u_emissive_uv_transform)).rgb;
     if (u_normal_uv >= 0) {
         vec3 t = tangent.xyz - n * dot(n, tangent.xyz);
         t = safe_normalize(t, abs(n.x) < 0.9 ? normalize(cross(n, vec3(1, 0, 0))) : normalize(cross(n, vec3(0, 1, 0))));
         vec3 b = cross(n, t) * (tangent.w < 0.0 ? -1.0 : 1.0);
-        vec3 tangent_normal = texture(u_normal_map, uv[clamp(u_normal_uv, 0, 1)]).xyz * 2.0 - 1.0;
+        vec3 tangent_normal = texture(u_normal_map, texture_uv(uv, u_normal_uv, u_normal_uv_transform)).xyz * 2.0 - 1.0;
         tangent_normal.xy *= u_normal_scale;
         n = safe_normalize(mat3(t, b, n) * tangent_normal, n);
     }

@@ -162,13 +162,40 @@ TEST(GltfImportRejects, DracoIsRequiredButUnsupported) {
         << message;
 }
 
-TEST(GltfImportAccepts, MalformedOptionalExtensionOnlyWarns) {
-    // badExtension.gltf is a valid box except that KHR_texture_transform (optional) is a string.
-    const Scene scene = import_gltf_file(assimp_dir / "wrongTypes/badExtension.gltf");
-    EXPECT_EQ(scene.objects.size(), 1u);
-    EXPECT_EQ(warnings_mentioning(scene, "KHR_texture_transform must be an object"), 1u);
-    EXPECT_TRUE(scene.materials[0].base_color_texture.valid());
+TEST(GltfImportRejects, MalformedExtensionValue) {
+    // badExtension.gltf is a valid box except that KHR_texture_transform is a string: glTF's schema
+    // (and the Khronos validator) require extension values to be objects.
+    const std::string message = import_error(assimp_dir / "wrongTypes/badExtension.gltf");
+    EXPECT_NE(message.find("KHR_texture_transform must be an object"), std::string::npos) << message;
 }
+
+// KHR_texture_transform as the Khronos sample (TextureTransformTest) writes it: offset, rotation
+// and scale composed as translation * rotation * scale, applied where textures are sampled.
+TEST(GltfImportAccepts, TextureTransformsAsTheirSpecificationComposesThem) {
+    const Scene scene = import_gltf_file(assimp_dir / "textureTransform/TextureTransformTest.gltf");
+    const auto transform_of = [&](const std::string& name) {
+        for (const auto& material : scene.materials) {
+            if (material.name == name) {
+                EXPECT_TRUE(material.base_color_texture.valid()) << name;
+                return material.base_color_texture;
+            }
+        }
+        ADD_FAILURE() << "no material " << name;
+        return TextureRef{};
+    };
+    const auto near = [](glm::vec2 a, glm::vec2 b) { return glm::length(a - b) < 1e-5f; };
+    EXPECT_TRUE(near(transform_of("Offset U").transform({0.25f, 0.25f}), {0.75f, 0.25f}));
+    EXPECT_TRUE(near(transform_of("Offset UV").transform({0.0f, 0.0f}), {0.5f, 0.5f}));
+    const float angle = 0.39269908169872414f;
+    EXPECT_TRUE(near(transform_of("Rotation").transform({1.0f, 0.0f}), {std::cos(angle), std::sin(angle)}));
+    EXPECT_TRUE(near(transform_of("Scale").transform({1.0f, 2.0f}), {1.5f, 3.0f}));
+    // All: offset (-0.2, -0.1), rotation 0.3, scale 1.5, applied scale first.
+    const glm::vec2 scaled(1.5f, 0.0f);
+    const glm::vec2 rotated(scaled.x * std::cos(0.3f), scaled.x * std::sin(0.3f));
+    EXPECT_TRUE(near(transform_of("All").transform({1.0f, 0.0f}), rotated + glm::vec2(-0.2f, -0.1f)));
+    EXPECT_TRUE(near(transform_of("Correct").transform({0.3f, 0.6f}), {0.3f, 0.6f}));  // none: identity
+}
+
 
 // ---- valid files from the assimp test models
 
@@ -534,6 +561,24 @@ TEST(GltfImportRejects, IndicesThatAreNotIntegersOrPastIntMax) {
     EXPECT_NE(import_error_of_edited("emissive_strength.gltf", "\"mesh\": 0", "\"mesh\": 0.0"), "");
     EXPECT_NE(import_error_of_edited("emissive_strength.gltf", "\"mesh\": 0", "\"mesh\": 4294967296"), "");
     EXPECT_NE(import_error_of_edited("lights.gltf", "\"light\": 0", "\"light\": 3e9").find("light"), std::string::npos);
+}
+
+// Each member of KHR_texture_transform is checked: wrong types and counts refuse the file, naming
+// the texture and the member; texCoord overrides the textureInfo's.
+TEST(GltfImportRejects, MalformedTextureTransforms) {
+    const std::string anchor = "\"baseColorTexture\": {\n     \"index\": 0";
+    const auto with = [&](const std::string& transform) {
+        return import_error_of_edited("textured.gltf", anchor,
+                                      anchor + ", \"extensions\": {\"KHR_texture_transform\": " + transform + "}");
+    };
+    EXPECT_EQ(with(R"({"offset": [0.5, 0.25], "rotation": 1, "scale": [2, 2]})"), "");
+    EXPECT_NE(with(R"({"offset": [0.5, 0.25, 1]})").find("baseColorTexture KHR_texture_transform offset must be an array of 2 numbers"),
+              std::string::npos);
+    EXPECT_NE(with(R"({"scale": ["2", 2]})").find("scale must be an array of 2 numbers"), std::string::npos);
+    EXPECT_NE(with(R"({"rotation": "half"})").find("rotation must be a number"), std::string::npos);
+    EXPECT_NE(with(R"({"texCoord": -1})").find("texCoord must be a non-negative integer"), std::string::npos);
+    EXPECT_NE(with(R"({"scale": [1e39, 1]})").find("scale"), std::string::npos);
+    EXPECT_NE(with(R"("sideways")").find("must be an object"), std::string::npos);
 }
 
 }  // namespace
