@@ -188,6 +188,23 @@ private:
         }
     }
 
+    // A texture read through a UV set the primitive lacks: the set is filled with (0, 0), so that
+    // every method and the reference read the same texel, and the file gets a warning (the Khronos
+    // validator calls it an error, MESH_PRIMITIVE_TOO_FEW_TEXCOORDS; the factors still apply).
+    void fill_missing_uvs(Primitive& primitive, const std::string& where) {
+        if (primitive.material < 0 || static_cast<std::size_t>(primitive.material) >= scene_.materials.size()) return;
+        const Material& material = scene_.materials[static_cast<std::size_t>(primitive.material)];
+        for (const TextureRef* ref : {&material.base_color_texture, &material.metallic_roughness_texture,
+                                      &material.normal_texture, &material.emissive_texture}) {
+            if (!ref->valid()) continue;
+            std::vector<glm::vec2>& uvs = ref->uv_set == 1 ? primitive.uv1 : primitive.uv0;
+            if (uvs.size() == primitive.positions.size()) continue;
+            warnings_.add(fmt::format("{}: material '{}' samples TEXCOORD_{}, which the primitive lacks; its "
+                                      "textures read UV (0, 0) there", where, material.name, ref->uv_set));
+            uvs.assign(primitive.positions.size(), glm::vec2(0.0f));
+        }
+    }
+
     // KHR_texture_transform's matrix, translation(offset) * rotation * scale, as its specification
     // composes it; its texCoord overrides the textureInfo's. Members of the wrong type or count,
     // or past the range of a float, refuse the file (the Khronos validator reports them as errors).
@@ -386,6 +403,11 @@ private:
                                where, primitive.indices.size()));
         }
 
+        // glTF numbers indexed attributes without gaps: TEXCOORD_1 needs a TEXCOORD_0.
+        if (source.attributes.count("TEXCOORD_1") != 0 && source.attributes.count("TEXCOORD_0") == 0) {
+            reject(fmt::format("{} has TEXCOORD_1 without TEXCOORD_0 (indexed attributes must be numbered "
+                               "from 0 without gaps)", where));
+        }
         const AttributeRead read{source, where, vertex_count};
         const std::initializer_list<int> uv_components = {float_type, TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE,
                                                           TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT};
@@ -398,6 +420,7 @@ private:
         const auto file_tangents =
             read_attribute<glm::vec4>(read, "TANGENT", TINYGLTF_TYPE_VEC4, {float_type}, false);
 
+        fill_missing_uvs(primitive, where);
         fill_normals(primitive, file_normals, where);
         fill_tangents(primitive, file_tangents, where);
         for (const glm::vec3& position : primitive.positions) primitive.bounds.extend(position);
@@ -572,7 +595,7 @@ private:
         if (scene_index >= 0 && static_cast<std::size_t>(scene_index) < model_.scenes.size()) {
             return model_.scenes[static_cast<std::size_t>(scene_index)].nodes;
         }
-        if (scene_index >= 0 && !model_.scenes.empty()) {
+        if (scene_index >= 0) {
             reject(fmt::format("the default scene {} does not exist (there are {} scenes)", scene_index,
                                model_.scenes.size()));
         }

@@ -268,8 +268,22 @@ TEST(GltfImportAccepts, Cameras) {
     EXPECT_EQ(scene.objects.size(), 1u);
 }
 
+// NoScene.gltf names "scene": 0 with no scenes at all: an unresolved reference (the Khronos
+// validator's error too), refused; a scene without nodes is an empty scene.
+TEST(GltfImportRejects, ADefaultSceneThatDoesNotExist) {
+    const std::string message = import_error(assimp_dir / "TestNoRootNode/NoScene.gltf");
+    EXPECT_NE(message.find("the default scene 0 does not exist (there are 0 scenes)"), std::string::npos) << message;
+}
+
+// assimp's issue_3269: a primitive with TEXCOORD_1 and no TEXCOORD_0 (glTF numbers indexed
+// attributes from 0 without gaps).
+TEST(GltfImportRejects, TexcoordsWithAGap) {
+    const std::string message = import_error(assimp_dir / "issue_3269/texcoord_crash.gltf");
+    EXPECT_NE(message.find("has TEXCOORD_1 without TEXCOORD_0"), std::string::npos) << message;
+}
+
 TEST(GltfImportAccepts, NoRootNode) {
-    for (const char* file : {"NoScene.gltf", "SceneWithoutNodes.gltf"}) {
+    for (const char* file : {"SceneWithoutNodes.gltf"}) {
         const Scene scene = import_gltf_file(assimp_dir / "TestNoRootNode" / file);
         EXPECT_TRUE(scene.objects.empty()) << file;
         EXPECT_TRUE(scene.meshes.empty()) << file;
@@ -579,6 +593,30 @@ TEST(GltfImportRejects, MalformedTextureTransforms) {
     EXPECT_NE(with(R"({"texCoord": -1})").find("texCoord must be a non-negative integer"), std::string::npos);
     EXPECT_NE(with(R"({"scale": [1e39, 1]})").find("scale"), std::string::npos);
     EXPECT_NE(with(R"("sideways")").find("must be an object"), std::string::npos);
+}
+
+
+// A texture read through a UV set the primitive lacks (textured.gltf without its TEXCOORD_0): the
+// set is filled with (0, 0), the same for every method and the reference, with a warning.
+TEST(GltfImportAccepts, AMissingUvSetReadsZeroWithAWarning) {
+    const auto dir = std::filesystem::temp_directory_path() / ("bounce-gltf-uv-" + std::to_string(::getpid()));
+    std::filesystem::remove_all(dir);
+    std::filesystem::copy(own_dir, dir, std::filesystem::copy_options::recursive);
+    std::ifstream in(dir / "textured.gltf");
+    std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+    const std::string uvs = ",\n      \"TEXCOORD_0\": 1";
+    ASSERT_NE(text.find(uvs), std::string::npos);
+    text.erase(text.find(uvs), uvs.size());
+    std::ofstream(dir / "textured.gltf", std::ios::trunc) << text;
+    const Scene scene = import_gltf_file(dir / "textured.gltf");
+    std::filesystem::remove_all(dir);
+    EXPECT_GE(warnings_mentioning(scene, "samples TEXCOORD_0, which the primitive lacks"), 1u);
+    for (const auto& mesh : scene.meshes) {
+        for (const auto& primitive : mesh.primitives) {
+            ASSERT_EQ(primitive.uv0.size(), primitive.positions.size());
+            for (const glm::vec2& uv : primitive.uv0) EXPECT_EQ(uv, glm::vec2(0.0f));
+        }
+    }
 }
 
 }  // namespace
