@@ -383,10 +383,20 @@ private:
         }
 
         constexpr int float_type = TINYGLTF_COMPONENT_TYPE_FLOAT;
+        constexpr int i8 = TINYGLTF_COMPONENT_TYPE_BYTE, u8 = TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE;
+        constexpr int i16 = TINYGLTF_COMPONENT_TYPE_SHORT, u16 = TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT;
+        // KHR_mesh_quantization (gltfpack, gltf-transform) admits integer positions, normalized or
+        // not (the node's transform dequantizes them), normalized integer normals and tangents, and
+        // texture coordinates as any 8- or 16-bit integers.
+        const bool quantized = uses_extension("KHR_mesh_quantization");
+        const std::initializer_list<int> float_only = {float_type};
+        const std::initializer_list<int> any_position = {float_type, i8, u8, i16, u16};
+        const std::initializer_list<int> signed_normalized = {float_type, i8, i16};
         const int position_accessor = attribute_accessor(source, "POSITION");
         if (position_accessor < 0) reject(fmt::format("{} has no POSITION attribute", where));
         primitive.positions = read_vectors<glm::vec3>(view_accessor(
-            model_, position_accessor, where + " POSITION", TINYGLTF_TYPE_VEC3, {float_type}, false));
+            model_, position_accessor, where + " POSITION", TINYGLTF_TYPE_VEC3, quantized ? any_position : float_only,
+            false));
         const std::size_t vertex_count = primitive.positions.size();
         for (std::size_t v = 0; v < vertex_count; ++v) {
             if (!finite(primitive.positions[v])) {
@@ -409,22 +419,24 @@ private:
                                "from 0 without gaps)", where));
         }
         const AttributeRead read{source, where, vertex_count};
-        const std::initializer_list<int> uv_components = {float_type, TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE,
-                                                          TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT};
-        primitive.uv0 =
-            read_attribute<glm::vec2>(read, "TEXCOORD_0", TINYGLTF_TYPE_VEC2, uv_components, true);
-        primitive.uv1 =
-            read_attribute<glm::vec2>(read, "TEXCOORD_1", TINYGLTF_TYPE_VEC2, uv_components, true);
-        const auto file_normals =
-            read_attribute<glm::vec3>(read, "NORMAL", TINYGLTF_TYPE_VEC3, {float_type}, false);
-        const auto file_tangents =
-            read_attribute<glm::vec4>(read, "TANGENT", TINYGLTF_TYPE_VEC4, {float_type}, false);
+        const std::initializer_list<int> uv_core = {float_type, u8, u16};  // named: a list's array lives with it
+        const std::initializer_list<int>& uv_components = quantized ? any_position : uv_core;
+        primitive.uv0 = read_attribute<glm::vec2>(read, "TEXCOORD_0", TINYGLTF_TYPE_VEC2, uv_components, !quantized);
+        primitive.uv1 = read_attribute<glm::vec2>(read, "TEXCOORD_1", TINYGLTF_TYPE_VEC2, uv_components, !quantized);
+        const auto file_normals = read_attribute<glm::vec3>(read, "NORMAL", TINYGLTF_TYPE_VEC3,
+                                                            quantized ? signed_normalized : float_only, true);
+        const auto file_tangents = read_attribute<glm::vec4>(read, "TANGENT", TINYGLTF_TYPE_VEC4,
+                                                             quantized ? signed_normalized : float_only, true);
 
         fill_missing_uvs(primitive, where);
         fill_normals(primitive, file_normals, where);
         fill_tangents(primitive, file_tangents, where);
         for (const glm::vec3& position : primitive.positions) primitive.bounds.extend(position);
         return primitive;
+    }
+
+    bool uses_extension(const std::string& name) const {
+        return std::find(model_.extensionsUsed.begin(), model_.extensionsUsed.end(), name) != model_.extensionsUsed.end();
     }
 
     static int attribute_accessor(const tinygltf::Primitive& source, const char* name) {

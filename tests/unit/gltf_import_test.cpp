@@ -1,6 +1,7 @@
 #include "renderer/scene/gltf_import.hpp"
 
 #include "renderer/base/error.hpp"
+#include "support/hostile_gltf.hpp"
 
 #include <gtest/gtest.h>
 
@@ -616,6 +617,61 @@ TEST(GltfImportAccepts, AMissingUvSetReadsZeroWithAWarning) {
             ASSERT_EQ(primitive.uv0.size(), primitive.positions.size());
             for (const glm::vec2& uv : primitive.uv0) EXPECT_EQ(uv, glm::vec2(0.0f));
         }
+    }
+}
+
+
+// KHR_mesh_quantization as gltfpack writes it: positions as 16-bit integers (not normalized, the
+// node's scale dequantizes them, 8-byte stride for alignment), normals as normalized bytes, texture
+// coordinates as normalized 16-bit integers. The same file without the extension is refused: core
+// glTF allows float positions only.
+std::vector<std::uint8_t> quantized_square(bool declare_extension) {
+    std::vector<std::uint8_t> bin;
+    const auto put16 = [&](std::int16_t v) { bin.push_back(static_cast<std::uint8_t>(v & 0xff)), bin.push_back(static_cast<std::uint8_t>((v >> 8) & 0xff)); };
+    for (const auto& [x, z] : std::vector<std::pair<int, int>>{{-1000, -1000}, {1000, -1000}, {1000, 1000}, {-1000, 1000}}) {
+        put16(static_cast<std::int16_t>(x)), put16(0), put16(static_cast<std::int16_t>(z)), put16(0);  // 8-byte stride
+    }
+    for (int i = 0; i < 4; ++i) bin.insert(bin.end(), {0, 127, 0, 0});  // normals, 4-byte stride
+    for (const auto& [u, v] : std::vector<std::pair<int, int>>{{0, 0}, {65535, 0}, {65535, 65535}, {0, 65535}}) {
+        put16(static_cast<std::int16_t>(static_cast<std::uint16_t>(u))), put16(static_cast<std::int16_t>(static_cast<std::uint16_t>(v)));
+    }
+    for (const std::uint16_t index : {0, 2, 1, 0, 3, 2}) bin.push_back(index & 0xff), bin.push_back(index >> 8);
+    const std::string used = declare_extension ? R"("extensionsUsed": ["KHR_mesh_quantization"], "extensionsRequired": ["KHR_mesh_quantization"],)" : "";
+    return test::hostile::make_glb(R"({"asset": {"version": "2.0"}, )" + used + R"(
+      "scene": 0, "scenes": [{"nodes": [0]}],
+      "nodes": [{"name": "square", "mesh": 0, "scale": [0.001, 0.001, 0.001]}],
+      "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2}, "indices": 3}]}],
+      "buffers": [{"byteLength": 76}],
+      "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 32, "byteStride": 8},
+                      {"buffer": 0, "byteOffset": 32, "byteLength": 16, "byteStride": 4},
+                      {"buffer": 0, "byteOffset": 48, "byteLength": 16},
+                      {"buffer": 0, "byteOffset": 64, "byteLength": 12}],
+      "accessors": [{"bufferView": 0, "componentType": 5122, "count": 4, "type": "VEC3", "min": [-1000, 0, -1000], "max": [1000, 0, 1000]},
+                    {"bufferView": 1, "componentType": 5120, "normalized": true, "count": 4, "type": "VEC3"},
+                    {"bufferView": 2, "componentType": 5123, "normalized": true, "count": 4, "type": "VEC2"},
+                    {"bufferView": 3, "componentType": 5123, "count": 6, "type": "SCALAR"}]})",
+                                   bin);
+}
+
+TEST(GltfImportAccepts, QuantizedMeshes) {
+    const auto glb = quantized_square(true);
+    const Scene scene = import_glb_memory(glb, "quantized");
+    ASSERT_EQ(scene.meshes.size(), 1u);
+    const Primitive& primitive = scene.meshes[0].primitives[0];
+    ASSERT_EQ(primitive.positions.size(), 4u);
+    expect_near(primitive.positions[2], {1000.0f, 0.0f, 1000.0f});
+    expect_near(glm::vec3(scene.objects[0].transform * glm::vec4(primitive.positions[2], 1.0f)), {1.0f, 0.0f, 1.0f});
+    for (const glm::vec3& normal : primitive.normals) expect_near(normal, {0.0f, 1.0f, 0.0f});
+    ASSERT_EQ(primitive.uv0.size(), 4u);
+    EXPECT_EQ(primitive.uv0[2], glm::vec2(1.0f, 1.0f));
+    EXPECT_EQ(primitive.uv0[1], glm::vec2(1.0f, 0.0f));
+
+    try {
+        import_glb_memory(quantized_square(false), "unquantized");
+        ADD_FAILURE() << "integer positions without KHR_mesh_quantization loaded";
+    } catch (const InputError& error) {
+        EXPECT_NE(std::string(error.what()).find("POSITION: accessor 0 is VEC3 of SHORT, expected VEC3 of FLOAT"),
+                  std::string::npos) << error.what();
     }
 }
 
