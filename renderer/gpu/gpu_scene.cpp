@@ -114,6 +114,7 @@ void GpuScene::bind_material(const ShaderProgram& program, int material_index) c
     program.set("u_emissive", material.emissive);
     program.set("u_normal_scale", material.normal_scale);
     program.set("u_double_sided", material.double_sided ? 1 : 0);
+    program.set("u_alpha_cutoff", material.alpha_cutoff);
     auto bind = [&](const scene::TextureRef& ref, GLuint unit, const char* uv_uniform) {
         const bool usable = ref.valid() && ref.texture < static_cast<int>(textures_.size()) &&
                             static_cast<bool>(textures_[ref.texture]);

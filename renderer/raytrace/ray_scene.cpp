@@ -1,21 +1,58 @@
 #include "renderer/raytrace/ray_scene.hpp"
 
 #include "renderer/base/error.hpp"
+#include "renderer/scene/shading.hpp"
 
 #include <embree3/rtcore.h>
 
 #include <algorithm>
 #include <atomic>
+#include <memory>
 #include <limits>
 #include <vector>
 
 namespace bounce::raytrace {
+namespace {
+
+// An alpha-masked primitive's test, the any-hit half of glTF's alphaMode MASK: a hit where the
+// base-colour alpha (factor times texture, at the hit's UV) is below the cutoff is not a hit.
+struct AlphaTest {
+    const scene::Scene* scene;
+    const scene::Primitive* primitive;
+    const scene::Material* material;
+
+    bool cut_out(unsigned triangle, float u, float v) const {
+        float alpha = material->base_color.a;
+        const scene::TextureRef& ref = material->base_color_texture;
+        const std::vector<glm::vec2>& uvs = ref.uv_set == 1 ? primitive->uv1 : primitive->uv0;
+        if (ref.valid() && ref.texture < static_cast<int>(scene->textures.size()) && !uvs.empty()) {
+            const std::uint32_t* corner = &primitive->indices[3 * static_cast<std::size_t>(triangle)];
+            const glm::vec2 uv = (1.0f - u - v) * uvs[corner[0]] + u * uvs[corner[1]] + v * uvs[corner[2]];
+            alpha *= scene::sample_texture(scene->textures[static_cast<std::size_t>(ref.texture)], ref.transform(uv)).a;
+        }
+        return alpha < material->alpha_cutoff;
+    }
+};
+
+void alpha_filter(const RTCFilterFunctionNArguments* args) {
+    const auto* test = static_cast<const AlphaTest*>(args->geometryUserPtr);
+    for (unsigned i = 0; i < args->N; ++i) {
+        if (args->valid[i] == 0) continue;
+        if (test->cut_out(RTCHitN_primID(args->hit, args->N, i), RTCHitN_u(args->hit, args->N, i),
+                          RTCHitN_v(args->hit, args->N, i))) {
+            args->valid[i] = 0;  // the ray goes on
+        }
+    }
+}
+
+}  // namespace
 
 struct RayScene::Impl {
     const scene::Scene& scene;
     RTCDevice device = nullptr;
     std::vector<RTCScene> mesh_scenes;  // per mesh; null for meshes no held object uses
     std::vector<RTCGeometry> instances;  // per object; null for objects not held
+    std::vector<std::unique_ptr<AlphaTest>> alpha_tests;  // one per alpha-masked primitive
     RTCScene top = nullptr;
     mutable std::atomic<std::uint64_t> rays{0};
 
@@ -46,6 +83,13 @@ struct RayScene::Impl {
                 auto* indices = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
                     geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), primitive.triangle_count()));
                 std::copy(primitive.indices.begin(), primitive.indices.end(), indices);
+                const scene::Material& material = scene.material(primitive.material);
+                if (material.alpha_cutoff >= 0.0f) {
+                    alpha_tests.push_back(std::make_unique<AlphaTest>(AlphaTest{&scene, &primitive, &material}));
+                    rtcSetGeometryUserData(geometry, alpha_tests.back().get());
+                    rtcSetGeometryIntersectFilterFunction(geometry, alpha_filter);
+                    rtcSetGeometryOccludedFilterFunction(geometry, alpha_filter);
+                }
                 rtcCommitGeometry(geometry);
                 rtcAttachGeometryByID(mesh_scene, geometry, static_cast<unsigned>(p));
                 rtcReleaseGeometry(geometry);

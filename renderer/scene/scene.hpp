@@ -77,6 +77,9 @@ struct Material {
     glm::vec3 emissive{0.0f};  // radiance, emissive_strength already applied
     float normal_scale = 1.0f;
     bool double_sided = false;
+    // glTF alphaMode MASK: where base-colour alpha (factor times texture) is below the cutoff the
+    // surface is not there, for every pass and ray. Negative: opaque (BLEND is read as MASK at 0.5).
+    float alpha_cutoff = -1.0f;
     TextureRef base_color_texture;          // sRGB
     TextureRef metallic_roughness_texture;  // linear: G = roughness, B = metallic
     TextureRef normal_texture;              // linear, tangent space

@@ -14,6 +14,7 @@ uniform float u_roughness;
 uniform float u_specular;
 uniform vec3 u_emissive;
 uniform float u_normal_scale;
+uniform float u_alpha_cutoff;  // alphaMode MASK: below it the surface is not there; negative: opaque
 uniform bool u_double_sided;
 // UV set per texture, or -1 when the material has none.
 uniform int u_base_color_uv;
@@ -35,7 +36,18 @@ struct SurfacePoint {
     float roughness;
     float specular;
     vec3 emissive;
+    float alpha;  // base-colour alpha, factor times texture
 };
+
+// alphaMode MASK: whether the surface is cut away at this point (every rasterizing pass discards it).
+bool cut_out(float alpha) { return alpha < u_alpha_cutoff; }
+
+// The base-colour alpha alone, for passes that need nothing else (shadow maps).
+float material_alpha(vec2 uv[2]) {
+    float alpha = u_base_color.a;
+    if (u_base_color_uv >= 0) alpha *= texture(u_base_color_map, texture_uv(uv, u_base_color_uv, u_base_color_uv_transform)).a;
+    return alpha;
+}
 
 SurfacePoint evaluate_surface(vec3 interpolated_normal, vec4 tangent, vec2 uv[2], bool front_facing) {
     SurfacePoint s;
@@ -64,6 +76,7 @@ SurfacePoint evaluate_surface(vec3 interpolated_normal, vec4 tangent, vec2 uv[2]
     }
     s.normal = n;
     s.base_color = clamp(base.rgb, 0.0, 1.0);
+    s.alpha = base.a;
     s.metallic = saturate(s.metallic);
     s.roughness = saturate(s.roughness);
     s.specular = saturate(u_specular);

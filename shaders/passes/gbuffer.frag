@@ -15,6 +15,7 @@ layout(location = BOUNCE_GBUFFER_EMISSIVE) out vec4 out_emissive;
 
 void main() {
     SurfacePoint s = evaluate_surface(v_normal, v_tangent, v_uv, gl_FrontFacing);
+    if (cut_out(s.alpha)) discard;
     out_position = vec4(v_position, 1.0);
     out_normal = vec4(s.normal, s.roughness);
     out_albedo = vec4(s.base_color, s.metallic);

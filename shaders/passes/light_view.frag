@@ -15,6 +15,7 @@ layout(location = 2) out vec4 out_albedo;
 
 void main() {
     SurfacePoint s = evaluate_surface(v_normal, v_tangent, v_uv, gl_FrontFacing);
+    if (cut_out(s.alpha)) discard;
     out_position = vec4(v_position, 1.0);
     out_normal = vec4(s.normal, 0.0);
     // What the surface re-emits diffusely of the light it receives (virtual point lights).

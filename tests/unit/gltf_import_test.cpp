@@ -675,5 +675,35 @@ TEST(GltfImportAccepts, QuantizedMeshes) {
     }
 }
 
+
+// glTF's alphaMode: MASK keeps its cutoff (0.5 when absent), BLEND is read as a cut-out at 0.5
+// with a warning, OPAQUE (the default) has none, and an unknown mode refuses the file.
+TEST(GltfImportAccepts, AlphaModes) {
+    const auto dir = std::filesystem::temp_directory_path() / ("bounce-gltf-alpha-" + std::to_string(::getpid()));
+    const auto material_with = [&](const std::string& alpha) {
+        std::filesystem::remove_all(dir);
+        std::filesystem::copy(own_dir, dir, std::filesystem::copy_options::recursive);
+        std::ifstream in(dir / "textured.gltf");
+        std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+        const std::string anchor = "\"pbrMetallicRoughness\": {";
+        text.replace(text.find(anchor), anchor.size(), alpha + anchor);
+        std::ofstream(dir / "textured.gltf", std::ios::trunc) << text;
+    };
+    material_with(R"("alphaMode": "MASK", "alphaCutoff": 0.3, )");
+    EXPECT_FLOAT_EQ(import_gltf_file(dir / "textured.gltf").materials[0].alpha_cutoff, 0.3f);
+    material_with(R"("alphaMode": "MASK", )");
+    EXPECT_FLOAT_EQ(import_gltf_file(dir / "textured.gltf").materials[0].alpha_cutoff, 0.5f);
+    material_with(R"("alphaMode": "BLEND", )");
+    const Scene blended = import_gltf_file(dir / "textured.gltf");
+    EXPECT_FLOAT_EQ(blended.materials[0].alpha_cutoff, 0.5f);
+    EXPECT_EQ(warnings_mentioning(blended, "alphaMode BLEND is rendered as a cut-out"), 1u);
+    material_with(R"("alphaMode": "OPAQUE", )");
+    EXPECT_LT(import_gltf_file(dir / "textured.gltf").materials[0].alpha_cutoff, 0.0f);
+    material_with(R"("alphaMode": "GLASS", )");
+    EXPECT_NE(import_error(dir / "textured.gltf").find("alphaMode 'GLASS' is none of OPAQUE, MASK, BLEND"),
+              std::string::npos);
+    std::filesystem::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace bounce::scene
