@@ -68,6 +68,14 @@ vec3 diffuse_brdf(SurfaceMaterial m, float n_dot_l, float n_dot_v) {
     return weight * (1.0 - m.metallic) * m.base_color * INV_PI;
 }
 
+// The diffuse reflectance toward a viewer at n.v = n_dot_v of light arriving from every direction:
+// (1 - E(n.v)) (1 - metallic) base, the diffuse weight with its incoming factor at its mean.
+// What a gathered irradiance turns into on its way to the camera (isr, cssm's texel display).
+vec3 diffuse_reflectance_toward(SurfaceMaterial m, float n_dot_v) {
+    float e_v = m.specular > 0.0 ? dielectric_albedo(m.specular, specular_albedo_ab(n_dot_v, m.roughness)) : 0.0;
+    return (1.0 - e_v) * (1.0 - m.metallic) * m.base_color;
+}
+
 // The diffuse reflectance seen from nowhere in particular (voxels keep no view direction): the
 // diffuse weight's cosine-weighted mean over both directions, 1 - E_avg.
 vec3 diffuse_albedo(SurfaceMaterial m) {

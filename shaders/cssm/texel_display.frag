@@ -2,7 +2,7 @@
 // The per-texel display (the paper's view-dependent lightmap, §5): indirect light is not gathered
 // per pixel but read from the atlas, where every bounce already summed its irradiance per texel.
 // A pixel blends the texels near it (within two texel edges, on surfaces facing its way), weighted
-// by distance, and reflects the result with its own diffuse albedo.
+// by distance, and reflects the result with its own diffuse reflectance toward the camera.
 #include "common/shared_layout.h"
 #include "common/brdf.glsl"
 #define CSSM_BRDF(l) 1.0
@@ -14,6 +14,8 @@ layout(binding = BOUNCE_UNIT_GBUFFER_NORMAL) uniform sampler2D u_gbuffer_normal;
 layout(binding = BOUNCE_UNIT_GBUFFER_ALBEDO) uniform sampler2D u_gbuffer_albedo;
 layout(binding = BOUNCE_UNIT_GBUFFER_EMISSIVE) uniform sampler2D u_gbuffer_emissive;
 layout(std430, binding = CSSM_BINDING_TEXEL_INDIRECT) readonly buffer CssmTexelIndirect { vec4 texel_indirect[]; };
+
+uniform vec3 u_camera_position;
 
 out vec4 out_radiance;
 
@@ -41,5 +43,7 @@ void main() {
         weight += w;
     }
     vec3 irradiance = weight > 0.0 ? sum / weight : vec3(0.0);
-    out_radiance = vec4(finite_or_zero(diffuse_albedo(material) * INV_PI * irradiance), 0.0);
+    vec3 v = normalize(u_camera_position - p);
+    vec3 reflectance = diffuse_reflectance_toward(material, max(dot(n, v), 1e-4));
+    out_radiance = vec4(finite_or_zero(reflectance * INV_PI * irradiance), 0.0);
 }

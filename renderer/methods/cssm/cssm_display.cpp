@@ -94,6 +94,7 @@ void CssmDisplay::texel_display(const FrameContext& frame, const GatherTree& tre
     gpu::GpuTimers::Scope timing(frame.timers, "cssm_texel_display");
     const gpu::ShaderProgram& program = frame.shaders.get({"common/fullscreen.vert", "cssm/texel_display.frag", {}});
     program.use();
+    program.set("u_camera_position", frame.camera.position);
     tree.bind(program, pcf, 0.0f);
     gpu::bind_storage(CSSM_BINDING_TEXEL_INDIRECT, indirect);
     gbuffer_.bind_textures();

@@ -147,6 +147,7 @@ private:
         gpu::GpuTimers::Scope timing(frame.timers, "isr_composite");
         const gpu::ShaderProgram& program = frame.shaders.get({"common/fullscreen.vert", "isr/composite.frag", {}});
         program.use();
+        program.set("u_camera_position", frame.camera.position);
         gbuffer_.bind_textures();
         glBindTextureUnit(BOUNCE_UNIT_HDR_INPUT, multires_.irradiance().id());
         glBindFramebuffer(GL_FRAMEBUFFER, frame.output.id());
