@@ -111,6 +111,7 @@ void GpuScene::bind_material(const ShaderProgram& program, int material_index) c
     program.set("u_metallic", material.metallic);
     program.set("u_roughness", material.roughness);
     program.set("u_specular", material.specular);
+    program.set("u_specular_f0", material.dielectric_f0());
     program.set("u_emissive", material.emissive);
     program.set("u_normal_scale", material.normal_scale);
     program.set("u_double_sided", material.double_sided ? 1 : 0);

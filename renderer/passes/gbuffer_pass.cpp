@@ -12,13 +12,17 @@ void GBufferPass::resize(int width, int height) {
     normal_ = gpu::Texture({GL_TEXTURE_2D, GL_RGBA16F, width, height});
     albedo_ = gpu::Texture({GL_TEXTURE_2D, GL_RGBA16F, width, height});
     emissive_ = gpu::Texture({GL_TEXTURE_2D, GL_RGBA32F, width, height});
+    specular_ = gpu::Texture({GL_TEXTURE_2D, GL_RGBA16F, width, height});
     depth_ = gpu::Texture({GL_TEXTURE_2D, GL_DEPTH_COMPONENT32F, width, height});
-    for (gpu::Texture* texture : {&position_, &normal_, &albedo_, &emissive_}) texture->set_filter(GL_NEAREST, GL_NEAREST);
+    for (gpu::Texture* texture : {&position_, &normal_, &albedo_, &emissive_, &specular_}) {
+        texture->set_filter(GL_NEAREST, GL_NEAREST);
+    }
     framebuffer_ = gpu::Framebuffer();
     framebuffer_.attach_color(BOUNCE_GBUFFER_POSITION, position_);
     framebuffer_.attach_color(BOUNCE_GBUFFER_NORMAL, normal_);
     framebuffer_.attach_color(BOUNCE_GBUFFER_ALBEDO, albedo_);
     framebuffer_.attach_color(BOUNCE_GBUFFER_EMISSIVE, emissive_);
+    framebuffer_.attach_color(BOUNCE_GBUFFER_SPECULAR, specular_);
     framebuffer_.attach_depth(depth_);
     framebuffer_.set_draw_buffers(BOUNCE_GBUFFER_TARGETS);
     framebuffer_.check_complete("the G-buffer");
@@ -56,18 +60,19 @@ void GBufferPass::bind_textures() const {
     glBindTextureUnit(BOUNCE_UNIT_GBUFFER_NORMAL, normal_.id());
     glBindTextureUnit(BOUNCE_UNIT_GBUFFER_ALBEDO, albedo_.id());
     glBindTextureUnit(BOUNCE_UNIT_GBUFFER_EMISSIVE, emissive_.id());
+    glBindTextureUnit(BOUNCE_UNIT_GBUFFER_SPECULAR, specular_.id());
     for (GLuint unit : {BOUNCE_UNIT_GBUFFER_POSITION, BOUNCE_UNIT_GBUFFER_NORMAL, BOUNCE_UNIT_GBUFFER_ALBEDO,
-                        BOUNCE_UNIT_GBUFFER_EMISSIVE}) {
+                        BOUNCE_UNIT_GBUFFER_EMISSIVE, BOUNCE_UNIT_GBUFFER_SPECULAR}) {
         glBindSampler(unit, 0);
     }
 }
 
 std::uint64_t GBufferPass::bytes_for(int width, int height) {
-    return static_cast<std::uint64_t>(width) * static_cast<std::uint64_t>(height) * (16 + 8 + 8 + 16 + 4);
+    return static_cast<std::uint64_t>(width) * static_cast<std::uint64_t>(height) * (16 + 8 + 8 + 16 + 8 + 4);
 }
 
 std::size_t GBufferPass::bytes() const {
-    return position_.bytes() + normal_.bytes() + albedo_.bytes() + emissive_.bytes() + depth_.bytes();
+    return position_.bytes() + normal_.bytes() + albedo_.bytes() + emissive_.bytes() + specular_.bytes() + depth_.bytes();
 }
 
 }  // namespace bounce::passes

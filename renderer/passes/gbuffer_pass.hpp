@@ -22,7 +22,7 @@ private:
     void resize(int width, int height);
     int width_ = 0;
     int height_ = 0;
-    gpu::Texture position_, normal_, albedo_, emissive_, depth_;
+    gpu::Texture position_, normal_, albedo_, emissive_, specular_, depth_;
     gpu::Framebuffer framebuffer_;
 };
 

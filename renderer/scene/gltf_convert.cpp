@@ -175,6 +175,32 @@ private:
                     extension_object(source.extensions, "KHR_materials_specular")) {
                 material.specular =
                     as_float(number_member(*specular, "specularFactor").value_or(1.0), where + " specularFactor");
+                if (specular->Has("specularColorFactor")) {
+                    const tinygltf::Value& colour = specular->Get("specularColorFactor");
+                    if (!colour.IsArray() || colour.ArrayLen() != 3) {
+                        reject(fmt::format("{} specularColorFactor must be an array of 3 numbers", where));
+                    }
+                    for (int c = 0; c < 3; ++c) {
+                        if (!colour.Get(c).IsNumber() || !(colour.Get(c).GetNumberAsDouble() >= 0.0)) {
+                            reject(fmt::format("{} specularColorFactor must hold 3 numbers of at least 0", where));
+                        }
+                        material.specular_color[c] = as_float(colour.Get(c).GetNumberAsDouble(), where + " specularColorFactor");
+                    }
+                }
+                for (const char* texture : {"specularTexture", "specularColorTexture"}) {
+                    if (specular->Has(texture)) {
+                        warnings_.add(fmt::format("{}: KHR_materials_specular's {} is not applied (its factors are)",
+                                                  where, texture));
+                    }
+                }
+            }
+            if (const tinygltf::Value* ior = extension_object(source.extensions, "KHR_materials_ior")) {
+                // ior >= 1 (0, the extension's other allowed value, gives F0 = 1 through the same formula).
+                const double value = number_member(*ior, "ior").value_or(1.5);
+                if (!(value == 0.0 || value >= 1.0) || !std::isfinite(value)) {
+                    reject(fmt::format("{} ior is {}, not 0 or at least 1", where, value));
+                }
+                material.ior = static_cast<float>(value);
             }
             material.normal_scale = as_float(source.normalTexture.scale, where + " normalTexture.scale");
             material.double_sided = source.doubleSided;

@@ -18,7 +18,7 @@ namespace {
 // Required extensions Bounce honours.
 const std::set<std::string, std::less<>> supported_extensions = {
     "KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_materials_specular",
-    "KHR_texture_transform", "KHR_mesh_quantization"};
+    "KHR_texture_transform", "KHR_mesh_quantization", "KHR_materials_ior"};
 
 // GLB's header and chunk lengths are little-endian.
 std::uint32_t read_u32_le(const std::uint8_t* bytes) {

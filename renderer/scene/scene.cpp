@@ -20,6 +20,11 @@ Aabb Aabb::transformed(const glm::mat4& transform) const {
     return out;
 }
 
+glm::vec3 Material::dielectric_f0() const {
+    const float r = (ior - 1.0f) / (ior + 1.0f);
+    return glm::min(r * r * specular_color, glm::vec3(1.0f));
+}
+
 bool Material::glossy() const {
     // A dielectric with specular 0 is pure Lambertian; otherwise the GGX lobe carries energy.
     return metallic > 0.0f || specular > 0.0f;

@@ -74,6 +74,10 @@ struct Material {
     float metallic = 1.0f;
     float roughness = 1.0f;
     float specular = 1.0f;  // KHR_materials_specular specularFactor
+    glm::vec3 specular_color{1.0f};  // KHR_materials_specular specularColorFactor
+    float ior = 1.5f;                // KHR_materials_ior
+    // The dielectric's F0 colour before the specular factor: min(((ior - 1)/(ior + 1))^2 colour, 1).
+    glm::vec3 dielectric_f0() const;
     glm::vec3 emissive{0.0f};  // radiance, emissive_strength already applied
     float normal_scale = 1.0f;
     bool double_sided = false;

@@ -17,27 +17,29 @@ float schlick_weight(float v_dot_h) {
     const float m2 = m * m;
     return m2 * m2 * m;
 }
-float dielectric_fresnel(float specular, float cos_angle) {
-    return specular * (kDielectricF0 + (1.0f - kDielectricF0) * schlick_weight(cos_angle));
+// Schlick's Fresnel of the dielectric: F0 = specular f0, F90 = specular (KHR_materials_specular).
+glm::vec3 dielectric_fresnel(const SurfaceMaterial& m, float cos_angle) {
+    return m.specular * (m.f0 + (glm::vec3(1.0f) - m.f0) * schlick_weight(cos_angle));
 }
 
-// The dielectric lobe's directional albedo from its (A, B) split: specular (F0 A + B).
-float dielectric_albedo(float specular, const glm::vec2& ab) { return specular * (kDielectricF0 * ab.x + ab.y); }
+// The dielectric lobe's directional albedo from its (A, B) split, per channel: F0 A + F90 B.
+glm::vec3 dielectric_albedo(const SurfaceMaterial& m, const glm::vec2& ab) { return m.specular * (m.f0 * ab.x + ab.y); }
 
 // What the diffuse base may reflect, between the specular directional albedos on the way in and
 // out, normalized so that a white base reflects exactly what the specular lobe leaves
 // (docs/methods.md, "BRDF": albedo scaling, reciprocal).
-float diffuse_weight(const SurfaceMaterial& m, float n_dot_l, float n_dot_v) {
-    if (m.specular <= 0.0f) return 1.0f;
-    const float e_l = dielectric_albedo(m.specular, specular_albedo_ab(n_dot_l, m.roughness));
-    const float e_v = dielectric_albedo(m.specular, specular_albedo_ab(n_dot_v, m.roughness));
-    const float e_avg = dielectric_albedo(m.specular, specular_average_ab(m.roughness));
-    return (1.0f - e_l) * (1.0f - e_v) / std::max(1.0f - e_avg, 1e-4f);
+glm::vec3 diffuse_weight(const SurfaceMaterial& m, float n_dot_l, float n_dot_v) {
+    if (m.specular <= 0.0f) return glm::vec3(1.0f);
+    const glm::vec3 e_l = dielectric_albedo(m, specular_albedo_ab(n_dot_l, m.roughness));
+    const glm::vec3 e_v = dielectric_albedo(m, specular_albedo_ab(n_dot_v, m.roughness));
+    const glm::vec3 e_avg = dielectric_albedo(m, specular_average_ab(m.roughness));
+    return (glm::vec3(1.0f) - e_l) * (glm::vec3(1.0f) - e_v) / glm::max(glm::vec3(1.0f) - e_avg, glm::vec3(1e-4f));
 }
 }  // namespace
 
 SurfaceMaterial SurfaceMaterial::from(const Material& material) {
-    return {glm::vec3(material.base_color), material.metallic, material.roughness, material.specular};
+    return {glm::vec3(material.base_color), material.metallic, material.roughness, material.specular,
+            material.dielectric_f0()};
 }
 
 float ggx_alpha(float roughness) { return std::max(roughness * roughness, kMinGgxAlpha); }
@@ -71,7 +73,7 @@ glm::vec3 evaluate_brdf(const SurfaceMaterial& m, const glm::vec3& n, const glm:
     // glTF's mix weights the diffuse part by 1 - F(v.h); albedo scaling weights it by what the
     // specular lobe leaves in each direction instead, which conserves energy and is reciprocal.
     const glm::vec3 dielectric = diffuse_weight(m, n_dot_l, n_dot_v) * m.base_color / kPi +
-                                 glm::vec3(dielectric_fresnel(m.specular, v_dot_h) * specular_lobe);
+                                 dielectric_fresnel(m, v_dot_h) * specular_lobe;
     const glm::vec3 metal = (m.base_color + (glm::vec3(1.0f) - m.base_color) * fw) * specular_lobe;
     return glm::mix(dielectric, metal, m.metallic);
 }
@@ -124,8 +126,9 @@ TexturedMaterial textured_material(const Scene& scene, const Material& material,
 
 glm::vec3 diffuse_albedo(const SurfaceMaterial& m) {
     // The diffuse weight's cosine-weighted mean over both directions is (1 - E_avg)^2 / (1 - E_avg).
-    const float e_avg = m.specular > 0.0f ? dielectric_albedo(m.specular, specular_average_ab(m.roughness)) : 0.0f;
-    return (1.0f - e_avg) * (1.0f - m.metallic) * m.base_color;
+    const glm::vec3 e_avg =
+        m.specular > 0.0f ? dielectric_albedo(m, specular_average_ab(m.roughness)) : glm::vec3(0.0f);
+    return (glm::vec3(1.0f) - e_avg) * (1.0f - m.metallic) * m.base_color;
 }
 
 void orthonormal_basis(const glm::vec3& n, glm::vec3& t, glm::vec3& b) {
@@ -141,7 +144,7 @@ float specular_sampling_probability(const SurfaceMaterial& m) {
     if (m.metallic <= 0.0f && m.specular <= 0.0f) return 0.0f;
     // Roughly the share of reflected energy in the specular lobe, kept away from 0 and 1 so both
     // lobes are always explored.
-    const float dielectric_share = m.specular * kDielectricF0 * 2.0f;
+    const float dielectric_share = m.specular * std::max({m.f0.r, m.f0.g, m.f0.b}) * 2.0f;
     return std::clamp(dielectric_share + (1.0f - dielectric_share) * m.metallic, 0.1f, 0.9f);
 }
 

@@ -15,7 +15,8 @@ struct SurfaceMaterial {
     glm::vec3 base_color{0.8f};
     float metallic = 0.0f;
     float roughness = 1.0f;
-    float specular = 1.0f;
+    float specular = 1.0f;                 // F90, and F0's scale (KHR_materials_specular's factor)
+    glm::vec3 f0{0.04f};                   // the dielectric's F0 colour before that factor
 
     static SurfaceMaterial from(const Material& material);
 };

@@ -14,7 +14,8 @@ struct SurfaceMaterial {
     vec3 base_color;
     float metallic;
     float roughness;  // perceptual; alpha = roughness^2
-    float specular;   // 0 turns the dielectric lobe off (pure Lambertian)
+    float specular;   // KHR_materials_specular's factor: F90, and F0's scale; 0: pure Lambertian
+    vec3 f0;          // the dielectric's F0 colour before that factor: min(((ior-1)/(ior+1))^2 colour, 1)
 };
 
 const float MIN_GGX_ALPHA = 1e-3;
@@ -42,12 +43,13 @@ float schlick_weight(float v_dot_h) {
     return m2 * m2 * m;
 }
 
-float dielectric_fresnel(float specular, float cos_angle) {
-    return specular * (DIELECTRIC_F0 + (1.0 - DIELECTRIC_F0) * schlick_weight(cos_angle));
+// Schlick's Fresnel of the dielectric, F0 = specular f0 and F90 = specular (KHR_materials_specular).
+vec3 dielectric_fresnel(SurfaceMaterial m, float cos_angle) {
+    return m.specular * (m.f0 + (1.0 - m.f0) * schlick_weight(cos_angle));
 }
 
-// The dielectric lobe's directional albedo E = specular (F0 A + B), and its cosine-weighted mean.
-float dielectric_albedo(float specular, vec2 ab) { return specular * (DIELECTRIC_F0 * ab.x + ab.y); }
+// The dielectric lobe's directional albedo E = F0 A + F90 B per channel, from the (A, B) split.
+vec3 dielectric_albedo(SurfaceMaterial m, vec2 ab) { return m.specular * (m.f0 * ab.x + ab.y); }
 vec2 specular_albedo_ab(float n_dot_v, float roughness) {
     return texture(u_brdf_albedo, vec2(saturate(n_dot_v), saturate(roughness))).rg;
 }
@@ -58,12 +60,12 @@ vec2 specular_average_ab(float roughness) { return texture(u_brdf_average, vec2(
 // (glTF's 1 - F(v.h) weight instead reflects more than it receives at grazing view, and the
 // smooth interface's 1 - F(n.l) darkens rough matte surfaces at grazing light).
 vec3 diffuse_brdf(SurfaceMaterial m, float n_dot_l, float n_dot_v) {
-    float weight = 1.0;
+    vec3 weight = vec3(1.0);
     if (m.specular > 0.0) {
-        float e_l = dielectric_albedo(m.specular, specular_albedo_ab(n_dot_l, m.roughness));
-        float e_v = dielectric_albedo(m.specular, specular_albedo_ab(n_dot_v, m.roughness));
-        float e_avg = dielectric_albedo(m.specular, specular_average_ab(m.roughness));
-        weight = (1.0 - e_l) * (1.0 - e_v) / max(1.0 - e_avg, 1e-4);
+        vec3 e_l = dielectric_albedo(m, specular_albedo_ab(n_dot_l, m.roughness));
+        vec3 e_v = dielectric_albedo(m, specular_albedo_ab(n_dot_v, m.roughness));
+        vec3 e_avg = dielectric_albedo(m, specular_average_ab(m.roughness));
+        weight = (1.0 - e_l) * (1.0 - e_v) / max(1.0 - e_avg, vec3(1e-4));
     }
     return weight * (1.0 - m.metallic) * m.base_color * INV_PI;
 }
@@ -72,21 +74,21 @@ vec3 diffuse_brdf(SurfaceMaterial m, float n_dot_l, float n_dot_v) {
 // (1 - E(n.v)) (1 - metallic) base, the diffuse weight with its incoming factor at its mean.
 // What a gathered irradiance turns into on its way to the camera (isr, cssm's texel display).
 vec3 diffuse_reflectance_toward(SurfaceMaterial m, float n_dot_v) {
-    float e_v = m.specular > 0.0 ? dielectric_albedo(m.specular, specular_albedo_ab(n_dot_v, m.roughness)) : 0.0;
+    vec3 e_v = m.specular > 0.0 ? dielectric_albedo(m, specular_albedo_ab(n_dot_v, m.roughness)) : vec3(0.0);
     return (1.0 - e_v) * (1.0 - m.metallic) * m.base_color;
 }
 
 // The diffuse reflectance seen from nowhere in particular (voxels keep no view direction): the
 // diffuse weight's cosine-weighted mean over both directions, 1 - E_avg.
 vec3 diffuse_albedo(SurfaceMaterial m) {
-    float e_avg = m.specular > 0.0 ? dielectric_albedo(m.specular, specular_average_ab(m.roughness)) : 0.0;
+    vec3 e_avg = m.specular > 0.0 ? dielectric_albedo(m, specular_average_ab(m.roughness)) : vec3(0.0);
     return (1.0 - e_avg) * (1.0 - m.metallic) * m.base_color;
 }
 
 // The specular part of evaluate_brdf integrated over the hemisphere (its directional albedo), from
 // the (A, B) split of scene::specular_albedo_table for this n.v and roughness.
 vec3 specular_albedo(SurfaceMaterial m, vec2 ab) {
-    vec3 dielectric = vec3(m.specular * (DIELECTRIC_F0 * ab.x + ab.y));
+    vec3 dielectric = dielectric_albedo(m, ab);
     vec3 metal = m.base_color * ab.x + ab.y;
     return mix(dielectric, metal, m.metallic);
 }
@@ -104,7 +106,7 @@ vec3 evaluate_brdf(SurfaceMaterial m, vec3 n, vec3 v, vec3 l) {
     float alpha = ggx_alpha(m.roughness);
     float specular_lobe = ggx_distribution(n_dot_h, alpha) * smith_visibility(n_dot_l, n_dot_v, alpha);
     float fw = schlick_weight(v_dot_h);
-    vec3 dielectric_specular = vec3(dielectric_fresnel(m.specular, v_dot_h) * specular_lobe);
+    vec3 dielectric_specular = dielectric_fresnel(m, v_dot_h) * specular_lobe;
     vec3 metal_specular = (m.base_color + (1.0 - m.base_color) * fw) * specular_lobe;
     return diffuse_brdf(m, n_dot_l, n_dot_v) + mix(dielectric_specular, metal_specular, m.metallic);
 }
@@ -116,9 +118,9 @@ vec3 evaluate_brdf(SurfaceMaterial m, vec3 n, vec3 v, vec3 l) {
 // Fresnel at 1 (metal) or at the specular factor (dielectric).
 float brdf_bound(SurfaceMaterial m, vec3 n, vec3 v, vec3 l_axis, float cone) {
     // The diffuse weight is at most 1 / (1 - E_avg) (both directional albedos at 0).
-    float e_avg = m.specular > 0.0 ? dielectric_albedo(m.specular, specular_average_ab(m.roughness)) : 0.0;
-    float diffuse = max(m.base_color.r, max(m.base_color.g, m.base_color.b)) * (1.0 - m.metallic) * INV_PI /
-                    max(1.0 - e_avg, 1e-4);
+    vec3 e_avg = m.specular > 0.0 ? dielectric_albedo(m, specular_average_ab(m.roughness)) : vec3(0.0);
+    vec3 diffuse_bound = m.base_color / max(1.0 - e_avg, vec3(1e-4));
+    float diffuse = max(diffuse_bound.r, max(diffuse_bound.g, diffuse_bound.b)) * (1.0 - m.metallic) * INV_PI;
     float fresnel = mix(m.specular, 1.0, m.metallic);
     if (fresnel <= 0.0) return diffuse;
     vec3 mirror = reflect(-v, n);

@@ -12,6 +12,7 @@ uniform vec4 u_base_color;
 uniform float u_metallic;
 uniform float u_roughness;
 uniform float u_specular;
+uniform vec3 u_specular_f0;  // the dielectric's F0 colour before the specular factor (ior, specularColorFactor)
 uniform vec3 u_emissive;
 uniform float u_normal_scale;
 uniform float u_alpha_cutoff;  // alphaMode MASK: below it the surface is not there; negative: opaque
@@ -35,6 +36,7 @@ struct SurfacePoint {
     float metallic;
     float roughness;
     float specular;
+    vec3 f0;
     vec3 emissive;
     float alpha;  // base-colour alpha, factor times texture
 };
@@ -80,6 +82,7 @@ SurfacePoint evaluate_surface(vec3 interpolated_normal, vec4 tangent, vec2 uv[2]
     s.metallic = saturate(s.metallic);
     s.roughness = saturate(s.roughness);
     s.specular = saturate(u_specular);
+    s.f0 = clamp(u_specular_f0, 0.0, 1.0);
     s.emissive = finite_or_zero(max(emissive, vec3(0.0)));
     return s;
 }

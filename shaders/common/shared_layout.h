@@ -19,6 +19,7 @@
 #define BOUNCE_UNIT_GBUFFER_NORMAL 5
 #define BOUNCE_UNIT_GBUFFER_ALBEDO 6
 #define BOUNCE_UNIT_GBUFFER_EMISSIVE 7
+#define BOUNCE_UNIT_GBUFFER_SPECULAR 13
 // Texture units: light-view maps and frame inputs.
 #define BOUNCE_UNIT_SHADOW_2D 8
 #define BOUNCE_UNIT_SHADOW_CUBE 9
@@ -33,7 +34,8 @@
 #define BOUNCE_GBUFFER_NORMAL 1     // RGBA16F: shading normal, w = perceptual roughness
 #define BOUNCE_GBUFFER_ALBEDO 2     // RGBA16F: base colour, w = metallic
 #define BOUNCE_GBUFFER_EMISSIVE 3   // RGBA32F: emitted radiance, w = specular factor
-#define BOUNCE_GBUFFER_TARGETS 4
+#define BOUNCE_GBUFFER_SPECULAR 4   // RGBA16F: the dielectric's F0 colour before the specular factor
+#define BOUNCE_GBUFFER_TARGETS 5
 
 // Light types (scene::LightType in the same order).
 #define BOUNCE_LIGHT_POINT 0

@@ -8,6 +8,7 @@ layout(binding = BOUNCE_UNIT_GBUFFER_POSITION) uniform sampler2D u_gbuffer_posit
 layout(binding = BOUNCE_UNIT_GBUFFER_NORMAL) uniform sampler2D u_gbuffer_normal;
 layout(binding = BOUNCE_UNIT_GBUFFER_ALBEDO) uniform sampler2D u_gbuffer_albedo;
 layout(binding = BOUNCE_UNIT_GBUFFER_EMISSIVE) uniform sampler2D u_gbuffer_emissive;
+layout(binding = BOUNCE_UNIT_GBUFFER_SPECULAR) uniform sampler2D u_gbuffer_specular;
 
 uniform vec3 u_camera_position;
 
@@ -26,7 +27,8 @@ void main() {
     vec4 normal_roughness = texelFetch(u_gbuffer_normal, pixel, 0);
     vec4 albedo_metallic = texelFetch(u_gbuffer_albedo, pixel, 0);
     float specular = texelFetch(u_gbuffer_emissive, pixel, 0).w;
-    g_material = SurfaceMaterial(albedo_metallic.rgb, albedo_metallic.w, normal_roughness.w, specular);
+    g_material = SurfaceMaterial(albedo_metallic.rgb, albedo_metallic.w, normal_roughness.w, specular,
+                                               texelFetch(u_gbuffer_specular, pixel, 0).rgb);
     g_n = normal_roughness.xyz;
     g_v = safe_normalize(u_camera_position - position.xyz, g_n);
     // With moving objects, the texel under the pixel tests its own group's occluders from its side.

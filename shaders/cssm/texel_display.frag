@@ -13,6 +13,7 @@ layout(binding = BOUNCE_UNIT_GBUFFER_POSITION) uniform sampler2D u_gbuffer_posit
 layout(binding = BOUNCE_UNIT_GBUFFER_NORMAL) uniform sampler2D u_gbuffer_normal;
 layout(binding = BOUNCE_UNIT_GBUFFER_ALBEDO) uniform sampler2D u_gbuffer_albedo;
 layout(binding = BOUNCE_UNIT_GBUFFER_EMISSIVE) uniform sampler2D u_gbuffer_emissive;
+layout(binding = BOUNCE_UNIT_GBUFFER_SPECULAR) uniform sampler2D u_gbuffer_specular;
 layout(std430, binding = CSSM_BINDING_TEXEL_INDIRECT) readonly buffer CssmTexelIndirect { vec4 texel_indirect[]; };
 
 uniform vec3 u_camera_position;
@@ -26,7 +27,8 @@ void main() {
     vec4 normal_roughness = texelFetch(u_gbuffer_normal, pixel, 0);
     vec4 albedo_metallic = texelFetch(u_gbuffer_albedo, pixel, 0);
     float specular = texelFetch(u_gbuffer_emissive, pixel, 0).w;
-    SurfaceMaterial material = SurfaceMaterial(albedo_metallic.rgb, albedo_metallic.w, normal_roughness.w, specular);
+    SurfaceMaterial material = SurfaceMaterial(albedo_metallic.rgb, albedo_metallic.w, normal_roughness.w, specular,
+                                               texelFetch(u_gbuffer_specular, pixel, 0).rgb);
     vec3 p = position.xyz, n = normal_roughness.xyz;
 
     float radius = 2.0 * u_texel_size;

@@ -8,6 +8,7 @@ layout(binding = BOUNCE_UNIT_GBUFFER_POSITION) uniform sampler2D u_gbuffer_posit
 layout(binding = BOUNCE_UNIT_GBUFFER_NORMAL) uniform sampler2D u_gbuffer_normal;
 layout(binding = BOUNCE_UNIT_GBUFFER_ALBEDO) uniform sampler2D u_gbuffer_albedo;
 layout(binding = BOUNCE_UNIT_GBUFFER_EMISSIVE) uniform sampler2D u_gbuffer_emissive;
+layout(binding = BOUNCE_UNIT_GBUFFER_SPECULAR) uniform sampler2D u_gbuffer_specular;
 layout(binding = BOUNCE_UNIT_HDR_INPUT) uniform sampler2D u_irradiance;
 
 uniform vec3 u_camera_position;
@@ -20,7 +21,8 @@ void main() {
     vec4 albedo_metallic = texelFetch(u_gbuffer_albedo, pixel, 0);
     SurfaceMaterial material = SurfaceMaterial(albedo_metallic.rgb, albedo_metallic.w,
                                                texelFetch(u_gbuffer_normal, pixel, 0).w,
-                                               texelFetch(u_gbuffer_emissive, pixel, 0).w);
+                                               texelFetch(u_gbuffer_emissive, pixel, 0).w,
+                                               texelFetch(u_gbuffer_specular, pixel, 0).rgb);
     vec3 irradiance = texelFetch(u_irradiance, pixel, 0).rgb;
     vec3 n = texelFetch(u_gbuffer_normal, pixel, 0).xyz;
     vec3 v = normalize(u_camera_position - texelFetch(u_gbuffer_position, pixel, 0).xyz);

@@ -10,6 +10,7 @@ layout(binding = BOUNCE_UNIT_GBUFFER_POSITION) uniform sampler2D u_gbuffer_posit
 layout(binding = BOUNCE_UNIT_GBUFFER_NORMAL) uniform sampler2D u_gbuffer_normal;
 layout(binding = BOUNCE_UNIT_GBUFFER_ALBEDO) uniform sampler2D u_gbuffer_albedo;
 layout(binding = BOUNCE_UNIT_GBUFFER_EMISSIVE) uniform sampler2D u_gbuffer_emissive;
+layout(binding = BOUNCE_UNIT_GBUFFER_SPECULAR) uniform sampler2D u_gbuffer_specular;
 
 uniform vec3 u_camera_position;
 uniform int u_light_type;
@@ -29,7 +30,8 @@ void main() {
     vec4 albedo_metallic = texelFetch(u_gbuffer_albedo, pixel, 0);
     float specular = texelFetch(u_gbuffer_emissive, pixel, 0).w;
 
-    SurfaceMaterial material = SurfaceMaterial(albedo_metallic.rgb, albedo_metallic.w, normal_roughness.w, specular);
+    SurfaceMaterial material = SurfaceMaterial(albedo_metallic.rgb, albedo_metallic.w, normal_roughness.w, specular,
+                                               texelFetch(u_gbuffer_specular, pixel, 0).rgb);
     PunctualLight light = PunctualLight(u_light_type, u_light_position, u_light_direction, u_light_radiant,
                                         u_light_cos_inner, u_light_cos_outer);
     vec3 p = position.xyz;

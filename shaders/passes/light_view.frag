@@ -19,5 +19,5 @@ void main() {
     out_position = vec4(v_position, 1.0);
     out_normal = vec4(s.normal, 0.0);
     // What the surface re-emits diffusely of the light it receives (virtual point lights).
-    out_albedo = vec4(diffuse_albedo(SurfaceMaterial(s.base_color, s.metallic, s.roughness, s.specular)), 1.0);
+    out_albedo = vec4(diffuse_albedo(SurfaceMaterial(s.base_color, s.metallic, s.roughness, s.specular, s.f0)), 1.0);
 }

@@ -13,6 +13,7 @@ layout(binding = BOUNCE_UNIT_GBUFFER_POSITION) uniform sampler2D u_gbuffer_posit
 layout(binding = BOUNCE_UNIT_GBUFFER_NORMAL) uniform sampler2D u_gbuffer_normal;
 layout(binding = BOUNCE_UNIT_GBUFFER_ALBEDO) uniform sampler2D u_gbuffer_albedo;
 layout(binding = BOUNCE_UNIT_GBUFFER_EMISSIVE) uniform sampler2D u_gbuffer_emissive;
+layout(binding = BOUNCE_UNIT_GBUFFER_SPECULAR) uniform sampler2D u_gbuffer_specular;
 
 uniform vec3 u_camera_position;
 uniform bool u_ambient_occlusion;
@@ -26,7 +27,8 @@ void main() {
     vec4 normal_roughness = texelFetch(u_gbuffer_normal, pixel, 0);
     vec4 albedo_metallic = texelFetch(u_gbuffer_albedo, pixel, 0);
     float specular = texelFetch(u_gbuffer_emissive, pixel, 0).w;
-    SurfaceMaterial material = SurfaceMaterial(albedo_metallic.rgb, albedo_metallic.w, normal_roughness.w, specular);
+    SurfaceMaterial material = SurfaceMaterial(albedo_metallic.rgb, albedo_metallic.w, normal_roughness.w, specular,
+                                               texelFetch(u_gbuffer_specular, pixel, 0).rgb);
     vec3 p = position.xyz;
     vec3 n = safe_normalize(normal_roughness.xyz, vec3(0.0, 1.0, 0.0));
     vec3 v = safe_normalize(u_camera_position - p, n);

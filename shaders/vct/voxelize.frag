@@ -24,7 +24,7 @@ void main() {
     SurfaceVoxels voxels = surface_voxels(g_position, g_face_normal, axis);
     SurfacePoint s = evaluate_surface(g_normal, g_tangent, g_uv, true);
     if (cut_out(s.alpha)) return;  // no voxels where the surface is cut away
-    SurfaceMaterial m = SurfaceMaterial(s.base_color, s.metallic, s.roughness, s.specular);
+    SurfaceMaterial m = SurfaceMaterial(s.base_color, s.metallic, s.roughness, s.specular, s.f0);
     uint albedo = packUnorm4x8(vec4(diffuse_albedo(m), 1.0));
     uint normal = packSnorm4x8(vec4(s.normal, 0.0));
     for (int i = 0; i < 2; ++i) {

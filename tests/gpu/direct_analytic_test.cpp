@@ -101,7 +101,13 @@ TEST(DirectAnalytic, GlossyDielectricAndMetalMatchTheBrdf) {
     metal.metallic = 1.0f;
     metal.roughness = 0.6f;
     metal.specular = 1.0f;
-    for (const auto& material : {dielectric, metal}) {
+    // KHR_materials_ior and specularColorFactor: F0 = ((2.4 - 1)/(2.4 + 1))^2 (1, 0.5, 0.25), a tinted
+    // glaze whose F0 colour reaches the frame through the G-buffer's specular target.
+    scene::Material tinted = dielectric;
+    tinted.roughness = 0.3f;
+    tinted.ior = 2.4f;
+    tinted.specular_color = {1.0f, 0.5f, 0.25f};
+    for (const auto& material : {dielectric, metal, tinted}) {
         const auto setup = plane_under(material, point_light({0.2f, 0.8f, 0.1f}, 1.0f));
         const auto result = render_scene(setup.scene, setup.request);
         EXPECT_EQ(expect_matches_closed_form(setup, result), 144) << "metallic " << material.metallic;

@@ -705,5 +705,34 @@ TEST(GltfImportAccepts, AlphaModes) {
     std::filesystem::remove_all(dir);
 }
 
+
+// KHR_materials_specular's colour factor and KHR_materials_ior are read; their textures only warn;
+// malformed values refuse the file.
+TEST(GltfImportAccepts, SpecularColourAndIor) {
+    const auto dir = std::filesystem::temp_directory_path() / ("bounce-gltf-ior-" + std::to_string(::getpid()));
+    const auto material_with = [&](const std::string& extensions) {
+        std::filesystem::remove_all(dir);
+        std::filesystem::copy(own_dir, dir, std::filesystem::copy_options::recursive);
+        std::ifstream in(dir / "textured.gltf");
+        std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+        const std::string anchor = "\"pbrMetallicRoughness\": {";
+        text.replace(text.find(anchor), anchor.size(), "\"extensions\": {" + extensions + "}, " + anchor);
+        std::ofstream(dir / "textured.gltf", std::ios::trunc) << text;
+    };
+    material_with(R"("KHR_materials_specular": {"specularFactor": 0.5, "specularColorFactor": [1, 0.5, 0.25],
+                     "specularTexture": {"index": 0}}, "KHR_materials_ior": {"ior": 2.4})");
+    const Scene scene = import_gltf_file(dir / "textured.gltf");
+    EXPECT_FLOAT_EQ(scene.materials[0].specular, 0.5f);
+    EXPECT_EQ(scene.materials[0].specular_color, glm::vec3(1.0f, 0.5f, 0.25f));
+    EXPECT_FLOAT_EQ(scene.materials[0].ior, 2.4f);
+    EXPECT_EQ(warnings_mentioning(scene, "specularTexture is not applied"), 1u);
+    material_with(R"("KHR_materials_ior": {"ior": 0.5})");
+    EXPECT_NE(import_error(dir / "textured.gltf").find("ior is 0.5, not 0 or at least 1"), std::string::npos);
+    material_with(R"("KHR_materials_specular": {"specularColorFactor": [1, 1]})");
+    EXPECT_NE(import_error(dir / "textured.gltf").find("specularColorFactor must be an array of 3 numbers"),
+              std::string::npos);
+    std::filesystem::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace bounce::scene

@@ -297,5 +297,34 @@ TEST(BrdfTables, AveragesAreTheMeansOfTheDirectionalAlbedos) {
     }
 }
 
+
+// KHR_materials_specular's colour and KHR_materials_ior: F0 per channel. A white base still
+// reflects all it receives in every channel (the diffuse weight is per channel), and the model
+// stays reciprocal. Tolerances as for the grey F0 above.
+TEST(Brdf, TintedDielectricsConserveEnergyPerChannelAndAreReciprocal) {
+    scene::Material glaze;
+    glaze.ior = 2.4f;
+    glaze.specular_color = {1.0f, 0.5f, 0.25f};
+    const glm::vec3 f0 = glaze.dielectric_f0();
+    EXPECT_NEAR(f0.r, std::pow(1.4f / 3.4f, 2.0f), 1e-6f);
+    EXPECT_NEAR(f0.b, 0.25f * std::pow(1.4f / 3.4f, 2.0f), 1e-6f);
+    for (float roughness : {0.3f, 1.0f}) {
+        const SurfaceMaterial m{{1.0f, 1.0f, 1.0f}, 0.0f, roughness, 1.0f, f0};
+        for (float degrees : {0.0f, 45.0f, 75.0f}) {
+            const glm::vec3 albedo = directional_albedo(m, from_angles(glm::radians(degrees), 0.0f));
+            for (int c = 0; c < 3; ++c) EXPECT_NEAR(albedo[c], 1.0f, 0.01f) << roughness << " " << degrees << " " << c;
+        }
+    }
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    const glm::vec3 n{0, 1, 0};
+    for (int i = 0; i < 100; ++i) {
+        const SurfaceMaterial m{{u(rng), u(rng), u(rng)}, u(rng), 0.05f + u(rng), u(rng), {u(rng), u(rng), u(rng)}};
+        const glm::vec3 a = from_angles(u(rng) * 1.5f, u(rng) * 6.28f), b = from_angles(u(rng) * 1.5f, u(rng) * 6.28f);
+        const glm::vec3 fab = evaluate_brdf(m, n, a, b), fba = evaluate_brdf(m, n, b, a);
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(fab[c], fba[c], 1e-4f * std::max(1.0f, fab[c]));
+    }
+}
+
 }  // namespace
 }  // namespace bounce::scene
