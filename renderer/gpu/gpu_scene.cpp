@@ -112,6 +112,9 @@ void GpuScene::bind_material(const ShaderProgram& program, int material_index) c
     program.set("u_roughness", material.roughness);
     program.set("u_specular", material.specular);
     program.set("u_specular_f0", material.dielectric_f0());
+    program.set("u_specular_color", material.specular_color);
+    const float r = (material.ior - 1.0f) / (material.ior + 1.0f);
+    program.set("u_ior_f0", r * r);
     program.set("u_emissive", material.emissive);
     program.set("u_normal_scale", material.normal_scale);
     program.set("u_double_sided", material.double_sided ? 1 : 0);
@@ -130,6 +133,8 @@ void GpuScene::bind_material(const ShaderProgram& program, int material_index) c
     bind(material.metallic_roughness_texture, BOUNCE_UNIT_METALLIC_ROUGHNESS, "u_metallic_roughness_uv");
     bind(material.normal_texture, BOUNCE_UNIT_NORMAL, "u_normal_uv");
     bind(material.emissive_texture, BOUNCE_UNIT_EMISSIVE, "u_emissive_uv");
+    bind(material.specular_texture, BOUNCE_UNIT_SPECULAR, "u_specular_uv");
+    bind(material.specular_color_texture, BOUNCE_UNIT_SPECULAR_COLOR, "u_specular_color_uv");
 }
 
 void set_object_transform(const ShaderProgram& program, const glm::mat4& model) {

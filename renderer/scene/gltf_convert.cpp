@@ -187,11 +187,15 @@ private:
                         material.specular_color[c] = as_float(colour.Get(c).GetNumberAsDouble(), where + " specularColorFactor");
                     }
                 }
-                for (const char* texture : {"specularTexture", "specularColorTexture"}) {
-                    if (specular->Has(texture)) {
-                        warnings_.add(fmt::format("{}: KHR_materials_specular's {} is not applied (its factors are)",
-                                                  where, texture));
-                    }
+                if (specular->Has("specularTexture")) {
+                    material.specular_texture = texture_ref(texture_info(specular->Get("specularTexture"),
+                                                                         where + " specularTexture"),
+                                                            false, where + " specularTexture");
+                }
+                if (specular->Has("specularColorTexture")) {
+                    material.specular_color_texture = texture_ref(
+                        texture_info(specular->Get("specularColorTexture"), where + " specularColorTexture"), true,
+                        where + " specularColorTexture");
                 }
             }
             if (const tinygltf::Value* ior = extension_object(source.extensions, "KHR_materials_ior")) {
@@ -231,7 +235,8 @@ private:
         if (primitive.material < 0 || static_cast<std::size_t>(primitive.material) >= scene_.materials.size()) return;
         const Material& material = scene_.materials[static_cast<std::size_t>(primitive.material)];
         for (const TextureRef* ref : {&material.base_color_texture, &material.metallic_roughness_texture,
-                                      &material.normal_texture, &material.emissive_texture}) {
+                                      &material.normal_texture, &material.emissive_texture,
+                                      &material.specular_texture, &material.specular_color_texture}) {
             if (!ref->valid()) continue;
             std::vector<glm::vec2>& uvs = ref->uv_set == 1 ? primitive.uv1 : primitive.uv0;
             if (uvs.size() == primitive.positions.size()) continue;
@@ -274,6 +279,26 @@ private:
         const glm::mat3 rotate(c, s, 0, -s, c, 0, 0, 0, 1);  // columns, as the specification writes them
         const glm::mat3 scaling(scale.x, 0, 0, 0, scale.y, 0, 0, 0, 1);
         return translation * rotate * scaling;
+    }
+
+    // An extension's textureInfo object (index, texCoord, extensions) in tinygltf's form.
+    tinygltf::TextureInfo texture_info(const tinygltf::Value& value, const std::string& where) {
+        if (!value.IsObject() || !value.Has("index") || !value.Get("index").IsInt()) {
+            reject(fmt::format("{} must be an object with an integer index", where));
+        }
+        tinygltf::TextureInfo info;
+        info.index = value.Get("index").GetNumberAsInt();
+        if (value.Has("texCoord")) {
+            if (!value.Get("texCoord").IsInt()) reject(fmt::format("{} texCoord must be an integer", where));
+            info.texCoord = value.Get("texCoord").GetNumberAsInt();
+        }
+        if (value.Has("extensions")) {
+            const tinygltf::Value& extensions = value.Get("extensions");
+            if (!extensions.IsObject()) reject(fmt::format("{} extensions must be an object", where));
+            for (const std::string& key : extensions.Keys()) info.extensions[key] = extensions.Get(key);
+        }
+        if (info.index < 0) reject(fmt::format("{} index must be at least 0", where));
+        return info;
     }
 
     // A texture reference; on any problem the reference is none, so the factor alone applies.

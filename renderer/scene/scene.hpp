@@ -88,6 +88,8 @@ struct Material {
     TextureRef metallic_roughness_texture;  // linear: G = roughness, B = metallic
     TextureRef normal_texture;              // linear, tangent space
     TextureRef emissive_texture;            // sRGB
+    TextureRef specular_texture;            // linear: A scales the specular factor
+    TextureRef specular_color_texture;      // sRGB: RGB scales the specular colour
 
     bool glossy() const;  // has a specular lobe that is not negligible
 };

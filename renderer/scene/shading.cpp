@@ -117,6 +117,16 @@ TexturedMaterial textured_material(const Scene& scene, const Material& material,
         result.surface.roughness *= mr.g;
         result.surface.metallic *= mr.b;
     }
+    // KHR_materials_specular's textures scale the factor (alpha) and the colour (RGB); F0's colour
+    // is then min(((ior - 1)/(ior + 1))^2 colour, 1), as Material::dielectric_f0 for the factors.
+    if (const Texture* t = texture(material.specular_texture)) {
+        result.surface.specular *= sample_texture(*t, uv(material.specular_texture)).a;
+    }
+    if (const Texture* t = texture(material.specular_color_texture)) {
+        const float r = (material.ior - 1.0f) / (material.ior + 1.0f);
+        const glm::vec3 colour = material.specular_color * glm::vec3(sample_texture(*t, uv(material.specular_color_texture)));
+        result.surface.f0 = glm::min(r * r * colour, glm::vec3(1.0f));
+    }
     if (const Texture* t = texture(material.emissive_texture)) {
         result.emitted *= glm::vec3(sample_texture(*t, uv(material.emissive_texture)));
     }

@@ -7,12 +7,16 @@ layout(binding = BOUNCE_UNIT_BASE_COLOR) uniform sampler2D u_base_color_map;
 layout(binding = BOUNCE_UNIT_METALLIC_ROUGHNESS) uniform sampler2D u_metallic_roughness_map;
 layout(binding = BOUNCE_UNIT_NORMAL) uniform sampler2D u_normal_map;
 layout(binding = BOUNCE_UNIT_EMISSIVE) uniform sampler2D u_emissive_map;
+layout(binding = BOUNCE_UNIT_SPECULAR) uniform sampler2D u_specular_map;
+layout(binding = BOUNCE_UNIT_SPECULAR_COLOR) uniform sampler2D u_specular_color_map;
 
 uniform vec4 u_base_color;
 uniform float u_metallic;
 uniform float u_roughness;
 uniform float u_specular;
 uniform vec3 u_specular_f0;  // the dielectric's F0 colour before the specular factor (ior, specularColorFactor)
+uniform vec3 u_specular_color;  // specularColorFactor, for the colour texture
+uniform float u_ior_f0;         // ((ior - 1)/(ior + 1))^2
 uniform vec3 u_emissive;
 uniform float u_normal_scale;
 uniform float u_alpha_cutoff;  // alphaMode MASK: below it the surface is not there; negative: opaque
@@ -22,11 +26,15 @@ uniform int u_base_color_uv;
 uniform int u_metallic_roughness_uv;
 uniform int u_normal_uv;
 uniform int u_emissive_uv;
+uniform int u_specular_uv;
+uniform int u_specular_color_uv;
 // KHR_texture_transform per texture (identity when the file gives none): uv' = (M (uv, 1)).xy.
 uniform mat3 u_base_color_uv_transform;
 uniform mat3 u_metallic_roughness_uv_transform;
 uniform mat3 u_normal_uv_transform;
 uniform mat3 u_emissive_uv_transform;
+uniform mat3 u_specular_uv_transform;
+uniform mat3 u_specular_color_uv_transform;
 
 vec2 texture_uv(vec2 uv[2], int set, mat3 transform) { return (transform * vec3(uv[clamp(set, 0, 1)], 1.0)).xy; }
 
@@ -81,8 +89,16 @@ SurfacePoint evaluate_surface(vec3 interpolated_normal, vec4 tangent, vec2 uv[2]
     s.alpha = base.a;
     s.metallic = saturate(s.metallic);
     s.roughness = saturate(s.roughness);
-    s.specular = saturate(u_specular);
-    s.f0 = clamp(u_specular_f0, 0.0, 1.0);
+    s.specular = u_specular;
+    if (u_specular_uv >= 0) s.specular *= texture(u_specular_map, texture_uv(uv, u_specular_uv, u_specular_uv_transform)).a;
+    s.specular = saturate(s.specular);
+    s.f0 = u_specular_f0;
+    if (u_specular_color_uv >= 0) {
+        vec3 colour = u_specular_color * texture(u_specular_color_map,
+                                                 texture_uv(uv, u_specular_color_uv, u_specular_color_uv_transform)).rgb;
+        s.f0 = min(u_ior_f0 * colour, vec3(1.0));
+    }
+    s.f0 = clamp(s.f0, 0.0, 1.0);
     s.emissive = finite_or_zero(max(emissive, vec3(0.0)));
     return s;
 }

@@ -14,6 +14,10 @@
 #define BOUNCE_UNIT_METALLIC_ROUGHNESS 1
 #define BOUNCE_UNIT_NORMAL 2
 #define BOUNCE_UNIT_EMISSIVE 3
+// KHR_materials_specular's textures. They share units 11 and 12 with vct's brick pools: passes that
+// rasterize materials and vct's cone trace each bind what they sample before they draw.
+#define BOUNCE_UNIT_SPECULAR 11
+#define BOUNCE_UNIT_SPECULAR_COLOR 12
 // Texture units: G-buffer.
 #define BOUNCE_UNIT_GBUFFER_POSITION 4
 #define BOUNCE_UNIT_GBUFFER_NORMAL 5

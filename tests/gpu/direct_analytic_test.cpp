@@ -263,5 +263,47 @@ TEST(DirectAnalytic, FileLightsAreInCandelaAndLux) {
     }
 }
 
+
+// KHR_materials_specular's textures: the specular texture's alpha scales the factor and the colour
+// texture's RGB (sRGB) the colour, on the GPU as in the CPU twin (textured_material). Constant 1x1
+// textures, so that filtering plays no part; tolerance as above.
+TEST(DirectAnalytic, SpecularTexturesScaleFactorAndColour) {
+    scene::Material glaze = matte({0.6f, 0.6f, 0.6f});
+    glaze.roughness = 0.3f;
+    glaze.specular = 1.0f;
+    glaze.ior = 2.0f;
+    scene::Texture alpha, colour;
+    alpha.width = alpha.height = colour.width = colour.height = 1;
+    alpha.rgba8 = {255, 255, 255, 128};
+    colour.rgba8 = {255, 128, 64, 255};
+    colour.srgb = true;
+    glaze.specular_texture.texture = 0;
+    glaze.specular_color_texture.texture = 1;
+    auto setup = plane_under(glaze, point_light({0.2f, 0.8f, 0.1f}, 1.0f));
+    setup.scene.textures = {alpha, colour};
+    const auto result = render_scene(setup.scene, setup.request);
+    const auto textured = scene::textured_material(setup.scene, glaze, glm::vec2(0.5f), glm::vec2(0.5f));
+    EXPECT_NEAR(textured.surface.specular, 128.0f / 255.0f, 1e-6f);
+    EXPECT_LT(textured.surface.f0.b, textured.surface.f0.r);
+    const glm::vec3 n{0, 1, 0};
+    const auto& light = setup.scene.lights[0];
+    int compared = 0;
+    for (int y = 4; y < kSize; y += 8) {
+        for (int x = 4; x < kSize; x += 8) {
+            const glm::vec3 p = pixel_on_ground(*setup.request.camera, kSize, kSize, x, y);
+            const auto incidence = scene::light_incidence(light, p);
+            const glm::vec3 v = glm::normalize(setup.request.camera->position - p);
+            const glm::vec3 expected = scene::evaluate_brdf(textured.surface, n, v, incidence.l) * incidence.irradiance *
+                                       std::max(glm::dot(n, incidence.l), 0.0f);
+            for (int c = 0; c < 3; ++c) {
+                EXPECT_NEAR(result.frame.at(x, y)[c], expected[c], std::max(kRelativeTolerance * expected[c], 1e-6f))
+                    << x << "," << y << " channel " << c;
+            }
+            ++compared;
+        }
+    }
+    EXPECT_EQ(compared, 144);
+}
+
 }  // namespace
 }  // namespace bounce::test

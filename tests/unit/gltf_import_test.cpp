@@ -706,7 +706,7 @@ TEST(GltfImportAccepts, AlphaModes) {
 }
 
 
-// KHR_materials_specular's colour factor and KHR_materials_ior are read; their textures only warn;
+// KHR_materials_specular's colour factor, its two textures and KHR_materials_ior are read;
 // malformed values refuse the file.
 TEST(GltfImportAccepts, SpecularColourAndIor) {
     const auto dir = std::filesystem::temp_directory_path() / ("bounce-gltf-ior-" + std::to_string(::getpid()));
@@ -720,16 +720,23 @@ TEST(GltfImportAccepts, SpecularColourAndIor) {
         std::ofstream(dir / "textured.gltf", std::ios::trunc) << text;
     };
     material_with(R"("KHR_materials_specular": {"specularFactor": 0.5, "specularColorFactor": [1, 0.5, 0.25],
-                     "specularTexture": {"index": 0}}, "KHR_materials_ior": {"ior": 2.4})");
+                     "specularTexture": {"index": 0}, "specularColorTexture": {"index": 0, "texCoord": 0}},
+                     "KHR_materials_ior": {"ior": 2.4})");
     const Scene scene = import_gltf_file(dir / "textured.gltf");
     EXPECT_FLOAT_EQ(scene.materials[0].specular, 0.5f);
     EXPECT_EQ(scene.materials[0].specular_color, glm::vec3(1.0f, 0.5f, 0.25f));
     EXPECT_FLOAT_EQ(scene.materials[0].ior, 2.4f);
-    EXPECT_EQ(warnings_mentioning(scene, "specularTexture is not applied"), 1u);
+    EXPECT_TRUE(scene.materials[0].specular_texture.valid());
+    EXPECT_TRUE(scene.materials[0].specular_color_texture.valid());
+    // The same image as linear data (specular) and as sRGB (colour): two textures.
+    EXPECT_NE(scene.materials[0].specular_texture.texture, scene.materials[0].specular_color_texture.texture);
     material_with(R"("KHR_materials_ior": {"ior": 0.5})");
     EXPECT_NE(import_error(dir / "textured.gltf").find("ior is 0.5, not 0 or at least 1"), std::string::npos);
     material_with(R"("KHR_materials_specular": {"specularColorFactor": [1, 1]})");
     EXPECT_NE(import_error(dir / "textured.gltf").find("specularColorFactor must be an array of 3 numbers"),
+              std::string::npos);
+    material_with(R"("KHR_materials_specular": {"specularTexture": {"index": "zero"}})");
+    EXPECT_NE(import_error(dir / "textured.gltf").find("specularTexture must be an object with an integer index"),
               std::string::npos);
     std::filesystem::remove_all(dir);
 }
