@@ -11,18 +11,20 @@
 
 namespace bounce::scene {
 
+// glTF's default dielectric F0: ((1.5 - 1)/(1.5 + 1))^2 for the default ior.
+inline constexpr float kDielectricF0 = 0.04f;
+
 struct SurfaceMaterial {
     glm::vec3 base_color{0.8f};
     float metallic = 0.0f;
     float roughness = 1.0f;
     float specular = 1.0f;                 // F90, and F0's scale (KHR_materials_specular's factor)
-    glm::vec3 f0{0.04f};                   // the dielectric's F0 colour before that factor
+    glm::vec3 f0{kDielectricF0};           // the dielectric's F0 colour before that factor
 
     static SurfaceMaterial from(const Material& material);
 };
 
 inline constexpr float kMinGgxAlpha = 1e-3f;
-inline constexpr float kDielectricF0 = 0.04f;
 
 float ggx_alpha(float roughness);
 float ggx_distribution(float n_dot_h, float alpha);

@@ -19,7 +19,6 @@ struct SurfaceMaterial {
 };
 
 const float MIN_GGX_ALPHA = 1e-3;
-const float DIELECTRIC_F0 = 0.04;
 
 float ggx_alpha(float roughness) { return max(roughness * roughness, MIN_GGX_ALPHA); }
 

@@ -45,11 +45,7 @@ scene::Scene blocked_floor(bool masked) {
         for (const auto& p : primitive.positions) primitive.bounds.extend(p);
         scene.meshes[1].bounds = primitive.bounds;
     }
-    scene::Light sun;
-    sun.type = scene::LightType::directional;
-    sun.direction = {0.0f, -1.0f, 0.0f};
-    sun.intensity = 2.0f;
-    scene.lights.push_back(sun);
+    scene.lights.push_back(directional_light({0.0f, -1.0f, 0.0f}, 2.0f));
     return scene;
 }
 
@@ -155,11 +151,9 @@ TEST(AlphaMask, ATexturedTransformedMaskedAssetMatchesTheReference) {
     request.width = request.height = 64;
     request.preset = "high";
     const auto direct = render_scene(scene, request);
-    methods::reference::PathTracer tracer(scene);
-    methods::reference::PathTracerSettings settings;
-    settings.max_bounces = 0;
-    settings.pixel_jitter = false;
-    const auto truth = tracer.render(scene.cameras[0], 64, 64, 4, settings);
+    methods::reference::PathTracerSettings direct_only;
+    direct_only.max_bounces = 0;
+    const auto truth = pixel_centre_reference(scene, 64, 4, direct_only);
     const image::ErrorMetrics error = image::compare(direct.frame, truth);
     // Pixels whose centre lies where the two decide differently (see above) disagree; every other
     // pixel agrees to 1% in every channel.

@@ -43,6 +43,15 @@ scene::Material matte(const glm::vec3& albedo) {
     return material;
 }
 
+scene::Light directional_light(const glm::vec3& direction, float irradiance) {
+    scene::Light light;
+    light.name = "sun";
+    light.type = scene::LightType::directional;
+    light.direction = direction;
+    light.intensity = irradiance;
+    return light;
+}
+
 void add_square(scene::Scene& scene, const std::string& name, const glm::vec3& centre, float half_size,
                 const glm::vec3& normal, int material) {
     const glm::vec3 n = glm::normalize(normal);

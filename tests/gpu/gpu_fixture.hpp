@@ -26,6 +26,9 @@ RenderResult render_scene(const scene::Scene& scene, const RenderRequest& reques
 
 scene::Material matte(const glm::vec3& albedo);
 
+// A directional light shining along `direction` (unit) with `irradiance` W/m^2 on a surface facing it.
+scene::Light directional_light(const glm::vec3& direction, float irradiance);
+
 // Adds a one-primitive object: a square of `half_size` centred at `centre`, facing `normal`.
 void add_square(scene::Scene& scene, const std::string& name, const glm::vec3& centre, float half_size,
                 const glm::vec3& normal, int material);

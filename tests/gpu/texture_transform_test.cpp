@@ -45,11 +45,7 @@ scene::Scene textured_plane(const glm::mat3& transform, bool transform_the_mesh)
     if (transform_the_mesh) {
         for (glm::vec2& uv : scene.meshes[0].primitives[0].uv0) uv = glm::vec2(transform * glm::vec3(uv, 1.0f));
     }
-    scene::Light light;
-    light.type = scene::LightType::directional;
-    light.direction = {0.0f, -1.0f, 0.0f};
-    light.intensity = 3.0f;
-    scene.lights.push_back(light);
+    scene.lights.push_back(directional_light({0.0f, -1.0f, 0.0f}, 3.0f));
     return scene;
 }
 

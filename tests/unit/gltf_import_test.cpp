@@ -552,8 +552,9 @@ namespace bounce::scene {
 namespace {
 
 // A copy of one of the project's test files with `from` replaced by `to`, in a temporary folder
-// beside copies of its buffers; the import's fault message ("" when it loads).
-std::string import_error_of_edited(const std::string& file, const std::string& from, const std::string& to) {
+// beside copies of its buffers, handed to `use` and removed after.
+template <typename Use>
+auto with_edited(const std::string& file, const std::string& from, const std::string& to, Use&& use) {
     const auto dir = std::filesystem::temp_directory_path() / ("bounce-gltf-edit-" + std::to_string(::getpid()));
     std::filesystem::remove_all(dir);
     std::filesystem::copy(own_dir, dir, std::filesystem::copy_options::recursive);
@@ -563,9 +564,19 @@ std::string import_error_of_edited(const std::string& file, const std::string& f
     EXPECT_NE(at, std::string::npos) << from;
     if (at != std::string::npos) text.replace(at, from.size(), to);
     std::ofstream(dir / file, std::ios::trunc) << text;
-    const std::string error = import_error(dir / file);
-    std::filesystem::remove_all(dir);
-    return error;
+    struct Cleanup {
+        std::filesystem::path dir;
+        ~Cleanup() { std::filesystem::remove_all(dir); }
+    } cleanup{dir};
+    return use(dir / file);
+}
+
+// The import's fault message for an edited file ("" when it loads), and the scene it loads.
+std::string import_error_of_edited(const std::string& file, const std::string& from, const std::string& to) {
+    return with_edited(file, from, to, [](const std::filesystem::path& path) { return import_error(path); });
+}
+Scene import_edited(const std::string& file, const std::string& from, const std::string& to) {
+    return with_edited(file, from, to, [](const std::filesystem::path& path) { return import_gltf_file(path); });
 }
 
 // Indices as tinygltf reads them: JSON integers in [0, INT_MAX]. A float index or one past INT_MAX
@@ -600,17 +611,7 @@ TEST(GltfImportRejects, MalformedTextureTransforms) {
 // A texture read through a UV set the primitive lacks (textured.gltf without its TEXCOORD_0): the
 // set is filled with (0, 0), the same for every method and the reference, with a warning.
 TEST(GltfImportAccepts, AMissingUvSetReadsZeroWithAWarning) {
-    const auto dir = std::filesystem::temp_directory_path() / ("bounce-gltf-uv-" + std::to_string(::getpid()));
-    std::filesystem::remove_all(dir);
-    std::filesystem::copy(own_dir, dir, std::filesystem::copy_options::recursive);
-    std::ifstream in(dir / "textured.gltf");
-    std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-    const std::string uvs = ",\n      \"TEXCOORD_0\": 1";
-    ASSERT_NE(text.find(uvs), std::string::npos);
-    text.erase(text.find(uvs), uvs.size());
-    std::ofstream(dir / "textured.gltf", std::ios::trunc) << text;
-    const Scene scene = import_gltf_file(dir / "textured.gltf");
-    std::filesystem::remove_all(dir);
+    const Scene scene = import_edited("textured.gltf", ",\n      \"TEXCOORD_0\": 1", "");
     EXPECT_GE(warnings_mentioning(scene, "samples TEXCOORD_0, which the primitive lacks"), 1u);
     for (const auto& mesh : scene.meshes) {
         for (const auto& primitive : mesh.primitives) {
@@ -679,50 +680,30 @@ TEST(GltfImportAccepts, QuantizedMeshes) {
 // glTF's alphaMode: MASK keeps its cutoff (0.5 when absent), BLEND is read as a cut-out at 0.5
 // with a warning, OPAQUE (the default) has none, and an unknown mode refuses the file.
 TEST(GltfImportAccepts, AlphaModes) {
-    const auto dir = std::filesystem::temp_directory_path() / ("bounce-gltf-alpha-" + std::to_string(::getpid()));
-    const auto material_with = [&](const std::string& alpha) {
-        std::filesystem::remove_all(dir);
-        std::filesystem::copy(own_dir, dir, std::filesystem::copy_options::recursive);
-        std::ifstream in(dir / "textured.gltf");
-        std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-        const std::string anchor = "\"pbrMetallicRoughness\": {";
-        text.replace(text.find(anchor), anchor.size(), alpha + anchor);
-        std::ofstream(dir / "textured.gltf", std::ios::trunc) << text;
+    const std::string anchor = "\"pbrMetallicRoughness\": {";
+    const auto material_with = [&](const std::string& alpha) { return import_edited("textured.gltf", anchor, alpha + anchor); };
+    const auto refusal_with = [&](const std::string& alpha) {
+        return import_error_of_edited("textured.gltf", anchor, alpha + anchor);
     };
-    material_with(R"("alphaMode": "MASK", "alphaCutoff": 0.3, )");
-    EXPECT_FLOAT_EQ(import_gltf_file(dir / "textured.gltf").materials[0].alpha_cutoff, 0.3f);
-    material_with(R"("alphaMode": "MASK", )");
-    EXPECT_FLOAT_EQ(import_gltf_file(dir / "textured.gltf").materials[0].alpha_cutoff, 0.5f);
-    material_with(R"("alphaMode": "BLEND", )");
-    const Scene blended = import_gltf_file(dir / "textured.gltf");
+    EXPECT_FLOAT_EQ(material_with(R"("alphaMode": "MASK", "alphaCutoff": 0.3, )").materials[0].alpha_cutoff, 0.3f);
+    EXPECT_FLOAT_EQ(material_with(R"("alphaMode": "MASK", )").materials[0].alpha_cutoff, 0.5f);
+    const Scene blended = material_with(R"("alphaMode": "BLEND", )");
     EXPECT_FLOAT_EQ(blended.materials[0].alpha_cutoff, 0.5f);
     EXPECT_EQ(warnings_mentioning(blended, "alphaMode BLEND is rendered as a cut-out"), 1u);
-    material_with(R"("alphaMode": "OPAQUE", )");
-    EXPECT_LT(import_gltf_file(dir / "textured.gltf").materials[0].alpha_cutoff, 0.0f);
-    material_with(R"("alphaMode": "GLASS", )");
-    EXPECT_NE(import_error(dir / "textured.gltf").find("alphaMode 'GLASS' is none of OPAQUE, MASK, BLEND"),
+    EXPECT_LT(material_with(R"("alphaMode": "OPAQUE", )").materials[0].alpha_cutoff, 0.0f);
+    EXPECT_NE(refusal_with(R"("alphaMode": "GLASS", )").find("alphaMode 'GLASS' is none of OPAQUE, MASK, BLEND"),
               std::string::npos);
-    std::filesystem::remove_all(dir);
 }
 
 
 // KHR_materials_specular's colour factor, its two textures and KHR_materials_ior are read;
 // malformed values refuse the file.
 TEST(GltfImportAccepts, SpecularColourAndIor) {
-    const auto dir = std::filesystem::temp_directory_path() / ("bounce-gltf-ior-" + std::to_string(::getpid()));
-    const auto material_with = [&](const std::string& extensions) {
-        std::filesystem::remove_all(dir);
-        std::filesystem::copy(own_dir, dir, std::filesystem::copy_options::recursive);
-        std::ifstream in(dir / "textured.gltf");
-        std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-        const std::string anchor = "\"pbrMetallicRoughness\": {";
-        text.replace(text.find(anchor), anchor.size(), "\"extensions\": {" + extensions + "}, " + anchor);
-        std::ofstream(dir / "textured.gltf", std::ios::trunc) << text;
-    };
-    material_with(R"("KHR_materials_specular": {"specularFactor": 0.5, "specularColorFactor": [1, 0.5, 0.25],
-                     "specularTexture": {"index": 0}, "specularColorTexture": {"index": 0, "texCoord": 0}},
-                     "KHR_materials_ior": {"ior": 2.4})");
-    const Scene scene = import_gltf_file(dir / "textured.gltf");
+    const std::string anchor = "\"pbrMetallicRoughness\": {";
+    const auto extensions = [&](const std::string& text) { return "\"extensions\": {" + text + "}, " + anchor; };
+    const Scene scene = import_edited("textured.gltf", anchor, extensions(R"("KHR_materials_specular": {
+        "specularFactor": 0.5, "specularColorFactor": [1, 0.5, 0.25], "specularTexture": {"index": 0},
+        "specularColorTexture": {"index": 0, "texCoord": 0}}, "KHR_materials_ior": {"ior": 2.4})"));
     EXPECT_FLOAT_EQ(scene.materials[0].specular, 0.5f);
     EXPECT_EQ(scene.materials[0].specular_color, glm::vec3(1.0f, 0.5f, 0.25f));
     EXPECT_FLOAT_EQ(scene.materials[0].ior, 2.4f);
@@ -730,15 +711,16 @@ TEST(GltfImportAccepts, SpecularColourAndIor) {
     EXPECT_TRUE(scene.materials[0].specular_color_texture.valid());
     // The same image as linear data (specular) and as sRGB (colour): two textures.
     EXPECT_NE(scene.materials[0].specular_texture.texture, scene.materials[0].specular_color_texture.texture);
-    material_with(R"("KHR_materials_ior": {"ior": 0.5})");
-    EXPECT_NE(import_error(dir / "textured.gltf").find("ior is 0.5, not 0 or at least 1"), std::string::npos);
-    material_with(R"("KHR_materials_specular": {"specularColorFactor": [1, 1]})");
-    EXPECT_NE(import_error(dir / "textured.gltf").find("specularColorFactor must be an array of 3 numbers"),
+    const auto refusal = [&](const std::string& text) {
+        return import_error_of_edited("textured.gltf", anchor, extensions(text));
+    };
+    EXPECT_NE(refusal(R"("KHR_materials_ior": {"ior": 0.5})").find("ior is 0.5, not 0 or at least 1"), std::string::npos);
+    EXPECT_NE(refusal(R"("KHR_materials_specular": {"specularColorFactor": [1, 1]})")
+                  .find("specularColorFactor must be an array of 3 numbers"),
               std::string::npos);
-    material_with(R"("KHR_materials_specular": {"specularTexture": {"index": "zero"}})");
-    EXPECT_NE(import_error(dir / "textured.gltf").find("specularTexture must be an object with an integer index"),
+    EXPECT_NE(refusal(R"("KHR_materials_specular": {"specularTexture": {"index": "zero"}})")
+                  .find("specularTexture must be an object with an integer index"),
               std::string::npos);
-    std::filesystem::remove_all(dir);
 }
 
 }  // namespace

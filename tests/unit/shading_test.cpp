@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 #include <random>
 
@@ -233,11 +234,14 @@ TEST(Brdf, WhiteDielectricsReflectAllTheyReceive) {
     for (float roughness : {0.2f, 0.35f, 0.5f, 0.75f, 1.0f}) {
         for (float specular : {0.25f, 0.5f, 1.0f}) {
             const SurfaceMaterial m{{1.0f, 1.0f, 1.0f}, 0.0f, roughness, specular};
+            std::printf("white dielectric, roughness %.2f, specular %.2f:", roughness, specular);
             for (float degrees : {0.0f, 30.0f, 60.0f, 75.0f, 80.0f}) {
                 const float albedo = directional_albedo(m, from_angles(glm::radians(degrees), 0.0f)).g;
+                std::printf(" %.0f deg %.4f", degrees, albedo);
                 EXPECT_NEAR(albedo, 1.0f, 0.01f) << "roughness " << roughness << " specular " << specular << " at "
                                                  << degrees << " degrees";
             }
+            std::printf("\n");
         }
     }
 }
