@@ -5,6 +5,11 @@
 #include <cstddef>
 
 namespace bounce::gpu {
+
+static_assert(static_cast<int>(scene::AlphaMode::opaque) == BOUNCE_ALPHA_OPAQUE &&
+                  static_cast<int>(scene::AlphaMode::mask) == BOUNCE_ALPHA_MASK &&
+                  static_cast<int>(scene::AlphaMode::blend) == BOUNCE_ALPHA_BLEND,
+              "scene::AlphaMode numbers its modes as the shaders do");
 namespace {
 
 struct Vertex {
@@ -118,6 +123,7 @@ void GpuScene::bind_material(const ShaderProgram& program, int material_index) c
     program.set("u_emissive", material.emissive);
     program.set("u_normal_scale", material.normal_scale);
     program.set("u_double_sided", material.double_sided ? 1 : 0);
+    program.set("u_alpha_mode", static_cast<int>(material.alpha_mode));
     program.set("u_alpha_cutoff", material.alpha_cutoff);
     auto bind = [&](const scene::TextureRef& ref, GLuint unit, const char* uv_uniform) {
         const bool usable = ref.valid() && ref.texture < static_cast<int>(textures_.size()) &&

@@ -27,11 +27,11 @@ void ShadowMaps::render_view(const PassContext& context, const gpu::ShaderProgra
     program.set("u_view_proj", view_projection);
     context.gpu_scene.for_each_primitive([&](const scene::Object& object, const gpu::GpuPrimitive& primitive) {
         program.set("u_model", object.transform);
-        // Alpha-masked materials need their alpha and its texture; every other surface only depth.
-        if (context.scene.material(primitive.material).alpha_cutoff >= 0.0f) {
+        // Masked and blended materials need their alpha and its texture; every other surface only depth.
+        if (context.scene.material(primitive.material).alpha_mode != scene::AlphaMode::opaque) {
             context.gpu_scene.bind_material(program, primitive.material);
         } else {
-            program.set("u_alpha_cutoff", -1.0f);
+            program.set("u_alpha_mode", static_cast<int>(scene::AlphaMode::opaque));
         }
         gpu::GpuScene::draw(primitive);
     });

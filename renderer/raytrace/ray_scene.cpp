@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cstring>
 #include <memory>
 #include <limits>
 #include <vector>
@@ -14,14 +15,16 @@
 namespace bounce::raytrace {
 namespace {
 
-// An alpha-masked primitive's test, the any-hit half of glTF's alphaMode MASK: a hit where the
-// base-colour alpha (factor times texture, at the hit's UV) is below the cutoff is not a hit.
+// The any-hit half of glTF's alphaMode for one primitive, at the hit's base-colour alpha (factor
+// times texture, at its UV). MASK: a hit below the cutoff is not a hit. BLEND: a hit is kept with
+// probability alpha (coverage), decided by a hash of the ray and the hit, so that a ray tested
+// twice against one primitive decides alike and two surfaces along one ray decide independently.
 struct AlphaTest {
     const scene::Scene* scene;
     const scene::Primitive* primitive;
     const scene::Material* material;
 
-    bool cut_out(unsigned triangle, float u, float v) const {
+    float alpha(unsigned triangle, float u, float v) const {
         float alpha = material->base_color.a;
         const scene::TextureRef& ref = material->base_color_texture;
         const std::vector<glm::vec2>& uvs = ref.uv_set == 1 ? primitive->uv1 : primitive->uv0;
@@ -30,18 +33,43 @@ struct AlphaTest {
             const glm::vec2 uv = (1.0f - u - v) * uvs[corner[0]] + u * uvs[corner[1]] + v * uvs[corner[2]];
             alpha *= scene::sample_texture(scene->textures[static_cast<std::size_t>(ref.texture)], ref.transform(uv)).a;
         }
-        return alpha < material->alpha_cutoff;
+        return alpha;
     }
 };
+
+std::uint64_t mix_bits(std::uint64_t h, float value) {
+    std::uint32_t bits;
+    std::memcpy(&bits, &value, sizeof bits);
+    h ^= bits + 0x9e3779b97f4a7c15ULL + (h << 6) + (h >> 2);
+    // splitmix64's finalizer
+    h = (h ^ (h >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    h = (h ^ (h >> 27)) * 0x94d049bb133111ebULL;
+    return h ^ (h >> 31);
+}
+
+// A uniform number in [0, 1) for one ray meeting one point of a primitive.
+float coverage_sample(const RTCFilterFunctionNArguments* args, unsigned i) {
+    std::uint64_t h = (static_cast<std::uint64_t>(RTCHitN_instID(args->hit, args->N, i, 0)) << 48) ^
+                      (static_cast<std::uint64_t>(RTCHitN_geomID(args->hit, args->N, i)) << 32) ^
+                      RTCHitN_primID(args->hit, args->N, i);
+    for (float value : {RTCRayN_org_x(args->ray, args->N, i), RTCRayN_org_y(args->ray, args->N, i),
+                        RTCRayN_org_z(args->ray, args->N, i), RTCRayN_dir_x(args->ray, args->N, i),
+                        RTCRayN_dir_y(args->ray, args->N, i), RTCRayN_dir_z(args->ray, args->N, i),
+                        RTCHitN_u(args->hit, args->N, i), RTCHitN_v(args->hit, args->N, i)})
+        h = mix_bits(h, value);
+    return static_cast<float>(h >> 40) * (1.0f / 16777216.0f);
+}
 
 void alpha_filter(const RTCFilterFunctionNArguments* args) {
     const auto* test = static_cast<const AlphaTest*>(args->geometryUserPtr);
     for (unsigned i = 0; i < args->N; ++i) {
         if (args->valid[i] == 0) continue;
-        if (test->cut_out(RTCHitN_primID(args->hit, args->N, i), RTCHitN_u(args->hit, args->N, i),
-                          RTCHitN_v(args->hit, args->N, i))) {
-            args->valid[i] = 0;  // the ray goes on
-        }
+        const float alpha = test->alpha(RTCHitN_primID(args->hit, args->N, i), RTCHitN_u(args->hit, args->N, i),
+                                        RTCHitN_v(args->hit, args->N, i));
+        const bool there = test->material->alpha_mode == scene::AlphaMode::blend
+                               ? coverage_sample(args, i) < test->material->coverage(alpha)
+                               : test->material->coverage(alpha) > 0.0f;
+        if (!there) args->valid[i] = 0;  // the ray goes on
     }
 }
 
@@ -52,7 +80,7 @@ struct RayScene::Impl {
     RTCDevice device = nullptr;
     std::vector<RTCScene> mesh_scenes;  // per mesh; null for meshes no held object uses
     std::vector<RTCGeometry> instances;  // per object; null for objects not held
-    std::vector<std::unique_ptr<AlphaTest>> alpha_tests;  // one per alpha-masked primitive
+    std::vector<std::unique_ptr<AlphaTest>> alpha_tests;  // one per masked or blended primitive
     RTCScene top = nullptr;
     mutable std::atomic<std::uint64_t> rays{0};
 
@@ -84,7 +112,7 @@ struct RayScene::Impl {
                     geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), primitive.triangle_count()));
                 std::copy(primitive.indices.begin(), primitive.indices.end(), indices);
                 const scene::Material& material = scene.material(primitive.material);
-                if (material.alpha_cutoff >= 0.0f) {
+                if (material.alpha_mode != scene::AlphaMode::opaque) {
                     alpha_tests.push_back(std::make_unique<AlphaTest>(AlphaTest{&scene, &primitive, &material}));
                     rtcSetGeometryUserData(geometry, alpha_tests.back().get());
                     rtcSetGeometryIntersectFilterFunction(geometry, alpha_filter);

@@ -159,12 +159,14 @@ private:
             material.normal_scale = as_float(source.normalTexture.scale, where + " normalTexture.scale");
             material.double_sided = source.doubleSided;
             if (source.alphaMode == "MASK") {
+                material.alpha_mode = scene::AlphaMode::mask;
                 material.alpha_cutoff = as_float(source.alphaCutoff, where + " alphaCutoff");
                 if (!(material.alpha_cutoff >= 0.0f)) reject(fmt::format("{}: alphaCutoff must be at least 0", where));
             } else if (source.alphaMode == "BLEND") {
-                material.alpha_cutoff = 0.5f;
-                warnings_.add(fmt::format("{}: alphaMode BLEND is rendered as a cut-out at alpha 0.5 (no "
-                                          "partial transparency)", where));
+                material.alpha_mode = scene::AlphaMode::blend;
+                warnings_.add(fmt::format("{}: alphaMode BLEND is rendered as coverage, the surface there with "
+                                          "probability alpha (dithered in GPU frames; no sorting, no refraction)",
+                                          where));
             } else if (source.alphaMode != "OPAQUE" && !source.alphaMode.empty()) {
                 reject(fmt::format("{}: alphaMode '{}' is none of OPAQUE, MASK, BLEND", where, source.alphaMode));
             }

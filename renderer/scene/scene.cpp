@@ -5,6 +5,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtx/string_cast.hpp>
 
+#include <algorithm>
 #include <cmath>
 
 namespace bounce::scene {
@@ -23,6 +24,15 @@ Aabb Aabb::transformed(const glm::mat4& transform) const {
 glm::vec3 Material::dielectric_f0() const {
     const float r = (ior - 1.0f) / (ior + 1.0f);
     return glm::min(r * r * specular_color, glm::vec3(1.0f));
+}
+
+float Material::coverage(float alpha) const {
+    switch (alpha_mode) {
+    case AlphaMode::mask: return alpha < alpha_cutoff ? 0.0f : 1.0f;
+    case AlphaMode::blend: return std::isnan(alpha) ? 0.0f : std::clamp(alpha, 0.0f, 1.0f);
+    case AlphaMode::opaque: break;
+    }
+    return 1.0f;
 }
 
 bool Material::glossy() const {

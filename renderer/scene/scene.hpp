@@ -65,6 +65,11 @@ struct TextureRef {
     glm::vec2 transform(const glm::vec2& uv) const { return glm::vec2(uv_transform * glm::vec3(uv, 1.0f)); }
 };
 
+// glTF alphaMode. BLEND is coverage, not compositing: a point with alpha a is there with
+// probability a, for camera, shadow and GI alike (screen-door on the GPU, any-hit on the CPU).
+// The numbers are shaders/common/shared_layout.h's BOUNCE_ALPHA_*.
+enum class AlphaMode : int { opaque = 0, mask = 1, blend = 2 };
+
 // glTF metallic-roughness material plus KHR_materials_emissive_strength and the
 // KHR_materials_specular factor (0 turns the dielectric specular lobe off: pure Lambertian).
 // docs/methods.md gives the BRDF; renderer/scene/brdf.hpp and shaders/common/brdf.glsl implement it.
@@ -81,9 +86,12 @@ struct Material {
     glm::vec3 emissive{0.0f};  // radiance, emissive_strength already applied
     float normal_scale = 1.0f;
     bool double_sided = false;
-    // glTF alphaMode MASK: where base-colour alpha (factor times texture) is below the cutoff the
-    // surface is not there, for every pass and ray. Negative: opaque (BLEND is read as MASK at 0.5).
-    float alpha_cutoff = -1.0f;
+    // glTF alphaMode, for every pass and ray; alpha is base-colour alpha (factor times texture).
+    AlphaMode alpha_mode = AlphaMode::opaque;
+    float alpha_cutoff = 0.5f;  // MASK: below it the surface is not there
+    // The fraction of a point with base-colour alpha `alpha` that the surface covers: 1 when
+    // opaque, 0 or 1 for MASK, alpha (clamped to [0, 1]) for BLEND.
+    float coverage(float alpha) const;
     TextureRef base_color_texture;          // sRGB
     TextureRef metallic_roughness_texture;  // linear: G = roughness, B = metallic
     TextureRef normal_texture;              // linear, tangent space

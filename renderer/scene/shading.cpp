@@ -109,9 +109,13 @@ TexturedMaterial textured_material(const Scene& scene, const Material& material,
         return ref.valid() && ref.texture < static_cast<int>(scene.textures.size()) ? &scene.textures[ref.texture] : nullptr;
     };
     auto uv = [&](const TextureRef& ref) { return ref.transform(ref.uv_set == 1 ? uv1 : uv0); };
+    float alpha = material.base_color.a;
     if (const Texture* t = texture(material.base_color_texture)) {
-        result.surface.base_color *= glm::vec3(sample_texture(*t, uv(material.base_color_texture)));
+        const glm::vec4 texel = sample_texture(*t, uv(material.base_color_texture));
+        result.surface.base_color *= glm::vec3(texel);
+        alpha *= texel.a;
     }
+    result.coverage = material.coverage(alpha);
     if (const Texture* t = texture(material.metallic_roughness_texture)) {
         const glm::vec4 mr = sample_texture(*t, uv(material.metallic_roughness_texture));
         result.surface.roughness *= mr.g;

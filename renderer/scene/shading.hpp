@@ -38,11 +38,12 @@ glm::vec3 evaluate_brdf(const SurfaceMaterial& material, const glm::vec3& n, con
 // textures to linear; white for an empty texture.
 glm::vec4 sample_texture(const Texture& texture, const glm::vec2& uv);
 
-// A material at a surface point with its textures applied (base colour, metallic-roughness,
-// emission) at the point's UV sets.
+// A material at a surface point with its textures applied (base colour and its alpha,
+// metallic-roughness, specular, emission) at the point's UV sets.
 struct TexturedMaterial {
     SurfaceMaterial surface;
     glm::vec3 emitted{0.0f};
+    float coverage = 1.0f;  // Material::coverage of the point's base-colour alpha
 };
 TexturedMaterial textured_material(const Scene& scene, const Material& material, const glm::vec2& uv0,
                                    const glm::vec2& uv1);

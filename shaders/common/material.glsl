@@ -19,7 +19,8 @@ uniform vec3 u_specular_color;  // specularColorFactor, for the colour texture
 uniform float u_ior_f0;         // ((ior - 1)/(ior + 1))^2
 uniform vec3 u_emissive;
 uniform float u_normal_scale;
-uniform float u_alpha_cutoff;  // alphaMode MASK: below it the surface is not there; negative: opaque
+uniform int u_alpha_mode;      // BOUNCE_ALPHA_OPAQUE, _MASK or _BLEND
+uniform float u_alpha_cutoff;  // alphaMode MASK: below it the surface is not there
 uniform bool u_double_sided;
 // UV set per texture, or -1 when the material has none.
 uniform int u_base_color_uv;
@@ -49,8 +50,17 @@ struct SurfacePoint {
     float alpha;  // base-colour alpha, factor times texture
 };
 
-// alphaMode MASK: whether the surface is cut away at this point (every rasterizing pass discards it).
-bool cut_out(float alpha) { return alpha < u_alpha_cutoff; }
+// glTF alphaMode: whether the surface is absent at this fragment (every rasterizing pass discards
+// it). MASK cuts it away below the cutoff. BLEND is coverage: the fragment stays with probability
+// alpha, decided by a hash of its window position and depth, so that two layers at one pixel
+// decide independently and filtered lookups (shadow-map PCF, voxel mips) see the fraction alpha.
+bool cut_out(float alpha) {
+    if (u_alpha_mode == BOUNCE_ALPHA_MASK) return alpha < u_alpha_cutoff;
+    if (u_alpha_mode != BOUNCE_ALPHA_BLEND) return false;
+    uvec2 pixel = uvec2(gl_FragCoord.xy);
+    uint h = pcg_hash(pixel.x ^ pcg_hash(pixel.y ^ pcg_hash(floatBitsToUint(gl_FragCoord.z))));
+    return alpha <= unit_float(h);
+}
 
 // The base-colour alpha alone, for passes that need nothing else (shadow maps).
 float material_alpha(vec2 uv[2]) {

@@ -16,3 +16,14 @@ vec3 finite_or_zero(vec3 v) {
                 isnan(v.y) || isinf(v.y) ? 0.0 : v.y,
                 isnan(v.z) || isinf(v.z) ? 0.0 : v.z);
 }
+
+// A 32-bit integer hash (PCG's output permutation, Jarzynski & Olano 2020): well mixed from
+// consecutive inputs, for per-pixel and per-node random numbers without state.
+uint pcg_hash(uint v) {
+    uint state = v * 747796405u + 2891336453u;
+    uint word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+    return (word >> 22u) ^ word;
+}
+
+// A uniform number in [0, 1) from a hash.
+float unit_float(uint h) { return float(h >> 8u) * (1.0 / 16777216.0); }

@@ -33,6 +33,11 @@
 #define BOUNCE_UNIT_BRDF_ALBEDO 14   // RG32F, (A, B) of the specular lobe by n.v (x) and roughness (y)
 #define BOUNCE_UNIT_BRDF_AVERAGE 15  // RG32F, their cosine-weighted means by roughness (x)
 
+// glTF alphaMode, as scene::AlphaMode numbers it.
+#define BOUNCE_ALPHA_OPAQUE 0
+#define BOUNCE_ALPHA_MASK 1
+#define BOUNCE_ALPHA_BLEND 2
+
 // G-buffer colour attachments.
 #define BOUNCE_GBUFFER_POSITION 0   // RGBA32F: world position, w = 1 where geometry was drawn
 #define BOUNCE_GBUFFER_NORMAL 1     // RGBA16F: shading normal, w = perceptual roughness

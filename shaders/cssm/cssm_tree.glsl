@@ -176,12 +176,6 @@ struct Gathered {
     uint visited;
 };
 
-uint pcg_hash(uint v) {
-    uint state = v * 747796405u + 2891336453u;
-    uint word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
-    return (word >> 22u) ^ word;
-}
-
 // Where a sender node emits from: its centre, or, jittered, a point of the disk of its area (at
 // most its bounding sphere) on its tangent plane, a different one each frame.
 vec3 sender_position(uint node) {

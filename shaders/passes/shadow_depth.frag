@@ -12,7 +12,7 @@ uniform vec3 u_light_position;
 uniform float u_far;
 
 void main() {
-    if (u_alpha_cutoff >= 0.0 && cut_out(material_alpha(v_uv))) discard;
+    if (u_alpha_mode != BOUNCE_ALPHA_OPAQUE && cut_out(material_alpha(v_uv))) discard;
     gl_FragDepth = u_store_distance ? clamp(length(v_world - u_light_position) / u_far, 0.0, 1.0)
                                     : gl_FragCoord.z;
 }

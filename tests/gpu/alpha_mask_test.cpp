@@ -29,7 +29,7 @@ scene::Scene blocked_floor(bool masked) {
         texture.rgba8 = {255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 0, 255, 255, 255, 0};
         scene.textures.push_back(texture);
         blocker.base_color_texture.texture = 0;
-        blocker.alpha_cutoff = 0.5f;
+        blocker.alpha_mode = scene::AlphaMode::mask;
     }
     scene.materials.push_back(blocker);
     add_square(scene, "floor", glm::vec3(0.0f), 2.0f, {0, 1, 0}, 0);
@@ -135,7 +135,7 @@ TEST(AlphaMask, ATexturedTransformedMaskedAssetMatchesTheReference) {
     blocker.base_color_texture.uv_transform = glm::mat3(1, 0, 0, 0, 1, 0, 0.1f, 0.0f, 1) *
                                               glm::mat3(c, s, 0, -s, c, 0, 0, 0, 1) *
                                               glm::mat3(1.5f, 0, 0, 0, 1.5f, 0, 0, 0, 1);
-    blocker.alpha_cutoff = 0.5f;
+    blocker.alpha_mode = scene::AlphaMode::mask;
     blocker.double_sided = true;
     scene.materials.push_back(blocker);
     add_square(scene, "floor", glm::vec3(0.0f), 2.0f, {0, 1, 0}, 0);

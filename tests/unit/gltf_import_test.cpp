@@ -677,20 +677,29 @@ TEST(GltfImportAccepts, QuantizedMeshes) {
 }
 
 
-// glTF's alphaMode: MASK keeps its cutoff (0.5 when absent), BLEND is read as a cut-out at 0.5
-// with a warning, OPAQUE (the default) has none, and an unknown mode refuses the file.
+// glTF's alphaMode: MASK keeps its cutoff (0.5 when absent), BLEND is coverage with a warning,
+// OPAQUE (the default) covers everything, and an unknown mode refuses the file.
 TEST(GltfImportAccepts, AlphaModes) {
     const std::string anchor = "\"pbrMetallicRoughness\": {";
     const auto material_with = [&](const std::string& alpha) { return import_edited("textured.gltf", anchor, alpha + anchor); };
     const auto refusal_with = [&](const std::string& alpha) {
         return import_error_of_edited("textured.gltf", anchor, alpha + anchor);
     };
-    EXPECT_FLOAT_EQ(material_with(R"("alphaMode": "MASK", "alphaCutoff": 0.3, )").materials[0].alpha_cutoff, 0.3f);
+    const Scene masked = material_with(R"("alphaMode": "MASK", "alphaCutoff": 0.3, )");
+    EXPECT_EQ(masked.materials[0].alpha_mode, scene::AlphaMode::mask);
+    EXPECT_FLOAT_EQ(masked.materials[0].alpha_cutoff, 0.3f);
+    EXPECT_EQ(masked.materials[0].coverage(0.29f), 0.0f);
+    EXPECT_EQ(masked.materials[0].coverage(0.3f), 1.0f);
     EXPECT_FLOAT_EQ(material_with(R"("alphaMode": "MASK", )").materials[0].alpha_cutoff, 0.5f);
     const Scene blended = material_with(R"("alphaMode": "BLEND", )");
-    EXPECT_FLOAT_EQ(blended.materials[0].alpha_cutoff, 0.5f);
-    EXPECT_EQ(warnings_mentioning(blended, "alphaMode BLEND is rendered as a cut-out"), 1u);
-    EXPECT_LT(material_with(R"("alphaMode": "OPAQUE", )").materials[0].alpha_cutoff, 0.0f);
+    EXPECT_EQ(blended.materials[0].alpha_mode, scene::AlphaMode::blend);
+    EXPECT_FLOAT_EQ(blended.materials[0].coverage(0.25f), 0.25f);
+    EXPECT_EQ(blended.materials[0].coverage(-1.0f), 0.0f);
+    EXPECT_EQ(blended.materials[0].coverage(std::nanf("")), 0.0f);
+    EXPECT_EQ(warnings_mentioning(blended, "alphaMode BLEND is rendered as coverage"), 1u);
+    const Scene opaque = material_with(R"("alphaMode": "OPAQUE", )");
+    EXPECT_EQ(opaque.materials[0].alpha_mode, scene::AlphaMode::opaque);
+    EXPECT_EQ(opaque.materials[0].coverage(0.0f), 1.0f);
     EXPECT_NE(refusal_with(R"("alphaMode": "GLASS", )").find("alphaMode 'GLASS' is none of OPAQUE, MASK, BLEND"),
               std::string::npos);
 }

@@ -187,9 +187,11 @@ void place_texels(const scene::Scene& scene, CssmBake& bake) {
             const glm::mat4& transform = scene.objects[texel.object].transform;
             bake.positions.push_back(glm::vec3(to_world * glm::vec4(group.maps.origins[t], 1.0f)));
             bake.normals.push_back(glm::normalize(glm::transpose(glm::inverse(glm::mat3(transform))) * texel.normal));
-            bake.areas.push_back(texel.area);
             // The material with its textures at the texel's centre (a texel averages nothing finer).
             const scene::TexturedMaterial material = scene::textured_material(scene, scene.material(texel.material), texel.uv0, texel.uv1);
+            // A texel sends light in proportion to the surface it covers: none where alphaMode MASK
+            // cuts the surface away, the fraction alpha where BLEND makes it partial.
+            bake.areas.push_back(texel.area * material.coverage);
             bake.albedo.push_back(scene::diffuse_albedo(material.surface));
             bake.emission.push_back(material.emitted);
             bake.texel_group.push_back(g);

@@ -197,6 +197,17 @@ struct PathTracer::Impl {
         return hit.position + hit.geometric_normal * (side * epsilon(hit.position));
     }
 
+    // An emissive triangle's material at barycentrics (a, b) of vertices 1 and 2.
+    scene::TexturedMaterial emitter_material(const Emitter& e, const scene::Material& material, float a, float b) const {
+        const scene::Primitive& primitive = scene.meshes[scene.objects[e.object].mesh].primitives[e.primitive];
+        const std::uint32_t* corner = &primitive.indices[3 * static_cast<std::size_t>(e.triangle)];
+        auto uv_of = [&](const std::vector<glm::vec2>& uvs) {
+            return uvs.empty() ? glm::vec2(0.0f) : (1.0f - a - b) * uvs[corner[0]] + a * uvs[corner[1]] + b * uvs[corner[2]];
+        };
+        const glm::vec2 uv0 = uv_of(primitive.uv0);
+        return scene::textured_material(scene, material, uv0, primitive.uv1.empty() ? uv0 : uv_of(primitive.uv1));
+    }
+
     // Direct light at a surface from punctual lights and (MIS) emissive triangles.
     glm::vec3 direct_light(const SurfaceHit& hit, const glm::vec3& v, Random& random) const {
         glm::vec3 total(0.0f);
@@ -238,13 +249,14 @@ struct PathTracer::Impl {
                 if (cos_theta > 0.0f && facing > 0.0f && glm::dot(hit.geometric_normal, to_light) > 0.0f) {
                     const glm::vec3 origin = offset(hit, to_light);
                     if (!occluded(origin, to_light, d * (1.0f - 1e-4f))) {
-                        // Emission textures are evaluated where the BRDF-sampled ray hits; here the
-                        // factor stands in (MIS keeps the sum unbiased only for untextured emitters).
+                        // The emitter's textures and coverage at the sampled point, as a BRDF-sampled
+                        // ray finds them (its any-hit keeps a blended point with probability alpha).
+                        const scene::TexturedMaterial emitter = emitter_material(e, material, a, b);
                         const float light_pdf = emitter_area_pdf(static_cast<int>(&e - emitters.data())) * d2 / facing;
                         const float brdf_pdf = scene::brdf_pdf(hit.material, n, v, to_light);
                         const float weight = light_pdf * light_pdf / (light_pdf * light_pdf + brdf_pdf * brdf_pdf);
-                        total += scene::evaluate_brdf(hit.material, n, v, to_light) * material.emissive * cos_theta *
-                                 (weight / light_pdf);
+                        total += scene::evaluate_brdf(hit.material, n, v, to_light) * emitter.emitted *
+                                 (emitter.coverage * cos_theta * weight / light_pdf);
                     }
                 }
             }
