@@ -127,35 +127,26 @@ TEST(AlphaCoverage, ReferenceBlendedWallSendsItsCoverageOfTheLight) {
     const scene::Material red = matte(glm::vec3(0.9f, 0.1f, 0.1f));
     const scene::Camera camera = top_down_camera(3.0f, 0.9f);
     constexpr int size = 32, spp = 128;
-    auto indirect_red = [&](const scene::Scene& scene, std::uint64_t seed) {
-        methods::reference::PathTracerSettings one_bounce, direct_only;
-        one_bounce.max_bounces = 1;
-        direct_only.max_bounces = 0;
-        one_bounce.seed = direct_only.seed = seed;
-        const image::Frame with = pixel_centre_reference(scene, size, spp, one_bounce);
-        const image::Frame without = pixel_centre_reference(scene, size, spp, direct_only);
-        std::vector<double> values;
-        for (int y = 0; y < size; ++y)
-            for (int x = 0; x < size; ++x)
-                if (open_floor(pixel_on_ground(camera, size, size, x, y)))
-                    values.push_back(static_cast<double>(with.at(x, y).r) - without.at(x, y).r);
-        return values;
+    auto indirect_red = [&](const scene::Scene& scene) {
+        return mean_over_two_seeds([&](std::uint64_t seed) {
+            methods::reference::PathTracerSettings one_bounce, direct_only;
+            one_bounce.max_bounces = 1;
+            direct_only.max_bounces = 0;
+            one_bounce.seed = direct_only.seed = seed;
+            const image::Frame with = pixel_centre_reference(scene, size, spp, one_bounce);
+            const image::Frame without = pixel_centre_reference(scene, size, spp, direct_only);
+            std::vector<double> values;
+            for (int y = 0; y < size; ++y)
+                for (int x = 0; x < size; ++x)
+                    if (open_floor(pixel_on_ground(camera, size, size, x, y)))
+                        values.push_back(static_cast<double>(with.at(x, y).r) - without.at(x, y).r);
+            return values;
+        });
     };
-    // The mean of two seeds' renders and its standard error.
-    auto measure = [&](const scene::Scene& scene, double& mean, double& standard_error) {
-        const std::vector<double> a = indirect_red(scene, 1), b = indirect_red(scene, 2);
-        double sum = 0.0, noise = 0.0;
-        for (std::size_t i = 0; i < a.size(); ++i) {
-            sum += a[i] + b[i];
-            noise += (a[i] - b[i]) * (a[i] - b[i]) / 2.0;  // per pixel: twice one render's variance, halved
-        }
-        const double n = static_cast<double>(a.size());
-        mean = sum / (2.0 * n);
-        standard_error = std::sqrt(noise / 2.0) / n;  // the two-seed mean: half of one render's variance
-    };
-    double opaque = 0.0, opaque_error = 0.0, half = 0.0, half_error = 0.0;
-    measure(floor_and_wall(red), opaque, opaque_error);
-    measure(floor_and_wall(with_alpha(red, scene::AlphaMode::blend, 0.5f)), half, half_error);
+    const MeasuredMean measured_opaque = indirect_red(floor_and_wall(red));
+    const MeasuredMean measured_half = indirect_red(floor_and_wall(with_alpha(red, scene::AlphaMode::blend, 0.5f)));
+    const double opaque = measured_opaque.mean, opaque_error = measured_opaque.standard_error;
+    const double half = measured_half.mean, half_error = measured_half.standard_error;
     const double ratio = half / opaque;
     const double ratio_error = ratio * std::hypot(half_error / half, opaque_error / opaque);
     std::printf("reference: floor indirect (red) opaque %.4g +- %.2g, blended at 0.5 %.4g +- %.2g: ratio %.4f +- %.4f\n",

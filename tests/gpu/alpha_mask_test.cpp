@@ -11,6 +11,10 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstdio>
+#include <vector>
+
 namespace bounce::test {
 namespace {
 
@@ -171,6 +175,77 @@ TEST(AlphaMask, ATexturedTransformedMaskedAssetMatchesTheReference) {
                 error.rel_mse, error.mean_test, error.mean_reference, agreeing);
     EXPECT_NEAR(error.mean_test, error.mean_reference, 0.01 * error.mean_reference);
     EXPECT_GE(agreeing, 64 * 64 * 97 / 100);  // edges: at most 3% of the frame
+}
+
+// An emitter the reference samples by area must be weighed where it samples: a square lamp facing
+// down whose right half is cut away (alpha 1 1 0 0, MASK) or dark (emission texture 1 1 0 0) lights
+// the floor as a lamp that is only its left half (as geometry) does. Direct light only, floor
+// pixels clear of the lamp's silhouette; the bound is four standard errors of the two means
+// (measured from two seeds). A sampler that took the lamp's full area at its factor would light the
+// floor about twice as much.
+TEST(AlphaMask, TheReferenceSamplesEmittersWhereTheyAreAndAsBrightAsTheyAre) {
+    enum class Lamp { left_half_geometry, masked, textured };
+    auto scene_with = [](Lamp lamp) {
+        scene::Scene scene;
+        scene.materials.push_back(matte(glm::vec3(0.8f)));
+        scene::Material emitter = matte(glm::vec3(0.0f));
+        emitter.emissive = glm::vec3(4.0f);
+        scene::Texture halves;
+        halves.width = 4;
+        halves.height = 1;
+        if (lamp == Lamp::masked) {
+            halves.rgba8 = {255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 0, 255, 255, 255, 0};
+            scene.textures.push_back(halves);
+            emitter.base_color_texture.texture = 0;
+            emitter.alpha_mode = scene::AlphaMode::mask;
+        } else if (lamp == Lamp::textured) {
+            halves.srgb = true;
+            halves.rgba8 = {255, 255, 255, 255, 255, 255, 255, 255, 0, 0, 0, 255, 0, 0, 0, 255};
+            scene.textures.push_back(halves);
+            emitter.emissive_texture.texture = 0;
+        }
+        scene.materials.push_back(emitter);
+        add_square(scene, "floor", glm::vec3(0.0f), 2.0f, {0, 1, 0}, 0);
+        add_square(scene, "lamp", glm::vec3(0.0f, 1.0f, 0.0f), 0.5f, {0, -1, 0}, 1);
+        if (lamp == Lamp::left_half_geometry) {
+            auto& primitive = scene.meshes[1].primitives[0];
+            const glm::vec3 u_edge = primitive.positions[1] - primitive.positions[0];
+            for (std::size_t i = 0; i < primitive.positions.size(); ++i) {
+                if (primitive.uv0[i].x > 0.5f) primitive.positions[i] -= 0.5f * u_edge;
+            }
+        }
+        scene.cameras.push_back(top_down_camera(3.0f, 1.2f));
+        return scene;
+    };
+    constexpr int size = 32, spp = 32;
+    auto floor_mean = [&](const scene::Scene& scene) {
+        return mean_over_two_seeds([&](std::uint64_t seed) {
+            methods::reference::PathTracerSettings direct_only;
+            direct_only.max_bounces = 0;
+            direct_only.seed = seed;
+            const image::Frame frame = pixel_centre_reference(scene, size, spp, direct_only);
+            std::vector<double> values;
+            for (int y = 0; y < size; ++y) {
+                for (int x = 0; x < size; ++x) {
+                    const glm::vec3 p = pixel_on_ground(scene.cameras[0], size, size, x, y);
+                    // Clear of the lamp, which hides the floor within 1.5 x its half size.
+                    if (std::max(std::abs(p.x), std::abs(p.z)) > 0.8f && std::max(std::abs(p.x), std::abs(p.z)) < 1.9f)
+                        values.push_back(frame.at(x, y).g);
+                }
+            }
+            return values;
+        });
+    };
+    const MeasuredMean truth = floor_mean(scene_with(Lamp::left_half_geometry));
+    ASSERT_GT(truth.mean, 0.0);
+    for (const auto& [label, lamp] : {std::pair{"masked", Lamp::masked}, std::pair{"emission-textured", Lamp::textured}}) {
+        const MeasuredMean measured = floor_mean(scene_with(lamp));
+        const double bound = 4.0 * std::hypot(truth.standard_error, measured.standard_error);
+        std::printf("floor under a %s half lamp %.5f +- %.5f, under the half lamp as geometry %.5f +- %.5f\n", label,
+                    measured.mean, measured.standard_error, truth.mean, truth.standard_error);
+        EXPECT_NEAR(measured.mean, truth.mean, bound) << label;
+        EXPECT_LT(bound, 0.05 * truth.mean) << "too noisy to tell half a lamp from a whole one";
+    }
 }
 
 }  // namespace

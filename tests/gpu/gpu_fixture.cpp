@@ -2,6 +2,7 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
+#include <cmath>
 #include <memory>
 
 namespace bounce::test {
@@ -26,6 +27,19 @@ image::Frame pixel_centre_reference(const scene::Scene& scene, int size, int spp
                                     methods::reference::PathTracerSettings settings) {
     settings.pixel_jitter = false;
     return methods::reference::PathTracer(scene).render(scene.cameras[0], size, size, spp, settings);
+}
+
+MeasuredMean mean_over_two_seeds(const std::function<std::vector<double>(std::uint64_t seed)>& sample) {
+    const std::vector<double> a = sample(1), b = sample(2);
+    if (a.empty() || a.size() != b.size()) return {};
+    double sum = 0.0, noise = 0.0;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+        sum += a[i] + b[i];
+        noise += (a[i] - b[i]) * (a[i] - b[i]) / 2.0;  // one render's noise variance, per pixel
+    }
+    const double n = static_cast<double>(a.size());
+    // The two-seed mean's variance: one render's summed variance / n^2, halved.
+    return {sum / (2.0 * n), std::sqrt(noise / 2.0) / n};
 }
 
 RenderResult render_scene(const scene::Scene& scene, const RenderRequest& request) {

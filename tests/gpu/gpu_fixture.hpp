@@ -6,7 +6,10 @@
 #include "renderer/renderer.hpp"
 #include "renderer/scene/scene.hpp"
 
+#include <cstdint>
+#include <functional>
 #include <string>
+#include <vector>
 
 namespace bounce::test {
 
@@ -20,6 +23,15 @@ RenderRequest method_request(const std::string& method, const std::string& prese
 // shade), square, with `settings` otherwise.
 image::Frame pixel_centre_reference(const scene::Scene& scene, int size, int spp,
                                     methods::reference::PathTracerSettings settings);
+
+// A Monte Carlo region mean with its noise measured, not assumed: `sample(seed)` renders with a
+// seed and returns one value per pixel of the region; two seeds' means are averaged, and the
+// variance of their per-pixel difference (twice one render's noise) gives the standard error.
+struct MeasuredMean {
+    double mean = 0.0;
+    double standard_error = 0.0;
+};
+MeasuredMean mean_over_two_seeds(const std::function<std::vector<double>(std::uint64_t seed)>& sample);
 
 // Renders `scene` once with fresh resources.
 RenderResult render_scene(const scene::Scene& scene, const RenderRequest& request);
