@@ -3,7 +3,8 @@
 # Run by bench/blender/roundtrip:  blender -b --factory-startup -P make_scene.py -- SCENE OUTDIR
 # Scenes: point, spot, sun (a matte plane under one light), emissive (an emitting plane), cornell
 # (a box of matte walls under a point light, 4 bounces, rendered by Cycles with Lambertian materials
-# after the export).
+# after the export), textured (a plane with an image texture under the sun), masked (a leaf-like
+# card with an alpha-masked image texture over a plane, under the sun: cut-outs and their shadows).
 import math
 import sys
 
@@ -55,6 +56,37 @@ def matte(name, colour, roughness=1.0, emission=None):
     return material
 
 
+def checker_image(name, out, cells, colours, alphas=(1.0, 1.0)):
+    """A `cells` x `cells` checker of two colours (and alphas), saved as PNG beside the export."""
+    image = bpy.data.images.new(name, cells, cells, alpha=True)
+    pixels = []
+    for y in range(cells):
+        for x in range(cells):
+            k = (x + y) % 2
+            pixels += [*colours[k], alphas[k]]
+    image.pixels = pixels
+    image.filepath_raw = f"{out}/{name}.png"
+    image.file_format = "PNG"
+    image.save()
+    return image
+
+
+def textured(name, image, masked=False):
+    """A rough dielectric whose base colour (and, when masked, alpha: alphaMode MASK) is `image`."""
+    material = matte(name, (1.0, 1.0, 1.0))
+    nodes, links = material.node_tree.nodes, material.node_tree.links
+    texture = nodes.new("ShaderNodeTexImage")
+    texture.image = image
+    texture.interpolation = "Closest"  # cells with sharp edges in both renderers
+    bsdf = nodes["Principled BSDF"]
+    links.new(texture.outputs["Color"], bsdf.inputs["Base Color"])
+    if masked:
+        links.new(texture.outputs["Alpha"], bsdf.inputs["Alpha"])
+        material.blend_method = "CLIP"
+        material.alpha_threshold = 0.5
+    return material
+
+
 def plane(name, size, location, rotation, material):
     bpy.ops.mesh.primitive_plane_add(size=size, location=location, rotation=rotation)
     obj = bpy.context.active_object
@@ -85,7 +117,7 @@ def light(scene, kind, energy, location, rotation=(0.0, 0.0, 0.0), **settings):
     scene.collection.objects.link(obj)
 
 
-def build(name, scene):
+def build(name, scene, out):
     grey = matte("grey", (0.8, 0.8, 0.8))
     if name in ("point", "spot", "sun"):
         plane("floor", 4.0, (0, 0, 0), (0, 0, 0), grey)
@@ -111,6 +143,18 @@ def build(name, scene):
         plane("right", 2.0, (1, 0, 1), (0, -half, 0), green)
         light(scene, "POINT", 40.0, (0, 0, 1.8), shadow_soft_size=0.0)
         camera(scene, (0, -3.4, 1), (half, 0, 0), 40)
+    elif name == "textured":
+        image = checker_image("cells", out, 4, ((0.8, 0.3, 0.1), (0.1, 0.4, 0.7)))
+        plane("floor", 4.0, (0, 0, 0), (0, 0, 0), textured("cells", image))
+        camera(scene, (0, 0, 3), (0, 0, 0), 60)
+        light(scene, "SUN", 3.0, (0, 0, 5), (math.radians(30), 0, 0), angle=0.0)
+    elif name == "masked":
+        scene.cycles.transparent_max_bounces = 8  # cut-outs are Cycles' transparency
+        image = checker_image("leaf", out, 4, ((0.2, 0.6, 0.1), (0.2, 0.6, 0.1)), alphas=(1.0, 0.0))
+        plane("floor", 4.0, (0, 0, 0), (0, 0, 0), grey)
+        plane("card", 1.2, (0.2, 0.1, 0.8), (0, 0, math.radians(20)), textured("leaf", image, masked=True))
+        camera(scene, (0, 0, 3), (0, 0, 0), 60)
+        light(scene, "SUN", 3.0, (0, 0, 5), (math.radians(30), 0, 0), angle=0.0)
     else:
         raise SystemExit(f"unknown scene {name}")
 
@@ -132,7 +176,7 @@ def main():
     argv = sys.argv[sys.argv.index("--") + 1:]
     name, out = argv[0], argv[1]
     scene = reset()
-    build(name, scene)
+    build(name, scene, out)
     bpy.ops.export_scene.gltf(filepath=f"{out}/{name}.glb", export_format="GLB", export_lights=True,
                               export_cameras=True)
     if name == "cornell":

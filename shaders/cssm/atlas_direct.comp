@@ -5,7 +5,7 @@ layout(local_size_x = 64) in;
 #include "common/compute.glsl"
 #include "common/lights.glsl"
 #include "common/shadows.glsl"
-#define CSSM_BRDF(l) 1.0
+#define CSSM_BRDF(l, spread) 1.0
 #define CSSM_BRDF_BOUND(l, cone) 1.0
 #include "cssm/cssm_tree.glsl"
 

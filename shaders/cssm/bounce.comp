@@ -3,7 +3,7 @@
 // is added to the texels' total; the irradiance itself to the sum the per-texel display reads.
 layout(local_size_x = 64) in;
 #include "common/compute.glsl"
-#define CSSM_BRDF(l) 1.0
+#define CSSM_BRDF(l, spread) 1.0
 #define CSSM_BRDF_BOUND(l, cone) 1.0
 #include "cssm/cssm_tree.glsl"
 

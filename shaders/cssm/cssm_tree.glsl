@@ -192,14 +192,16 @@ vec3 sender_position(uint node) {
 
 // Light a node sends to a receiver at p with normal n: the disk-to-point form factor times its
 // radiance, pi L A cos_s cos_r / (pi d^2 + A), weighted by the CSSM visibility.
-vec3 node_irradiance(uint node, vec3 p, vec3 n, uint receiver_texel, out vec3 l) {
+// `spread` is sin^2 of the angular radius of the node's disk as seen from p, A / (pi d^2 + A).
+vec3 node_irradiance(uint node, vec3 p, vec3 n, uint receiver_texel, out vec3 l, out float spread) {
     vec3 to_node = sender_position(node) - p;
     float d2 = max(dot(to_node, to_node), 1e-30);
     l = to_node * inversesqrt(d2);
+    float area = nodes[node].area.x;
+    spread = area / (PI * d2 + area);
     float cos_r = dot(n, l);
     float cos_s = dot(nodes[node].normal_cone.xyz, -l);
     if (cos_r <= 0.0 || cos_s <= 0.0) return vec3(0.0);
-    float area = nodes[node].area.x;
     float v = visibility(nodes[node].links.z, p, receiver_texel);
     return node_radiance[node].rgb * (PI * area * cos_s * cos_r / (PI * d2 + area)) * v;
 }
@@ -228,7 +230,8 @@ float irradiance_bound(uint node, vec3 p, vec3 n, out vec3 l, out float widen) {
 // whose bound, times the receiver's BRDF bound towards it and tone-mapped, exceeds the threshold is
 // refined (child pointer); otherwise it is gathered and skipped (skip pointer). Leaves are always
 // gathered. `exclude` is the receiver's own texel (for pixels, the texel under them, or
-// CSSM_NONE). The includer defines CSSM_BRDF(l) as the receiver's BRDF towards l and
+// CSSM_NONE). The includer defines CSSM_BRDF(l, spread) as the receiver's BRDF towards a node in
+// direction l whose disk subtends sin^2 = spread, and
 // CSSM_BRDF_BOUND(l, cone) as its bound over a cone of directions (constants for texels).
 Gathered gather_cut(vec3 p, vec3 n, uint exclude) {
     Gathered result = Gathered(vec3(0.0), 0u, 0u);
@@ -256,8 +259,9 @@ Gathered gather_cut(vec3 p, vec3 n, uint exclude) {
                 continue;
             }
             vec3 l;
-            vec3 e = node_irradiance(node, p, n, exclude, l);
-            result.irradiance += e * CSSM_BRDF(l);
+            float spread;
+            vec3 e = node_irradiance(node, p, n, exclude, l, spread);
+            result.irradiance += e * CSSM_BRDF(l, spread);
             result.gathered += 1u;
             node = links.y;
         }

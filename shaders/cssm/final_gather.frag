@@ -14,7 +14,17 @@ uniform vec3 u_camera_position;
 
 SurfaceMaterial g_material;
 vec3 g_n, g_v;
-#define CSSM_BRDF(l) evaluate_brdf(g_material, g_n, g_v, l)
+// The BRDF averaged over a sender node's disk rather than taken at its centre (virtual spherical
+// lights, Hasan et al. 2009): the GGX lobe widened by the disk's angular radius in half-vector
+// angle, alpha'^2 = alpha^2 + sin^2(theta) / 4, so that a sharp lobe meeting a node reflects about
+// the node's radiance instead of a spike of D's peak times its irradiance.
+vec3 brdf_over_node(vec3 l, float spread) {
+    SurfaceMaterial widened = g_material;
+    float alpha = ggx_alpha(g_material.roughness);
+    widened.roughness = sqrt(sqrt(alpha * alpha + 0.25 * spread));
+    return evaluate_brdf(widened, g_n, g_v, l);
+}
+#define CSSM_BRDF(l, spread) brdf_over_node(l, spread)
 #define CSSM_BRDF_BOUND(l, cone) brdf_bound(g_material, g_n, g_v, l, cone)
 #include "cssm/cssm_tree.glsl"
 

@@ -3,7 +3,7 @@
 // the cut through this batch's subtrees, accumulated over the batches.
 layout(local_size_x = 64) in;
 #include "common/compute.glsl"
-#define CSSM_BRDF(l) 1.0
+#define CSSM_BRDF(l, spread) 1.0
 #define CSSM_BRDF_BOUND(l, cone) g_brdf_max
 float g_brdf_max;
 #include "cssm/cssm_tree.glsl"

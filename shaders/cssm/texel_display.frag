@@ -5,7 +5,7 @@
 // by distance, and reflects the result with its own diffuse reflectance toward the camera.
 #include "common/shared_layout.h"
 #include "common/brdf.glsl"
-#define CSSM_BRDF(l) 1.0
+#define CSSM_BRDF(l, spread) 1.0
 #define CSSM_BRDF_BOUND(l, cone) 1.0
 #include "cssm/cssm_tree.glsl"
 
