@@ -12,6 +12,30 @@ static_assert(static_cast<int>(scene::AlphaMode::opaque) == BOUNCE_ALPHA_OPAQUE 
               "scene::AlphaMode numbers its modes as the shaders do");
 namespace {
 
+// A GL sampler object with a glTF sampler's filters and wraps.
+Sampler make_texture_sampler(const scene::TextureSampler& source) {
+    using Min = scene::TextureSampler::MinFilter;
+    using Wrap = scene::TextureSampler::Wrap;
+    const auto wrap = [](Wrap mode) -> GLint {
+        return mode == Wrap::clamp_to_edge ? GL_CLAMP_TO_EDGE : mode == Wrap::mirrored_repeat ? GL_MIRRORED_REPEAT : GL_REPEAT;
+    };
+    GLint min_filter = GL_LINEAR_MIPMAP_LINEAR;
+    switch (source.min_filter) {
+    case Min::nearest: min_filter = GL_NEAREST; break;
+    case Min::linear: min_filter = GL_LINEAR; break;
+    case Min::nearest_mipmap_nearest: min_filter = GL_NEAREST_MIPMAP_NEAREST; break;
+    case Min::linear_mipmap_nearest: min_filter = GL_LINEAR_MIPMAP_NEAREST; break;
+    case Min::nearest_mipmap_linear: min_filter = GL_NEAREST_MIPMAP_LINEAR; break;
+    case Min::linear_mipmap_linear: break;
+    }
+    Sampler sampler = make_sampler();
+    glSamplerParameteri(sampler.id(), GL_TEXTURE_MIN_FILTER, min_filter);
+    glSamplerParameteri(sampler.id(), GL_TEXTURE_MAG_FILTER, source.mag_nearest ? GL_NEAREST : GL_LINEAR);
+    glSamplerParameteri(sampler.id(), GL_TEXTURE_WRAP_S, wrap(source.wrap_s));
+    glSamplerParameteri(sampler.id(), GL_TEXTURE_WRAP_T, wrap(source.wrap_t));
+    return sampler;
+}
+
 struct Vertex {
     glm::vec3 position;
     glm::vec3 normal;
@@ -97,11 +121,7 @@ GpuScene::GpuScene(const scene::Scene& scene) : scene_(&scene) {
         textures_.push_back(upload(source));
         texture_bytes_ += textures_.back().bytes();
     }
-    material_sampler_ = make_sampler();
-    glSamplerParameteri(material_sampler_.id(), GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
-    glSamplerParameteri(material_sampler_.id(), GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-    glSamplerParameteri(material_sampler_.id(), GL_TEXTURE_WRAP_S, GL_REPEAT);
-    glSamplerParameteri(material_sampler_.id(), GL_TEXTURE_WRAP_T, GL_REPEAT);
+    for (const scene::Texture& source : scene.textures) samplers_.push_back(make_texture_sampler(source.sampler));
 }
 
 void GpuScene::draw(const GpuPrimitive& primitive) {
@@ -132,7 +152,7 @@ void GpuScene::bind_material(const ShaderProgram& program, int material_index) c
         program.set(std::string(uv_uniform) + "_transform", ref.uv_transform);
         if (usable) {
             glBindTextureUnit(unit, textures_[ref.texture].id());
-            glBindSampler(unit, material_sampler_.id());
+            glBindSampler(unit, samplers_[ref.texture].id());
         }
     };
     bind(material.base_color_texture, BOUNCE_UNIT_BASE_COLOR, "u_base_color_uv");

@@ -49,7 +49,7 @@ private:
     const scene::Scene* scene_;
     std::vector<std::vector<GpuPrimitive>> meshes_;
     std::vector<Texture> textures_;
-    Sampler material_sampler_;
+    std::vector<Sampler> samplers_;  // per texture: its glTF sampler
     std::size_t geometry_bytes_ = 0;
     std::size_t texture_bytes_ = 0;
 };

@@ -2,6 +2,7 @@
 
 #include "renderer/scene/gltf_accessors.hpp"
 #include "renderer/scene/gltf_material_extensions.hpp"
+#include "renderer/scene/gltf_images.hpp"
 #include "renderer/scene/mesh_utils.hpp"
 #include "renderer/scene/units.hpp"
 
@@ -14,6 +15,7 @@
 #include <map>
 #include <optional>
 #include <set>
+#include <tuple>
 #include <utility>
 
 namespace bounce::scene::gltf {
@@ -228,13 +230,15 @@ private:
             reject(fmt::format("texture {} refers to image {} (there are {})", info.index, image_index,
                                model_.images.size()));
         }
-        const auto key = std::pair{image_index, srgb};
+        const int sampler = model_.textures[static_cast<std::size_t>(info.index)].sampler;
+        const auto key = std::tuple{image_index, srgb, sampler};
         if (const auto made = textures_made_.find(key); made != textures_made_.end()) {
             ref.texture = made->second;
         } else {
             std::optional<Texture> texture = convert_image(image_index, info.index);
             if (!texture) return ref;
             texture->srgb = srgb;
+            texture->sampler = texture_sampler(model_, sampler, fmt::format("texture {}", info.index));
             ref.texture = static_cast<int>(scene_.textures.size());
             scene_.textures.push_back(std::move(*texture));
             textures_made_[key] = ref.texture;
@@ -748,7 +752,7 @@ private:
     const LoadContext& context_;
     Warnings& warnings_;
     Scene scene_;
-    std::map<std::pair<int, bool>, int> textures_made_;
+    std::map<std::tuple<int, bool, int>, int> textures_made_;  // (image, sRGB, sampler)
     std::set<int> images_warned_;
     NameRegistry object_names_;
     NameRegistry camera_names_;

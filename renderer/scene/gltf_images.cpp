@@ -1,5 +1,6 @@
 #include "renderer/scene/gltf_images.hpp"
 
+#include "renderer/base/error.hpp"
 #include "renderer/scene/gltf_validation.hpp"
 
 #include <zlib.h>
@@ -339,6 +340,48 @@ void decode_images(tinygltf::Model& model, const Json& document, LoadContext& co
             context.image_failures[index] = std::move(*failure);
         }
     }
+}
+
+TextureSampler texture_sampler(const tinygltf::Model& model, int index, const std::string& where) {
+    TextureSampler sampler;
+    if (index < 0) return sampler;
+    if (static_cast<std::size_t>(index) >= model.samplers.size()) {
+        throw InputError(fmt::format("{} refers to sampler {} (there are {})", where, index, model.samplers.size()));
+    }
+    const tinygltf::Sampler& source = model.samplers[static_cast<std::size_t>(index)];
+    const auto wrap = [&](int value, const char* member) {
+        switch (value) {
+        case 10497: return TextureSampler::Wrap::repeat;
+        case 33071: return TextureSampler::Wrap::clamp_to_edge;
+        case 33648: return TextureSampler::Wrap::mirrored_repeat;
+        default:
+            throw InputError(fmt::format("{}: sampler {} {} is {}, none of 10497 (REPEAT), 33071 (CLAMP_TO_EDGE), "
+                                         "33648 (MIRRORED_REPEAT)",
+                                         where, index, member, value));
+        }
+    };
+    sampler.wrap_s = wrap(source.wrapS, "wrapS");
+    sampler.wrap_t = wrap(source.wrapT, "wrapT");
+    switch (source.magFilter) {
+    case -1: case 9729: break;  // absent or LINEAR
+    case 9728: sampler.mag_nearest = true; break;
+    default:
+        throw InputError(fmt::format("{}: sampler {} magFilter is {}, neither 9728 (NEAREST) nor 9729 (LINEAR)", where,
+                                     index, source.magFilter));
+    }
+    using Min = TextureSampler::MinFilter;
+    switch (source.minFilter) {
+    case -1: case 9987: sampler.min_filter = Min::linear_mipmap_linear; break;
+    case 9728: sampler.min_filter = Min::nearest; break;
+    case 9729: sampler.min_filter = Min::linear; break;
+    case 9984: sampler.min_filter = Min::nearest_mipmap_nearest; break;
+    case 9985: sampler.min_filter = Min::linear_mipmap_nearest; break;
+    case 9986: sampler.min_filter = Min::nearest_mipmap_linear; break;
+    default:
+        throw InputError(fmt::format("{}: sampler {} minFilter is {}, not a glTF filter (9728, 9729, 9984 to 9987)",
+                                     where, index, source.minFilter));
+    }
+    return sampler;
 }
 
 }  // namespace bounce::scene::gltf

@@ -5,6 +5,7 @@
 #pragma once
 
 #include "renderer/scene/gltf_detail.hpp"
+#include "renderer/scene/scene.hpp"
 
 #include <tiny_gltf.h>
 
@@ -36,6 +37,10 @@ bool record_image_header(tinygltf::Image* image, int image_index, std::string* e
 inline constexpr unsigned used_as_srgb = 1;
 inline constexpr unsigned used_as_linear = 2;
 std::vector<unsigned> texture_uses(const tinygltf::Model& model);
+
+// The sampler `index` of the model (-1: none, the defaults) as a TextureSampler. Throws InputError
+// naming `where` for an index out of range or a filter or wrap value glTF does not define.
+TextureSampler texture_sampler(const tinygltf::Model& model, int index, const std::string& where);
 
 // Decodes each image that a material uses and whose header was recorded, reading its bytes again
 // from its bufferView, data: URI or file (`document` holds the URIs). An image whose header is no

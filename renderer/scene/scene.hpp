@@ -47,12 +47,26 @@ struct Aabb {
 };
 
 // An 8-bit RGBA texture as decoded from the file; `srgb` tells how the sampler reads it.
+// A glTF sampler: how a texture is filtered and wrapped, as OpenGL defines the modes. Absent
+// filters are trilinear, absent wraps repeat.
+struct TextureSampler {
+    enum class Wrap : std::uint8_t { repeat, clamp_to_edge, mirrored_repeat };
+    enum class MinFilter : std::uint8_t {
+        nearest, linear, nearest_mipmap_nearest, linear_mipmap_nearest, nearest_mipmap_linear, linear_mipmap_linear
+    };
+    Wrap wrap_s = Wrap::repeat, wrap_t = Wrap::repeat;
+    bool mag_nearest = false;  // magFilter NEAREST; the CPU twin, which has no mipmaps, samples as magnified
+    MinFilter min_filter = MinFilter::linear_mipmap_linear;
+    bool operator==(const TextureSampler&) const = default;
+};
+
 struct Texture {
     std::string name;
     int width = 0;
     int height = 0;
     std::vector<std::uint8_t> rgba8;  // width * height * 4, rows top to bottom
     bool srgb = false;
+    TextureSampler sampler;
 };
 
 // A texture reference inside a material: an index into Scene::textures and the UV set it reads.

@@ -82,21 +82,43 @@ namespace {
 float srgb_to_linear(float c) { return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f); }
 }  // namespace
 
+namespace {
+
+// A texel coordinate folded into [0, size) by a glTF wrap mode.
+int wrap_texel(int i, int size, TextureSampler::Wrap wrap) {
+    switch (wrap) {
+    case TextureSampler::Wrap::clamp_to_edge: return std::clamp(i, 0, size - 1);
+    case TextureSampler::Wrap::mirrored_repeat: {
+        const int period = 2 * size;
+        const int folded = ((i % period) + period) % period;
+        return folded < size ? folded : period - 1 - folded;
+    }
+    case TextureSampler::Wrap::repeat: break;
+    }
+    return ((i % size) + size) % size;
+}
+
+}  // namespace
+
 glm::vec4 sample_texture(const Texture& texture, const glm::vec2& uv) {
     if (texture.width <= 0 || texture.height <= 0 || texture.rgba8.empty()) return glm::vec4(1.0f);
-    const float x = uv.x * static_cast<float>(texture.width) - 0.5f;
-    const float y = uv.y * static_cast<float>(texture.height) - 0.5f;
-    const float fx = std::floor(x), fy = std::floor(y);
-    const float tx = x - fx, ty = y - fy;
     auto texel = [&](int ix, int iy) {
-        ix = ((ix % texture.width) + texture.width) % texture.width;
-        iy = ((iy % texture.height) + texture.height) % texture.height;
+        ix = wrap_texel(ix, texture.width, texture.sampler.wrap_s);
+        iy = wrap_texel(iy, texture.height, texture.sampler.wrap_t);
         const std::size_t i = (static_cast<std::size_t>(iy) * texture.width + ix) * 4;
         glm::vec4 c(texture.rgba8[i], texture.rgba8[i + 1], texture.rgba8[i + 2], texture.rgba8[i + 3]);
         c /= 255.0f;
         if (texture.srgb) c = glm::vec4(srgb_to_linear(c.r), srgb_to_linear(c.g), srgb_to_linear(c.b), c.a);
         return c;
     };
+    const float x = uv.x * static_cast<float>(texture.width), y = uv.y * static_cast<float>(texture.height);
+    if (!std::isfinite(x) || !std::isfinite(y)) return texel(0, 0);
+    if (texture.sampler.mag_nearest) {
+        return texel(static_cast<int>(std::floor(std::clamp(x, -1e9f, 1e9f))),
+                     static_cast<int>(std::floor(std::clamp(y, -1e9f, 1e9f))));
+    }
+    const float fx = std::floor(std::clamp(x - 0.5f, -1e9f, 1e9f)), fy = std::floor(std::clamp(y - 0.5f, -1e9f, 1e9f));
+    const float tx = x - 0.5f - fx, ty = y - 0.5f - fy;
     const int ix = static_cast<int>(fx), iy = static_cast<int>(fy);
     return glm::mix(glm::mix(texel(ix, iy), texel(ix + 1, iy), tx), glm::mix(texel(ix, iy + 1), texel(ix + 1, iy + 1), tx),
                     ty);

@@ -34,8 +34,8 @@ float smith_visibility(float n_dot_l, float n_dot_v, float alpha);
 glm::vec3 evaluate_brdf(const SurfaceMaterial& material, const glm::vec3& n, const glm::vec3& v,
                         const glm::vec3& l);
 
-// Bilinear lookup with repeat wrapping, as the GL sampler does (without mipmaps), decoding sRGB
-// textures to linear; white for an empty texture.
+// A lookup as the texture's sampler magnifies (nearest or bilinear, wrapped per axis; no
+// mipmaps), decoding sRGB textures to linear; white for an empty texture.
 glm::vec4 sample_texture(const Texture& texture, const glm::vec2& uv);
 
 // A material at a surface point with its textures applied (base colour and its alpha,

@@ -705,6 +705,31 @@ TEST(GltfImportAccepts, AlphaModes) {
 }
 
 
+// glTF samplers: filters and wraps are read per texture (one image under two samplers is two
+// textures); a value glTF does not define refuses the file.
+TEST(GltfImportAccepts, Samplers) {
+    const std::string anchor = "\"textures\": [\n  {\n   \"source\": 0\n  }";
+    const std::string with_sampler = "\"samplers\": [{\"magFilter\": 9728, \"minFilter\": 9984, \"wrapS\": 33071, "
+                                     "\"wrapT\": 33648}],\n \"textures\": [\n  {\n   \"source\": 0, \"sampler\": 0\n  }";
+    const Scene scene = import_edited("textured.gltf", anchor, with_sampler);
+    ASSERT_FALSE(scene.textures.empty());
+    const TextureSampler& sampler = scene.textures[0].sampler;
+    EXPECT_TRUE(sampler.mag_nearest);
+    EXPECT_EQ(sampler.min_filter, TextureSampler::MinFilter::nearest_mipmap_nearest);
+    EXPECT_EQ(sampler.wrap_s, TextureSampler::Wrap::clamp_to_edge);
+    EXPECT_EQ(sampler.wrap_t, TextureSampler::Wrap::mirrored_repeat);
+    const Scene plain = import_edited("textured.gltf", anchor, anchor);
+    EXPECT_EQ(plain.textures[0].sampler, TextureSampler{});
+    const auto refusal = [&](const std::string& member) {
+        return import_error_of_edited("textured.gltf", anchor,
+                                      "\"samplers\": [{" + member + "}],\n \"textures\": [\n  {\n   \"source\": 0, "
+                                      "\"sampler\": 0\n  }");
+    };
+    EXPECT_NE(refusal("\"magFilter\": 1234").find("magFilter is 1234"), std::string::npos);
+    EXPECT_NE(refusal("\"minFilter\": 9727").find("minFilter is 9727"), std::string::npos);
+    EXPECT_NE(refusal("\"wrapS\": 0").find("wrapS is 0"), std::string::npos);
+}
+
 // KHR_materials_specular's colour factor, its two textures and KHR_materials_ior are read;
 // malformed values refuse the file.
 TEST(GltfImportAccepts, SpecularColourAndIor) {

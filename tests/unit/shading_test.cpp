@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <numbers>
 #include <random>
 
@@ -328,6 +329,37 @@ TEST(Brdf, TintedDielectricsConserveEnergyPerChannelAndAreReciprocal) {
         const glm::vec3 fab = evaluate_brdf(m, n, a, b), fba = evaluate_brdf(m, n, b, a);
         for (int c = 0; c < 3; ++c) EXPECT_NEAR(fab[c], fba[c], 1e-4f * std::max(1.0f, fab[c]));
     }
+}
+
+// The CPU twin's texture lookup follows the texture's glTF sampler, as the GPU's sampler objects
+// do: a 2x1 texture, black then white, read at chosen u.
+TEST(TextureLookup, FollowsTheSamplersFilterAndWraps) {
+    Texture texture;
+    texture.width = 2;
+    texture.height = 1;
+    texture.rgba8 = {0, 0, 0, 255, 255, 255, 255, 255};
+    auto red_at = [&](float u) { return sample_texture(texture, {u, 0.5f}).r; };
+    // Bilinear, repeat: between texel centres a ramp; across the edge the wrap blends both ends.
+    EXPECT_FLOAT_EQ(red_at(0.5f), 0.5f);
+    EXPECT_FLOAT_EQ(red_at(0.25f), 0.0f);
+    EXPECT_FLOAT_EQ(red_at(0.0f), 0.5f);
+    texture.sampler.mag_nearest = true;
+    EXPECT_FLOAT_EQ(red_at(0.49f), 0.0f);
+    EXPECT_FLOAT_EQ(red_at(0.51f), 1.0f);
+    EXPECT_FLOAT_EQ(red_at(1.2f), 0.0f);  // repeat: 0.2
+    texture.sampler.wrap_s = TextureSampler::Wrap::clamp_to_edge;
+    EXPECT_FLOAT_EQ(red_at(1.2f), 1.0f);
+    EXPECT_FLOAT_EQ(red_at(-3.0f), 0.0f);
+    texture.sampler.wrap_s = TextureSampler::Wrap::mirrored_repeat;
+    EXPECT_FLOAT_EQ(red_at(1.2f), 1.0f);   // mirrored: 0.8
+    EXPECT_FLOAT_EQ(red_at(1.7f), 0.0f);   // mirrored: 0.3
+    EXPECT_FLOAT_EQ(red_at(-0.2f), 0.0f);  // mirrored: 0.2
+    EXPECT_FLOAT_EQ(red_at(2.2f), 0.0f);   // a whole period on: 0.2
+    // Non-finite coordinates read a texel, never out of bounds.
+    EXPECT_TRUE(std::isfinite(red_at(std::numeric_limits<float>::infinity())));
+    EXPECT_TRUE(std::isfinite(red_at(std::nanf(""))));
+    texture.sampler.mag_nearest = false;
+    EXPECT_TRUE(std::isfinite(red_at(1e30f)));
 }
 
 }  // namespace
