@@ -106,7 +106,8 @@ bool LightViewMaps::render(const PassContext& context, int size) {
     framebuffer_.set_draw_buffers(3);
     glBindFramebuffer(GL_FRAMEBUFFER, framebuffer_.id());
     glViewport(0, 0, size, size);
-    // Both faces: a light reaches the back of an open wall as much as its front.
+    // Both faces: the back of an open wall occludes as much as its front (it reflects nothing:
+    // light_view.frag).
     context.state.apply({.depth_test = true, .depth_write = true, .depth_func = GL_LESS, .cull = gpu::Cull::none});
     const float zero[4] = {0.0f, 0.0f, 0.0f, 0.0f};
     const float far_depth = 1.0f;

@@ -18,6 +18,9 @@ void main() {
     if (cut_out(s.alpha)) discard;
     out_position = vec4(v_position, 1.0);
     out_normal = vec4(s.normal, 0.0);
-    // What the surface re-emits diffusely of the light it receives (virtual point lights).
-    out_albedo = vec4(diffuse_albedo(SurfaceMaterial(s.base_color, s.metallic, s.roughness, s.specular, s.f0)), 1.0);
+    // What the surface re-emits diffusely of the light it receives (virtual point lights). The back
+    // of a single-sided surface absorbs, as in the reference: it still occludes, but sends nothing
+    // (its front faces the other way, and light must not pass through it).
+    vec3 albedo = diffuse_albedo(SurfaceMaterial(s.base_color, s.metallic, s.roughness, s.specular, s.f0));
+    out_albedo = vec4(u_double_sided || gl_FrontFacing ? albedo : vec3(0.0), 1.0);
 }

@@ -1,65 +1,50 @@
-// Material extremes on the Cornell box: where a GI method cannot model an effect it must leave it
-// out, not add a wrong one, so no GI method's error against the reference may exceed `direct`'s
-// (which leaves all indirect light out). Every frame is finite. The cases are the ones that broke
-// cssm's final gather: every surface at roughness 0 (glTF's default specular), and the white
-// surfaces a mirror metal. Errors are relMSE against the path-traced reference through pixel
-// centres (512 spp, 4 bounces); its noise adds alike to every method's error, so the comparison
-// with `direct` is fair at any sample count.
+// The extremes matrix (bench/extremes.hpp): every method on every case, with its invariants —
+// finite, energy not above the reference's beyond its noise, and error not above `direct`'s —
+// or a documented exception. `bench/extremes` writes the same matrix to docs/benchmarks.md.
+#include "bench/extremes.hpp"
 #include "gpu_fixture.hpp"
-#include "renderer/image/metrics.hpp"
-#include "renderer/scene/builtin.hpp"
 
 #include <gtest/gtest.h>
 
+#include <cctype>
 #include <cstdio>
-#include <functional>
 #include <string>
 
 namespace bounce::test {
 namespace {
 
-constexpr int kSize = 48;
+class Extremes : public ::testing::TestWithParam<std::size_t> {};
 
-struct MaterialCase {
-    std::string name;
-    std::function<void(scene::Material&)> edit;
-};
-
-void check_no_method_worse_than_direct(const MaterialCase& extreme) {
-    scene::Scene scene = scene::make_cornell_box();
-    for (scene::Material& material : scene.materials) extreme.edit(material);
-    methods::reference::PathTracerSettings settings;
-    settings.max_bounces = 4;
-    const image::Frame truth = pixel_centre_reference(scene, kSize, 512, settings);
-    const auto error_of = [&](const std::string& method) {
-        const RenderResult result = render_scene(scene, method_request(method, "high", kSize));
-        EXPECT_EQ(result.frame.non_finite_count(), 0u) << extreme.name << ": " << method;
-        const image::ErrorMetrics error = image::compare(result.frame, truth);
-        std::printf("%s: %-6s relMSE %.4f, mean %.4f (reference %.4f)\n", extreme.name.c_str(), method.c_str(),
-                    error.rel_mse, error.mean_test, error.mean_reference);
-        return error.rel_mse;
-    };
-    const double direct = error_of("direct");
-    for (const std::string method : {"vct", "isr", "cssm"}) {
-        EXPECT_LE(error_of(method), direct) << extreme.name << ": " << method << " is worse than direct light alone";
+TEST_P(Extremes, EveryMethodStaysFiniteAndNoWorseThanDirect) {
+    const auto cases = bench::extreme_cases();
+    const bench::ExtremeCase& extreme = cases.at(GetParam());
+    const bench::ExtremeTruth truth = bench::extreme_truth(extreme, bench::kExtremeReferenceBounces);
+    const bench::ExtremeTruth isr_truth = bench::extreme_truth(extreme, 1, false);
+    ASSERT_EQ(truth.frame.non_finite_count(), 0u) << extreme.name << ": the reference itself";
+    const bench::ExtremeVerdict direct = bench::judge(shared_renderer(), extreme, "direct", truth, isr_truth, 0.0);
+    for (const std::string method : {"direct", "vct", "isr", "cssm"}) {
+        const bench::ExtremeVerdict verdict =
+            method == "direct" ? direct : bench::judge(shared_renderer(), extreme, method, truth, isr_truth, direct.rel_mse);
+        std::printf("%-24s %-6s finite %d relMSE %.4f (direct %.4f) mean %.5g (bound %.5g)%s%s\n", extreme.name.c_str(),
+                    method.c_str(), verdict.finite, verdict.rel_mse, verdict.direct_rel_mse, verdict.mean,
+                    verdict.energy_bound, verdict.exception.empty() ? "" : " exception: ", verdict.exception.c_str());
+        EXPECT_TRUE(verdict.finite) << extreme.name << ": " << method << " has non-finite pixels";
+        if (!verdict.exception.empty()) continue;
+        EXPECT_TRUE(verdict.energy_ok) << extreme.name << ": " << method << " mean " << verdict.mean
+                                       << " is above the reference's " << verdict.energy_bound;
+        EXPECT_TRUE(verdict.error_ok) << extreme.name << ": " << method << " relMSE " << verdict.rel_mse
+                                      << " is worse than direct light alone (" << verdict.direct_rel_mse << ")";
     }
 }
 
-TEST(MaterialExtremes, NoGiMethodIsWorseThanDirectWhenEverySurfaceIsSmooth) {
-    check_no_method_worse_than_direct({"roughness 0", [](scene::Material& m) {
-                                           m.roughness = 0.0f;
-                                           m.specular = 1.0f;
-                                       }});
+std::string case_label(const ::testing::TestParamInfo<std::size_t>& param) {
+    std::string label = bench::extreme_cases().at(param.param).name;
+    for (char& c : label)
+        if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+    return label;
 }
 
-TEST(MaterialExtremes, NoGiMethodIsWorseThanDirectWhenTheWhiteSurfacesAreMirrors) {
-    check_no_method_worse_than_direct({"mirror metal", [](scene::Material& m) {
-                                           if (m.name != "white") return;
-                                           m.metallic = 1.0f;
-                                           m.roughness = 0.0f;
-                                           m.base_color = glm::vec4(1.0f);
-                                       }});
-}
+INSTANTIATE_TEST_SUITE_P(Matrix, Extremes, ::testing::Range<std::size_t>(0, bench::extreme_cases().size()), case_label);
 
 }  // namespace
 }  // namespace bounce::test

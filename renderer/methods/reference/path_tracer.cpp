@@ -267,7 +267,7 @@ struct PathTracer::Impl {
     // One cosine-distributed visibility sample of A(p) at the surface a camera ray hits.
     float ambient_occlusion(const glm::vec3& origin, const glm::vec3& direction, float lambda, Random& random) const {
         SurfaceHit hit;
-        if (!intersect(origin, direction, hit)) return 0.0f;
+        if (!intersect_from_camera(origin, direction, hit)) return 0.0f;
         glm::vec3 t, b;
         const glm::vec3& n = hit.shading_normal;
         scene::orthonormal_basis(n, t, b);
@@ -282,7 +282,7 @@ struct PathTracer::Impl {
         return 1.0f - 1.0f / (1.0f + lambda * distance);
     }
 
-    // The back of a single-sided surface absorbs, as it is culled in raster.
+    // The back of a single-sided surface absorbs light (camera rays pass it: intersect_from_camera).
     bool absorbs(const SurfaceHit& hit) const {
         return !hit.front &&
                !scene.material(scene.meshes[scene.objects[hit.object].mesh].primitives[hit.primitive].material).double_sided;
@@ -342,11 +342,23 @@ struct PathTracer::Impl {
         return total;
     }
 
+    // The first surface a camera ray sees, as the G-buffer draws them: a single-sided surface seen
+    // from behind is culled there (glTF's doubleSided false), so the camera ray passes it. Light
+    // transport still meets such backs, which absorb.
+    bool intersect_from_camera(const glm::vec3& origin, const glm::vec3& direction, SurfaceHit& hit) const {
+        float tnear = 0.0f;
+        while (intersect(origin, direction, hit, tnear)) {
+            if (!absorbs(hit)) return true;
+            tnear = std::max(hit.distance * (1.0f + 1e-5f) + epsilon(hit.position), std::nextafter(hit.distance, kInfinity));
+        }
+        return false;
+    }
+
     glm::vec3 trace(glm::vec3 origin, glm::vec3 direction, int max_bounces, bool indirect_visibility,
                     Random& random) const {
         glm::vec3 radiance(0.0f), throughput(1.0f);
         SurfaceHit hit;
-        if (!intersect(origin, direction, hit)) return radiance;
+        if (!intersect_from_camera(origin, direction, hit)) return radiance;
         radiance += hit.emitted;
         for (int bounce = 0;; ++bounce) {
             if (absorbs(hit)) break;
