@@ -200,6 +200,7 @@ std::vector<ExtremeCase> extreme_cases() {
                           {"isr", {{"shadow_map_size", 256}, {"rsm_size", 64}}},
                           {"cssm", {{"shadow_map_size", 256}}}};
     cases.back().reference_spp = 32;  // every path vertex tests all 256 lights
+    cases.back().width = cases.back().height = 16;
 
     // Frames.
     cases.push_back(scene_case("frame/1x1", "a single pixel", [](scene::Scene&) {}, 1, 1));
