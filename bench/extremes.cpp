@@ -27,15 +27,7 @@ void add_triangles(scene::Scene& scene, const std::string& name, const std::vect
     primitive.tangents.assign(positions.size(), glm::vec4(1.0f, 0.0f, 0.0f, 1.0f));
     for (std::uint32_t i = 0; i < positions.size(); ++i) primitive.indices.push_back(i);
     for (const glm::vec3& p : positions) primitive.bounds.extend(p);
-    scene::Mesh mesh;
-    mesh.name = name;
-    mesh.bounds = primitive.bounds;
-    mesh.primitives.push_back(std::move(primitive));
-    scene.meshes.push_back(std::move(mesh));
-    scene::Object object;
-    object.name = name;
-    object.mesh = static_cast<int>(scene.meshes.size()) - 1;
-    scene.objects.push_back(object);
+    scene::add_primitive_object(scene, name, std::move(primitive));
 }
 
 ExtremeCase materials_case(const std::string& name, const std::string& what,

@@ -72,8 +72,8 @@ int main(int argc, char** argv) {
         std::string md = std::string(kBegin) + "\n\n## Extremes (bench/extremes)\n\n";
         md += fmt::format(
             "Written by `{}` on {} ({:.1f} min) on {}; {}.\n\n"
-            "The Cornell box at the limits (bench/extremes.cpp lists the cases), 32x32 unless the case is a frame "
-            "shape, every method at `high`, against the path tracer through pixel centres (two seeds of 256 spp, "
+            "The Cornell box at the limits (bench/extremes.cpp lists the cases), 32x32 but for the frame shapes and "
+            "256 lights (16x16), every method at `high`, against the path tracer through pixel centres (two seeds of 256 spp, "
             "4 bounces; 32 spp for 256 lights). A method holds when its frame is finite, its mean is not above the "
             "reference's beyond four standard errors and its allowance (isr: against the reference without "
             "indirect visibility, +0.5% for its gather's bias; others +2^-10), and its relMSE is not above "

@@ -50,21 +50,8 @@ Material lambertian(const std::string& name, const glm::vec3& reflectance) {
 }
 
 // A one-primitive mesh, appended to the scene, and an object that places it at `origin` (metres).
-Object mesh_object(Scene& scene, const std::string& name, Primitive primitive, const glm::vec3& origin) {
-    Mesh mesh;
-    mesh.name = name;
-    mesh.bounds = primitive.bounds;
-    mesh.primitives.push_back(std::move(primitive));
-    scene.meshes.push_back(std::move(mesh));
-    Object object;
-    object.name = name;
-    object.mesh = static_cast<int>(scene.meshes.size()) - 1;
-    object.initial_transform = object.transform = glm::translate(glm::mat4(1.0f), origin);
-    return object;
-}
-
 // A block from its five published faces (mm), as an object whose origin is its base centre.
-Object add_block(Scene& scene, const std::string& name, const std::array<Quad, 5>& faces_mm, int material) {
+void add_block(Scene& scene, const std::string& name, const std::array<Quad, 5>& faces_mm, int material) {
     glm::vec3 centre_mm(0.0f);
     for (const Quad& face : faces_mm)
         for (const glm::vec3& p : face) centre_mm += p / 20.0f;
@@ -76,7 +63,7 @@ Object add_block(Scene& scene, const std::string& name, const std::array<Quad, 5
         const glm::vec3 face_centre = (face[0] + face[1] + face[2] + face[3]) * 0.25f;
         add_quad(primitive, face, face_centre - centre_mm, origin);  // outward
     }
-    return mesh_object(scene, name, std::move(primitive), origin);
+    add_primitive_object(scene, name, std::move(primitive), glm::translate(glm::mat4(1.0f), origin));
 }
 
 }  // namespace
@@ -117,20 +104,20 @@ Scene make_cornell_box() {
     room_object.mesh = 0;
     scene.objects.push_back(room_object);
 
-    scene.objects.push_back(add_block(scene, "short_block",
+    add_block(scene, "short_block",
         {{{{{130.0f, 165.0f, 65.0f}, {82.0f, 165.0f, 225.0f}, {240.0f, 165.0f, 272.0f}, {290.0f, 165.0f, 114.0f}}},
           {{{290.0f, 0.0f, 114.0f}, {290.0f, 165.0f, 114.0f}, {240.0f, 165.0f, 272.0f}, {240.0f, 0.0f, 272.0f}}},
           {{{130.0f, 0.0f, 65.0f}, {130.0f, 165.0f, 65.0f}, {290.0f, 165.0f, 114.0f}, {290.0f, 0.0f, 114.0f}}},
           {{{82.0f, 0.0f, 225.0f}, {82.0f, 165.0f, 225.0f}, {130.0f, 165.0f, 65.0f}, {130.0f, 0.0f, 65.0f}}},
           {{{240.0f, 0.0f, 272.0f}, {240.0f, 165.0f, 272.0f}, {82.0f, 165.0f, 225.0f}, {82.0f, 0.0f, 225.0f}}}}},
-        white));
-    scene.objects.push_back(add_block(scene, "tall_block",
+        white);
+    add_block(scene, "tall_block",
         {{{{{423.0f, 330.0f, 247.0f}, {265.0f, 330.0f, 296.0f}, {314.0f, 330.0f, 456.0f}, {472.0f, 330.0f, 406.0f}}},
           {{{423.0f, 0.0f, 247.0f}, {423.0f, 330.0f, 247.0f}, {472.0f, 330.0f, 406.0f}, {472.0f, 0.0f, 406.0f}}},
           {{{472.0f, 0.0f, 406.0f}, {472.0f, 330.0f, 406.0f}, {314.0f, 330.0f, 456.0f}, {314.0f, 0.0f, 456.0f}}},
           {{{314.0f, 0.0f, 456.0f}, {314.0f, 330.0f, 456.0f}, {265.0f, 330.0f, 296.0f}, {265.0f, 0.0f, 296.0f}}},
           {{{265.0f, 0.0f, 296.0f}, {265.0f, 330.0f, 296.0f}, {423.0f, 330.0f, 247.0f}, {423.0f, 0.0f, 247.0f}}}}},
-        white));
+        white);
 
     // A white point light 100 mm below the centre of the published ceiling light (343..213 x
     // 227..332). Closer to the ceiling, the ceiling's radiance around it grows as 1/d^3 into a hot
@@ -152,6 +139,20 @@ Scene make_cornell_box() {
     return scene;
 }
 
+int add_primitive_object(Scene& scene, const std::string& name, Primitive primitive, const glm::mat4& transform) {
+    Mesh mesh;
+    mesh.name = name;
+    mesh.bounds = primitive.bounds;
+    mesh.primitives.push_back(std::move(primitive));
+    scene.meshes.push_back(std::move(mesh));
+    Object object;
+    object.name = name;
+    object.mesh = static_cast<int>(scene.meshes.size()) - 1;
+    object.initial_transform = object.transform = transform;
+    scene.objects.push_back(std::move(object));
+    return static_cast<int>(scene.objects.size()) - 1;
+}
+
 int add_box(Scene& scene, const std::string& name, const glm::vec3& lo, const glm::vec3& hi, int material) {
     const glm::vec3 centre = (lo + hi) * 0.5f;
     const glm::vec3 a = (lo - centre) / kMillimetre, b = (hi - centre) / kMillimetre;
@@ -166,8 +167,7 @@ int add_box(Scene& scene, const std::string& name, const glm::vec3& lo, const gl
         {{{{a.x, a.y, b.z}, {b.x, a.y, b.z}, {b.x, b.y, b.z}, {a.x, b.y, b.z}}}, {0, 0, 1}},
     }};
     for (const auto& [quad, facing] : faces) add_quad(primitive, quad, facing, glm::vec3(0.0f));
-    scene.objects.push_back(mesh_object(scene, name, std::move(primitive), centre));
-    return static_cast<int>(scene.objects.size()) - 1;
+    return add_primitive_object(scene, name, std::move(primitive), glm::translate(glm::mat4(1.0f), centre));
 }
 
 Scene make_cornell_blob() {

@@ -18,6 +18,11 @@ Scene make_cornell_box();
 // charting and the cube-map bake must handle without a parametrization.
 Scene make_cornell_blob();
 
+// Appends `primitive` (its bounds set) as a mesh of its own and an object of that name placed by
+// `transform`; returns the object's index.
+int add_primitive_object(Scene& scene, const std::string& name, Primitive primitive,
+                         const glm::mat4& transform = glm::mat4(1.0f));
+
 // Appends an axis-aligned box [lo, hi] (metres, faces outward) as a movable object whose origin is
 // its centre; returns the object's index.
 int add_box(Scene& scene, const std::string& name, const glm::vec3& lo, const glm::vec3& hi, int material);

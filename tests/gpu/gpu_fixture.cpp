@@ -1,5 +1,7 @@
 #include "gpu_fixture.hpp"
 
+#include "renderer/scene/builtin.hpp"
+
 #include <glm/gtc/matrix_transform.hpp>
 
 #include <cmath>
@@ -80,16 +82,7 @@ void add_square(scene::Scene& scene, const std::string& name, const glm::vec3& c
     primitive.uv0 = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
     primitive.indices = {0, 1, 2, 0, 2, 3};
     for (const auto& p : primitive.positions) primitive.bounds.extend(p);
-    scene::Mesh mesh;
-    mesh.name = name;
-    mesh.bounds = primitive.bounds;
-    mesh.primitives.push_back(std::move(primitive));
-    scene.meshes.push_back(std::move(mesh));
-    scene::Object object;
-    object.name = name;
-    object.mesh = static_cast<int>(scene.meshes.size()) - 1;
-    object.initial_transform = object.transform = glm::translate(glm::mat4(1.0f), centre);
-    scene.objects.push_back(object);
+    scene::add_primitive_object(scene, name, std::move(primitive), glm::translate(glm::mat4(1.0f), centre));
 }
 
 scene::Camera top_down_camera(float height, float vertical_fov) {

@@ -17,6 +17,19 @@ scene::Scene cornell_with_intensity(float intensity) {
     return scene;
 }
 
+// The Cornell box scaled by k about the origin, with point intensities scaled by k^2: the same
+// radiance everywhere in theory.
+scene::Scene scaled_cornell(float k) {
+    scene::Scene scaled = scene::make_cornell_box();
+    for (auto& object : scaled.objects) object.transform = glm::scale(glm::mat4(1.0f), glm::vec3(k)) * object.transform;
+    for (auto& light : scaled.lights) {
+        light.position *= k;
+        light.intensity *= k * k;
+    }
+    for (auto& camera : scaled.cameras) camera.position *= k;
+    return scaled;
+}
+
 // Every test runs for each GPU method.
 class Stability : public ::testing::TestWithParam<std::string> {
 protected:
@@ -156,16 +169,7 @@ TEST_P(Stability, UniformScaleInvariance) {
     }
     const auto base = render_scene(scene::make_cornell_box(), request);
     for (float k : {1e-3f, 1e4f}) {
-        scene::Scene scaled = scene::make_cornell_box();
-        for (auto& object : scaled.objects) {
-            object.transform = glm::scale(glm::mat4(1.0f), glm::vec3(k)) * object.transform;
-        }
-        for (auto& light : scaled.lights) {
-            light.position *= k;
-            light.intensity *= k * k;
-        }
-        for (auto& camera : scaled.cameras) camera.position *= k;
-        const auto result = render_scene(scaled, request);
+        const auto result = render_scene(scaled_cornell(k), request);
         EXPECT_EQ(result.frame.non_finite_count(), 0u);
         double error = 0.0, total = 0.0;
         std::size_t differing = 0;
@@ -200,14 +204,7 @@ TEST(StabilityCssm, UniformScaleInvarianceWithTheOracleOn) {
     };
     const double base = mean_of(render_scene(scene::make_cornell_box(), request).frame);
     for (float k : {1e-3f, 1e4f}) {
-        scene::Scene scaled = scene::make_cornell_box();
-        for (auto& object : scaled.objects) object.transform = glm::scale(glm::mat4(1.0f), glm::vec3(k)) * object.transform;
-        for (auto& light : scaled.lights) {
-            light.position *= k;
-            light.intensity *= k * k;
-        }
-        for (auto& camera : scaled.cameras) camera.position *= k;
-        const auto result = render_scene(scaled, request);
+        const auto result = render_scene(scaled_cornell(k), request);
         EXPECT_EQ(result.frame.non_finite_count(), 0u);
         EXPECT_NEAR(mean_of(result.frame), base, 1e-3 * base) << "scale " << k;
     }
