@@ -40,6 +40,9 @@ private:
 
 float luminance(const glm::vec3& c) { return 0.2126f * c.r + 0.7152f * c.g + 0.0722f * c.b; }
 
+// Per pixel in Accumulator::feature_sums_: albedo RGB, normal XYZ, depth, hits, luminance^2.
+constexpr std::size_t kFeatureFloats = 9;
+
 struct Emitter {
     std::uint32_t object, primitive, triangle;
     glm::vec3 p0, p1, p2;
@@ -354,11 +357,18 @@ struct PathTracer::Impl {
         return false;
     }
 
+    // `first`, when given, receives the first hit's albedo, normal, distance and 1 (8 floats added).
     glm::vec3 trace(glm::vec3 origin, glm::vec3 direction, int max_bounces, bool indirect_visibility,
-                    Random& random) const {
+                    Random& random, float* first = nullptr) const {
         glm::vec3 radiance(0.0f), throughput(1.0f);
         SurfaceHit hit;
         if (!intersect_from_camera(origin, direction, hit)) return radiance;
+        if (first) {
+            const float values[8] = {hit.material.base_color.r, hit.material.base_color.g, hit.material.base_color.b,
+                                     hit.shading_normal.x,      hit.shading_normal.y,      hit.shading_normal.z,
+                                     hit.distance,              1.0f};
+            for (int i = 0; i < 8; ++i) first[i] += values[i];
+        }
         radiance += hit.emitted;
         for (int bounce = 0;; ++bounce) {
             if (absorbs(hit)) break;
@@ -396,8 +406,36 @@ struct PathTracer::Impl {
 };
 
 Accumulator::Accumulator(int width, int height)
-    : width_(width), height_(height), sums_(static_cast<std::size_t>(width) * static_cast<std::size_t>(height) * 3, 0.0) {
+    : width_(width), height_(height), sums_(static_cast<std::size_t>(width) * static_cast<std::size_t>(height) * 3, 0.0),
+      feature_sums_(static_cast<std::size_t>(width) * static_cast<std::size_t>(height) * kFeatureFloats, 0.0f) {
     BOUNCE_CHECK(width > 0 && height > 0, "accumulator size {}x{}", width, height);
+}
+
+PixelFeatures Accumulator::features() const {
+    PixelFeatures features;
+    features.width = width_;
+    features.height = height_;
+    const std::size_t pixels = static_cast<std::size_t>(width_) * height_;
+    features.albedo.resize(pixels);
+    features.normal.resize(pixels);
+    features.depth.resize(pixels);
+    features.coverage.resize(pixels);
+    features.variance.resize(pixels);
+    for (std::size_t i = 0; i < pixels; ++i) {
+        const float* sum = &feature_sums_[i * kFeatureFloats];
+        const float hits = sum[7];
+        const float per_hit = hits > 0.0f ? 1.0f / hits : 0.0f;
+        features.albedo[i] = glm::vec3(sum[0], sum[1], sum[2]) * per_hit;
+        features.normal[i] = glm::vec3(sum[3], sum[4], sum[5]) * per_hit;
+        features.depth[i] = sum[6] * per_hit;
+        features.coverage[i] = samples_ > 0 ? hits / static_cast<float>(samples_) : 0.0f;
+        if (samples_ > 1) {
+            const double n = samples_;
+            const double mean = luminance(glm::vec3(sums_[i * 3] / n, sums_[i * 3 + 1] / n, sums_[i * 3 + 2] / n));
+            features.variance[i] = static_cast<float>(std::max(sum[8] / n - mean * mean, 0.0) / (n - 1.0));
+        }
+    }
+    return features;
 }
 
 image::Frame Accumulator::frame() const {
@@ -428,7 +466,7 @@ void PathTracer::render(Accumulator& accumulator, const scene::Camera& camera, i
     const float aspect = static_cast<float>(width) / static_cast<float>(height);
     const glm::mat4 inverse = glm::inverse(camera.projection(aspect, camera.far_plane_for(impl_->scene.world_bounds())) *
                                            camera.view());
-    const int first = accumulator.samples_;
+    const int first_sample = accumulator.samples_;
     impl_->arena.execute([&] {
         tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
             for (int y = rows.begin(); y < rows.end(); ++y) {
@@ -436,7 +474,8 @@ void PathTracer::render(Accumulator& accumulator, const scene::Camera& camera, i
                     if (cancelled && cancelled->load(std::memory_order_relaxed)) return;
                     const std::uint64_t pixel = static_cast<std::uint64_t>(y) * width + x;
                     glm::dvec3 sum(0.0);
-                    for (int s = first; s < first + count; ++s) {
+                    float* first = &accumulator.feature_sums_[pixel * kFeatureFloats];
+                    for (int s = first_sample; s < first_sample + count; ++s) {
                         Random random(settings.seed, pixel, static_cast<std::uint64_t>(s));
                         const float jx = random.next(), jy = random.next();
                         const float ox = settings.pixel_jitter ? jx : 0.5f, oy = settings.pixel_jitter ? jy : 0.5f;
@@ -448,10 +487,11 @@ void PathTracer::render(Accumulator& accumulator, const scene::Camera& camera, i
                             settings.ambient_occlusion
                                 ? glm::vec3(impl_->ambient_occlusion(camera.position, direction, settings.ao_lambda, random))
                                 : impl_->trace(camera.position, direction, settings.max_bounces,
-                                               settings.indirect_visibility, random);
+                                               settings.indirect_visibility, random, first);
                         // A non-finite sample would poison the pixel forever: it is dropped (counted as 0).
                         if (std::isfinite(radiance.r) && std::isfinite(radiance.g) && std::isfinite(radiance.b)) {
                             sum += glm::dvec3(radiance);
+                            first[8] += luminance(radiance) * luminance(radiance);
                         }
                     }
                     double* out = &accumulator.sums_[pixel * 3];

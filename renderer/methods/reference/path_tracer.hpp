@@ -49,7 +49,19 @@ struct PathTracerSettings {
 // max_bounces other than 1, or with ambient occlusion). render() checks them too.
 void check_settings(const PathTracerSettings& settings);
 
-// Running sums of radiance samples per pixel; frame() gives their mean.
+// What camera rays first meet in a pixel, averaged over its samples: the guides of the denoiser
+// (renderer/methods/reference/denoiser.hpp). Pixels whose rays meet nothing have coverage 0.
+struct PixelFeatures {
+    int width = 0, height = 0;
+    std::vector<glm::vec3> albedo;  // base colour at the first hit
+    std::vector<glm::vec3> normal;  // shading normal at the first hit (mean, not renormalized)
+    std::vector<float> depth;       // distance to the first hit
+    std::vector<float> coverage;    // fraction of samples that hit something
+    std::vector<float> variance;    // of the pixel's mean luminance: the samples' variance over their count
+};
+
+// Running sums of radiance samples per pixel; frame() gives their mean, features() the mean of
+// what the camera rays first met.
 class Accumulator {
 public:
     Accumulator(int width, int height);
@@ -57,6 +69,7 @@ public:
     int height() const { return height_; }
     int samples() const { return samples_; }
     image::Frame frame() const;
+    PixelFeatures features() const;
 
 private:
     friend class PathTracer;
@@ -64,6 +77,7 @@ private:
     int height_;
     int samples_ = 0;
     std::vector<double> sums_;  // RGB per pixel
+    std::vector<float> feature_sums_;  // per pixel: albedo RGB, normal XYZ, depth, hits, luminance^2
 };
 
 class PathTracer {

@@ -1,5 +1,9 @@
 #include "renderer/methods/reference/reference_method.hpp"
 
+#include "renderer/methods/reference/denoiser.hpp"
+
+#include <chrono>
+
 namespace bounce::methods::reference {
 
 methods::MethodInfo method_info() {
@@ -15,10 +19,12 @@ methods::MethodInfo method_info() {
                   {"ao_lambda", 0, 1e6, false, "ambient occlusion falloff 1 / (1 + lambda r), per metre"},
                   {"indirect_visibility", 0, 1, true,
                    "0: the indirect ray gathers direct light from every surface it crosses, unoccluded, as "
-                   "instant-radiosity / RSM methods do (needs bounces = 1)"}};
+                   "instant-radiosity / RSM methods do (needs bounces = 1)"},
+                  {"denoise", 0, 1, true,
+                   "1: an edge-avoiding a-trous filter guided by the first hits' albedo, normal and depth"}};
     auto preset = [](double spp) {
         return methods::KnobValues{{"spp", spp}, {"bounces", 4}, {"seed", 1}, {"ao", 0}, {"ao_lambda", 1},
-                                   {"indirect_visibility", 1}};
+                                   {"indirect_visibility", 1}, {"denoise", 0}};
     };
     info.presets = {{"draft", preset(4)}, {"low", preset(16)}, {"medium", preset(64)}, {"high", preset(256)},
                     {"ultra", preset(1024)}};
@@ -33,6 +39,7 @@ ReferenceRequest request_from_knobs(const methods::KnobValues& knobs) {
     request.settings.ambient_occlusion = knobs.at("ao") != 0.0;
     request.settings.ao_lambda = static_cast<float>(knobs.at("ao_lambda"));
     request.settings.indirect_visibility = knobs.at("indirect_visibility") != 0.0;
+    request.denoise = knobs.at("denoise") != 0.0;
     check_settings(request.settings);  // InputError: the daemon answers with an error reply
     return request;
 }
@@ -44,11 +51,17 @@ image::Frame ReferenceMethod::render(const CpuFrameContext& frame) {
     tracer.render(accumulator, frame.camera, request.spp, request.settings, frame.cancelled);
     rays_traced_ = tracer.rays_traced();
     spp_ = request.spp;
-    return accumulator.frame();
+    denoise_ms_ = 0.0;
+    if (!request.denoise) return accumulator.frame();
+    const auto start = std::chrono::steady_clock::now();
+    image::Frame filtered = denoise(accumulator.frame(), accumulator.features());
+    denoise_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    return filtered;
 }
 
 std::map<std::string, double> ReferenceMethod::statistics() const {
-    return {{"rays_traced", static_cast<double>(rays_traced_)}, {"samples_per_pixel", static_cast<double>(spp_)}};
+    return {{"rays_traced", static_cast<double>(rays_traced_)}, {"samples_per_pixel", static_cast<double>(spp_)},
+            {"denoise_ms", denoise_ms_}};
 }
 
 }  // namespace bounce::methods::reference

@@ -13,8 +13,10 @@ methods::MethodInfo method_info();
 struct ReferenceRequest {
     PathTracerSettings settings;
     int spp = 64;
+    bool denoise = false;  // filter the frame with denoiser.hpp, guided by the first hits
 };
-// From knobs resolved by the registry (spp, bounces, seed, ao, ao_lambda, indirect_visibility).
+// From knobs resolved by the registry (spp, bounces, seed, ao, ao_lambda, indirect_visibility,
+// denoise).
 ReferenceRequest request_from_knobs(const methods::KnobValues& knobs);
 
 class ReferenceMethod final : public CpuMethod {
@@ -27,6 +29,7 @@ public:
 private:
     std::uint64_t rays_traced_ = 0;
     int spp_ = 0;
+    double denoise_ms_ = 0.0;
 };
 
 }  // namespace bounce::methods::reference
