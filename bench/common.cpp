@@ -64,6 +64,21 @@ std::string machine_description() {
     return fmt::format("{}, {} hardware threads", model, std::thread::hardware_concurrency());
 }
 
+std::optional<ReportPaths> report_paths(Arguments& arguments, const char* usage) {
+    ReportPaths paths;
+    while (arguments.next()) {
+        if (arguments.flag() == "--out") {
+            paths.out = arguments.value();
+        } else if (arguments.flag() == "--markdown") {
+            paths.markdown = arguments.value();
+        } else {
+            std::fprintf(stderr, "%s\n", usage);
+            return std::nullopt;
+        }
+    }
+    return paths;
+}
+
 std::string today() {
     const std::time_t now = std::time(nullptr);
     char date[32];

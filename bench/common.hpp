@@ -5,6 +5,8 @@
 #include "renderer/renderer.hpp"
 
 #include <chrono>
+#include <filesystem>
+#include <optional>
 #include <string>
 
 namespace bounce::bench {
@@ -28,6 +30,15 @@ private:
     int at_ = 0;
     std::string program_, command_, flag_;
 };
+
+// Where a table-writing bench puts its CSVs (--out DIR) and its section (--markdown FILE).
+struct ReportPaths {
+    std::filesystem::path out = "bench/results";
+    std::filesystem::path markdown = "docs/benchmarks.md";
+};
+// Reads the remaining flags as --out and --markdown; nullopt, after printing `usage` to stderr,
+// for any other flag.
+std::optional<ReportPaths> report_paths(Arguments& arguments, const char* usage);
 
 using Clock = std::chrono::steady_clock;
 

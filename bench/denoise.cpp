@@ -27,17 +27,11 @@ constexpr int kSize = 128;
 
 int main(int argc, char** argv) {
     bench::Arguments arguments(argc, argv, "bounce_bench_denoise", "build/bench/bounce_bench_denoise");
-    fs::path out = "bench/results", markdown = "docs/benchmarks.md";
-    while (arguments.next()) {
-        if (arguments.flag() == "--out") {
-            out = arguments.value();
-        } else if (arguments.flag() == "--markdown") {
-            markdown = arguments.value();
-        } else {
-            std::fprintf(stderr, "usage: bounce_bench_denoise [--out DIR] [--markdown FILE]\n");
-            return 2;
-        }
-    }
+    const std::optional<bench::ReportPaths> paths =
+        bench::report_paths(arguments, "usage: bounce_bench_denoise [--out DIR] [--markdown FILE]");
+    if (!paths) return 2;
+    const fs::path& out = paths->out;
+    const fs::path& markdown = paths->markdown;
     try {
         fs::create_directories(out);
         std::ofstream csv(out / "denoise.csv");

@@ -25,17 +25,11 @@ inline constexpr std::string_view kEnd = "<!-- end of extremes -->";
 
 int main(int argc, char** argv) {
     bench::Arguments arguments(argc, argv, "bounce_bench_extremes", "build/bench/bounce_bench_extremes");
-    fs::path out = "bench/results", markdown = "docs/benchmarks.md";
-    while (arguments.next()) {
-        if (arguments.flag() == "--out") {
-            out = arguments.value();
-        } else if (arguments.flag() == "--markdown") {
-            markdown = arguments.value();
-        } else {
-            std::fprintf(stderr, "usage: bounce_bench_extremes [--out DIR] [--markdown FILE]\n");
-            return 2;
-        }
-    }
+    const std::optional<bench::ReportPaths> paths =
+        bench::report_paths(arguments, "usage: bounce_bench_extremes [--out DIR] [--markdown FILE]");
+    if (!paths) return 2;
+    const fs::path& out = paths->out;
+    const fs::path& markdown = paths->markdown;
     try {
         Renderer renderer(gpu::DeviceChoice::resolve(std::nullopt));
         fs::create_directories(out);
