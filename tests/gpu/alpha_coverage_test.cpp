@@ -1,7 +1,8 @@
 // glTF alphaMode in the light transport: a surface cut away by MASK (or BLEND at alpha 0) sends
 // no indirect light by any method, and BLEND is coverage — a blocker of alpha a lets 1 - a of the
 // light through and shows a of itself, in the GPU frames (screen-door) and in the reference
-// (stochastic any-hit) alike, and a blended wall sends a of an opaque one's indirect light.
+// (stochastic any-hit) alike, and a blended wall sends a of an opaque one's indirect light. And the
+// lit back of a single-sided wall sends nothing.
 #include "gpu_fixture.hpp"
 #include "renderer/methods/reference/path_tracer.hpp"
 
@@ -34,12 +35,13 @@ scene::Material with_alpha(scene::Material material, scene::AlphaMode mode, floa
 // facing it (sunlit; its shadow falls beyond the floor). Without `wall`, a zero-area triangle
 // across the wall's diagonal stands in for it: nothing to see or light, but the same scene bounds,
 // so every structure fitted to them (voxel grid, light views) is the same with the wall and without.
-scene::Scene floor_and_wall(const std::optional<scene::Material>& wall) {
+// `facing` is the wall's front: towards the floor (-x) unless a test turns it away.
+scene::Scene floor_and_wall(const std::optional<scene::Material>& wall, const glm::vec3& facing = {-1, 0, 0}) {
     scene::Scene scene;
     scene.materials.push_back(matte(glm::vec3(kFloorAlbedo)));
     add_square(scene, "floor", glm::vec3(0.0f), 1.0f, {0, 1, 0}, 0);
     scene.materials.push_back(wall.value_or(matte(glm::vec3(0.0f))));
-    add_square(scene, "wall", glm::vec3(1.0f, 0.5f, 0.0f), 0.5f, {-1, 0, 0}, 1);
+    add_square(scene, "wall", glm::vec3(1.0f, 0.5f, 0.0f), 0.5f, facing, 1);
     if (!wall) {
         scene::Primitive& primitive = scene.meshes.back().primitives[0];
         primitive.positions[1] = 0.5f * (primitive.positions[0] + primitive.positions[2]);
@@ -71,10 +73,11 @@ bool open_floor(const glm::vec3& p) { return std::abs(p.x) < 0.9f && std::abs(p.
 
 // What the wall adds to the open floor: the mean of a method's frame there less the mean of its
 // frame of the floor alone (the same direct light and whatever the method gives a plane by itself).
-glm::dvec3 light_from_wall(const std::string& method, const scene::Material& wall, methods::KnobValues knobs = {}) {
+glm::dvec3 light_from_wall(const std::string& method, const scene::Material& wall, methods::KnobValues knobs = {},
+                           const glm::vec3& facing = {-1, 0, 0}) {
     const RenderRequest request = method_request(method, "high", kSize, std::move(knobs));
     const scene::Camera camera = top_down_camera(3.0f, 0.9f);
-    return region_mean(render_scene(floor_and_wall(wall), request).frame, camera, open_floor) -
+    return region_mean(render_scene(floor_and_wall(wall, facing), request).frame, camera, open_floor) -
            region_mean(render_scene(floor_and_wall(std::nullopt), request).frame, camera, open_floor);
 }
 
@@ -101,6 +104,41 @@ TEST_P(AlphaTransport, ACutAwayWallSendsNoIndirectLight) {
 
 INSTANTIATE_TEST_SUITE_P(Methods, AlphaTransport, ::testing::Values("vct", "isr", "cssm"),
                          [](const ::testing::TestParamInfo<std::string>& param) { return param.param; });
+
+// The back of a single-sided surface absorbs (as in the reference): lit, it sends nothing. Two
+// setups, each with the floor's indirect light zero in theory, bound 1e-5 of the sunlit floor's
+// radiance (float rounding of the frame; measured 2.5e-7, i.e. 1.4e-6 of it, for isr's composite
+// over `direct`). A lit back that reflected would send what a lit front does, 0.026 in red:
+// - the wall facing the floor, the sun from beyond it (lighting its back): isr's one bounce on the
+//   open floor must add nothing to `direct` (the floor is a plane; the wall's lit side is its back).
+//   Its light views once gave such backs the front's flux, sent towards the floor;
+// - the wall turned away, the sun on the floor's side lighting its back: cssm sends nothing.
+// (vct's voxels have no sides: it lights the floor from either side of a wall, docs/methods.md
+// "Extremes"; so vct is not held to this.)
+TEST(SingleSidedBacks, ALitBackSendsNoLight) {
+    const scene::Material red = matte(glm::vec3(0.9f, 0.1f, 0.1f));
+    const scene::Camera camera = top_down_camera(3.0f, 0.9f);
+    {
+        const glm::dvec3 front = light_from_wall("isr", red);
+        scene::Scene from_beyond = floor_and_wall(red);
+        from_beyond.lights[0].direction = glm::normalize(glm::vec3(-1.0f, -1.0f, 0.0f));
+        const glm::dvec3 added =
+            region_mean(render_scene(from_beyond, method_request("isr", "high", kSize)).frame, camera, open_floor) -
+            region_mean(render_scene(from_beyond, method_request("direct", "high", kSize)).frame, camera, open_floor);
+        std::printf("isr: light from the wall's lit front %.3g, from its lit back (%.3g %.3g %.3g)\n", front.r, added.r,
+                    added.g, added.b);
+        ASSERT_GT(front.r, 0.01 * kLitFloor);
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(added[c], 0.0, 1e-5 * kLitFloor) << "isr, channel " << c;
+    }
+    {
+        const glm::dvec3 front = light_from_wall("cssm", red);
+        const glm::dvec3 back = light_from_wall("cssm", red, {}, {1, 0, 0});
+        std::printf("cssm: light from the wall's lit front %.3g, from its lit back (%.3g %.3g %.3g)\n", front.r,
+                    back.r, back.g, back.b);
+        ASSERT_GT(front.r, 0.01 * kLitFloor);
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(back[c], 0.0, 1e-5 * kLitFloor) << "cssm, channel " << c;
+    }
+}
 
 // cssm's atlas gives a blended texel alpha of its area: a wall of alpha 0.5 sends half of an opaque
 // wall's light (its direct light is the same; the radiosity is linear in sender area). With one

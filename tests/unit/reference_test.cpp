@@ -111,6 +111,29 @@ scene::Scene plane_with(const scene::Light& light, const scene::Material& materi
     return scene;
 }
 
+// A single-sided quad seen from behind is culled by the G-buffer (glTF's doubleSided false), and
+// the reference's camera rays pass it too; its back still absorbs light. A quad over the floor
+// facing down, its back to the camera above, with the light between it and the floor: the frame
+// is the frame without the quad, to the bit (the same rays and random numbers; no shadow ray
+// reaches the quad). Made double-sided, the camera sees it instead.
+TEST(ReferenceSidedness, CameraRaysPassTheBacksOfSingleSidedSurfaces) {
+    scene::Light light;
+    light.position = {0.2f, 0.5f, 0.1f};
+    light.intensity = 1.0f;
+    const scene::Scene open = plane_with(light, matte(glm::vec3(0.6f)));
+    scene::Scene covered = open;
+    covered.materials.push_back(matte(glm::vec3(0.9f)));
+    add_quad(covered, 1, {-1, 1, -1}, {1, 1, -1}, {1, 1, 1}, {-1, 1, 1});  // at y = 1, facing down
+    PathTracerSettings settings;
+    settings.max_bounces = 0;
+    const image::Frame a = PathTracer(open).render(open.cameras[0], 16, 16, 4, settings);
+    const image::Frame b = PathTracer(covered).render(covered.cameras[0], 16, 16, 4, settings);
+    EXPECT_EQ(a.rgba, b.rgba);
+    covered.materials[1].double_sided = true;
+    const image::Frame c = PathTracer(covered).render(covered.cameras[0], 16, 16, 4, settings);
+    EXPECT_NE(a.rgba, c.rgba);  // the quad's lit underside is not what the camera sees now: its top, unlit
+}
+
 // The ground point seen through image position (x, y) in pixels (x + 0.5 is a pixel centre) from
 // the top-down camera of plane_with().
 glm::vec3 ground_point(const scene::Camera& camera, int size, float x, float y) {
