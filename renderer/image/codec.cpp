@@ -31,6 +31,7 @@ const char* dummy_filename(ImageFormat format) {
     switch (format) {
         case ImageFormat::png: return "memory.png";
         case ImageFormat::jpeg: return "memory.jpg";
+        case ImageFormat::webp: return "memory.webp";
         case ImageFormat::exr: return "memory.exr";
     }
     return "memory.png";
@@ -46,6 +47,9 @@ bool sniff_format(std::span<const std::uint8_t> bytes, ImageFormat& format) {
         format = ImageFormat::png;
     } else if (starts_with(bytes, {0xFF, 0xD8, 0xFF})) {
         format = ImageFormat::jpeg;
+    } else if (bytes.size() >= 12 && starts_with(bytes, {'R', 'I', 'F', 'F'}) && bytes[8] == 'W' && bytes[9] == 'E' &&
+               bytes[10] == 'B' && bytes[11] == 'P') {
+        format = ImageFormat::webp;
     } else if (starts_with(bytes, {0x76, 0x2F, 0x31, 0x01})) {
         format = ImageFormat::exr;
     } else {
@@ -71,16 +75,18 @@ ImageFormat parse_image_format(std::string_view name) {
     const std::string lower = lowercase(name);
     if (lower == "png") return ImageFormat::png;
     if (lower == "jpeg" || lower == "jpg") return ImageFormat::jpeg;
+    if (lower == "webp") return ImageFormat::webp;
     if (lower == "exr") return ImageFormat::exr;
-    throw InputError(fmt::format("unknown image format '{}' (expected png, jpeg or exr)", name));
+    throw InputError(fmt::format("unknown image format '{}' (expected png, jpeg, webp or exr)", name));
 }
 
 ImageFormat image_format_from_path(const std::filesystem::path& path) {
     const std::string ext = lowercase(path.extension().string());
     if (ext == ".png") return ImageFormat::png;
     if (ext == ".jpg" || ext == ".jpeg") return ImageFormat::jpeg;
+    if (ext == ".webp") return ImageFormat::webp;
     if (ext == ".exr") return ImageFormat::exr;
-    throw InputError(fmt::format("cannot tell the image format of '{}' (expected .png, .jpg, .jpeg or .exr)",
+    throw InputError(fmt::format("cannot tell the image format of '{}' (expected .png, .jpg, .jpeg, .webp or .exr)",
                                  path.string()));
 }
 
@@ -88,6 +94,7 @@ std::string_view image_format_name(ImageFormat format) {
     switch (format) {
         case ImageFormat::png: return "png";
         case ImageFormat::jpeg: return "jpeg";
+        case ImageFormat::webp: return "webp";
         case ImageFormat::exr: return "exr";
     }
     return "png";
@@ -123,15 +130,15 @@ std::vector<std::uint8_t> encode_image(const Frame& frame, ImageFormat format, c
             BOUNCE_FAIL("cannot encode {}: display_rgba8 has {} bytes, expected {} for {}x{}", name,
                         frame.display_rgba8.size(), values, frame.width, frame.height);
         }
-        const bool jpeg = format == ImageFormat::jpeg;
-        spec = OIIO::ImageSpec(frame.width, frame.height, jpeg ? 3 : 4, OIIO::TypeDesc::UINT8);
-        if (jpeg) {
+        const bool lossy = format == ImageFormat::jpeg || format == ImageFormat::webp;
+        spec = OIIO::ImageSpec(frame.width, frame.height, lossy ? 3 : 4, OIIO::TypeDesc::UINT8);
+        if (lossy) {
             if (options.jpeg_quality < 1 || options.jpeg_quality > 100) {
-                throw InputError(fmt::format("jpeg quality {} is out of range (expected 1..100)",
+                throw InputError(fmt::format("{} quality {} is out of range (expected 1..100)", name,
                                              options.jpeg_quality));
             }
-            spec.attribute("Compression", fmt::format("jpeg:{}", options.jpeg_quality));
-            // JPEG has no alpha: a 4-byte pixel stride over 3 channels drops it without a copy.
+            spec.attribute("Compression", fmt::format("{}:{}", name, options.jpeg_quality));
+            // No alpha in a preview frame: a 4-byte pixel stride over 3 channels drops it without a copy.
             xstride = 4;
         } else {
             spec.alpha_channel = 3;
@@ -174,7 +181,7 @@ std::vector<std::uint8_t> encode_image(const Frame& frame, ImageFormat format, c
 DecodedImage decode_image(std::span<const std::uint8_t> bytes) {
     ImageFormat format{};
     if (!sniff_format(bytes, format)) {
-        throw InputError(fmt::format("cannot decode image: {} bytes are not PNG, JPEG or EXR data",
+        throw InputError(fmt::format("cannot decode image: {} bytes are not PNG, JPEG, WebP or EXR data",
                                      bytes.size()));
     }
     const std::string filename = dummy_filename(format);

@@ -12,20 +12,20 @@
 
 namespace bounce::image {
 
-enum class ImageFormat { png, jpeg, exr };
+enum class ImageFormat { png, jpeg, webp, exr };
 
-// "png", "jpeg"/"jpg", "exr" (case-insensitive); throws InputError naming the value otherwise.
+// "png", "jpeg"/"jpg", "webp", "exr" (case-insensitive); throws InputError naming the value otherwise.
 ImageFormat parse_image_format(std::string_view name);
-// From a path's extension (.png, .jpg, .jpeg, .exr); throws InputError otherwise.
+// From a path's extension (.png, .jpg, .jpeg, .webp, .exr); throws InputError otherwise.
 ImageFormat image_format_from_path(const std::filesystem::path& path);
 std::string_view image_format_name(ImageFormat format);
 
 struct EncodeOptions {
-    int jpeg_quality = 90;   // 1..100
+    int jpeg_quality = 90;   // 1..100, JPEG and (lossy) WebP
     bool exr_half = false;   // EXR channels as half instead of float
 };
 
-// PNG and JPEG encode Frame::display_rgba8 (RGBA for PNG, RGB for JPEG); EXR encodes the linear
+// PNG, JPEG and WebP encode Frame::display_rgba8 (RGBA for PNG, RGB for JPEG and WebP); EXR encodes the linear
 // Frame::rgba. Throws Error if the frame lacks the image the format needs or the encoder fails.
 std::vector<std::uint8_t> encode_image(const Frame& frame, ImageFormat format,
                                        const EncodeOptions& options = {});
@@ -43,7 +43,7 @@ struct DecodedImage {
     }
 };
 
-// Decodes PNG, JPEG or EXR bytes; throws InputError if they are not a readable image.
+// Decodes PNG, JPEG, WebP or EXR bytes; throws InputError if they are not a readable image.
 DecodedImage decode_image(std::span<const std::uint8_t> bytes);
 
 // Writes bytes to a file atomically (temporary file in the same folder, then rename).

@@ -41,15 +41,16 @@ Frame gradient_frame(int width, int height) {
     return frame;
 }
 
-double jpeg_mean_error(const Frame& frame, int quality) {
+// Mean absolute error, in 8-bit steps over RGB, of a lossy format's round trip.
+double lossy_mean_error(const Frame& frame, int quality, ImageFormat format = ImageFormat::jpeg) {
     EncodeOptions options;
     options.jpeg_quality = quality;
-    const auto bytes = encode_image(frame, ImageFormat::jpeg, options);
+    const auto bytes = encode_image(frame, format, options);
     const DecodedImage image = decode_image(bytes);
     EXPECT_EQ(image.width, frame.width);
     EXPECT_EQ(image.height, frame.height);
     EXPECT_EQ(image.channels, 3);
-    EXPECT_EQ(image.format, "jpeg");
+    EXPECT_EQ(image.format, image_format_name(format));
     double sum = 0.0;
     for (int y = 0; y < frame.height; ++y) {
         for (int x = 0; x < frame.width; ++x) {
@@ -134,8 +135,8 @@ TEST(ImageCodec, PngRoundTripIsExact) {
 
 TEST(ImageCodec, JpegDecodesWithSmallErrorAndQualityMatters) {
     const Frame frame = gradient_frame(64, 48);
-    const double error_95 = jpeg_mean_error(frame, 95);
-    const double error_20 = jpeg_mean_error(frame, 20);
+    const double error_95 = lossy_mean_error(frame, 95);
+    const double error_20 = lossy_mean_error(frame, 20);
     // Mean absolute error in 8-bit steps over the RGB channels.
     EXPECT_LT(error_95, 1.5);
     EXPECT_LT(error_20, 8.0);
@@ -194,12 +195,27 @@ TEST(ImageCodec, EncodeEmptyFrameThrows) {
     EXPECT_THROW(encode_image(frame, ImageFormat::png), Error);
 }
 
+// The same bounds as JPEG's: the preview stream trades either for bytes the same way.
+TEST(ImageCodec, WebpDecodesWithSmallErrorAndQualityMatters) {
+    const Frame frame = gradient_frame(64, 48);
+    const double error_95 = lossy_mean_error(frame, 95, ImageFormat::webp);
+    const double error_20 = lossy_mean_error(frame, 20, ImageFormat::webp);
+    EXPECT_LT(error_95, 1.5);
+    EXPECT_LT(error_20, 8.0);
+    EXPECT_LT(error_95, error_20);
+    EncodeOptions low, high;
+    low.jpeg_quality = 20;
+    high.jpeg_quality = 95;
+    EXPECT_LT(encode_image(frame, ImageFormat::webp, low).size(), encode_image(frame, ImageFormat::webp, high).size());
+}
+
 TEST(ImageCodec, ParseImageFormat) {
     EXPECT_EQ(parse_image_format("png"), ImageFormat::png);
     EXPECT_EQ(parse_image_format("PNG"), ImageFormat::png);
     EXPECT_EQ(parse_image_format("jpeg"), ImageFormat::jpeg);
     EXPECT_EQ(parse_image_format("jpg"), ImageFormat::jpeg);
     EXPECT_EQ(parse_image_format("Exr"), ImageFormat::exr);
+    EXPECT_EQ(parse_image_format("webp"), ImageFormat::webp);
     EXPECT_THROW(parse_image_format("tiff"), InputError);
     EXPECT_THROW(parse_image_format(""), InputError);
     try {
@@ -208,7 +224,7 @@ TEST(ImageCodec, ParseImageFormat) {
     } catch (const InputError& e) {
         EXPECT_NE(std::string(e.what()).find("bmp"), std::string::npos) << e.what();
     }
-    for (ImageFormat f : {ImageFormat::png, ImageFormat::jpeg, ImageFormat::exr}) {
+    for (ImageFormat f : {ImageFormat::png, ImageFormat::jpeg, ImageFormat::webp, ImageFormat::exr}) {
         EXPECT_EQ(parse_image_format(image_format_name(f)), f);
     }
 }
@@ -218,6 +234,7 @@ TEST(ImageCodec, ImageFormatFromPath) {
     EXPECT_EQ(image_format_from_path("frame.JPG"), ImageFormat::jpeg);
     EXPECT_EQ(image_format_from_path("frame.jpeg"), ImageFormat::jpeg);
     EXPECT_EQ(image_format_from_path("/tmp/a.b/frame.exr"), ImageFormat::exr);
+    EXPECT_EQ(image_format_from_path("frame.webp"), ImageFormat::webp);
     EXPECT_THROW(image_format_from_path("frame.tif"), InputError);
     EXPECT_THROW(image_format_from_path("frame"), InputError);
 }
