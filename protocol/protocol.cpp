@@ -17,7 +17,7 @@ struct TypeEntry {
     std::string_view name;
 };
 
-constexpr std::array<TypeEntry, 21> kTypes{{
+constexpr std::array<TypeEntry, 22> kTypes{{
     {MessageType::hello, "hello"},
     {MessageType::ok, "ok"},
     {MessageType::error, "error"},
@@ -39,6 +39,7 @@ constexpr std::array<TypeEntry, 21> kTypes{{
     {MessageType::stream_stop, "stream.stop"},
     {MessageType::bake, "bake"},
     {MessageType::stats, "stats"},
+    {MessageType::stream_update, "stream.update"},
 }};
 
 struct ErrorEntry {

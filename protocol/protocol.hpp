@@ -48,6 +48,7 @@ enum class MessageType : std::uint16_t {
     stream_stop = 26,
     bake = 27,
     stats = 28,
+    stream_update = 29,
 };
 
 // The wire name ("scene.load"), or "unknown" for a number the table does not have.

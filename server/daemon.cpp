@@ -4,10 +4,9 @@
 #include "renderer/base/error.hpp"
 #include "renderer/base/log.hpp"
 #include "renderer/scene/builtin.hpp"
+#include "server/http_server.hpp"
 #include "server/session.hpp"
 
-#include <boost/beast/core.hpp>
-#include <boost/beast/http.hpp>
 
 #include <cstdlib>
 #include <fstream>
@@ -17,21 +16,7 @@ namespace bounce::server {
 namespace {
 
 namespace asio = boost::asio;
-namespace http = boost::beast::http;
 using asio::ip::tcp;
-
-std::pair<std::string, std::uint16_t> split_host_port(const std::string& text, const char* flag) {
-    const auto colon = text.rfind(':');
-    if (colon == std::string::npos) throw InputError(fmt::format("{} expects HOST:PORT, got '{}'", flag, text));
-    const std::string host = text.substr(0, colon);
-    int port = -1;
-    try {
-        port = std::stoi(text.substr(colon + 1));
-    } catch (const std::exception&) {
-    }
-    if (port < 0 || port > 65535) throw InputError(fmt::format("{}: '{}' is not a port", flag, text.substr(colon + 1)));
-    return {host, static_cast<std::uint16_t>(port)};
-}
 
 bool is_loopback(const std::string& host) {
     boost::system::error_code error;
@@ -49,41 +34,6 @@ std::string read_token(const std::filesystem::path& path) {
     if (token.size() < 16) throw InputError(fmt::format("--token-file {}: the token has fewer than 16 characters", path.string()));
     return token;
 }
-
-// One HTTP exchange on the ops port: /healthz, /readyz, /metrics. Reading the request and writing
-// the answer together must finish within the ops timeout; `on_end` runs when the exchange is done.
-struct OpsExchange : std::enable_shared_from_this<OpsExchange> {
-    using Router = std::function<std::pair<unsigned, std::string>(const http::request<http::string_body>&)>;
-    OpsExchange(tcp::socket s, Router router, std::function<void()> ended)
-        : stream(std::move(s)), route(std::move(router)), on_end(std::move(ended)) {}
-    ~OpsExchange() { on_end(); }
-    void start(std::chrono::milliseconds timeout) {
-        stream.expires_after(timeout);
-        parser.body_limit(0);
-        parser.header_limit(8192);
-        http::async_read(stream, buffer, parser, [self = shared_from_this()](boost::system::error_code error, std::size_t) {
-            if (error) return;
-            const auto& request = self->parser.get();
-            const auto [status, body] = self->route(request);
-            self->response.result(status);
-            self->response.version(request.version());
-            self->response.set(http::field::content_type, "text/plain; version=0.0.4");
-            self->response.body() = body;
-            self->response.keep_alive(false);
-            self->response.prepare_payload();
-            http::async_write(self->stream, self->response, [self](boost::system::error_code, std::size_t) {
-                boost::system::error_code ignored;
-                self->stream.socket().shutdown(tcp::socket::shutdown_both, ignored);
-            });
-        });
-    }
-    boost::beast::tcp_stream stream;
-    boost::beast::flat_buffer buffer;
-    http::request_parser<http::string_body> parser;
-    http::response<http::string_body> response;
-    Router route;
-    std::function<void()> on_end;
-};
 
 }  // namespace
 
@@ -193,91 +143,58 @@ void Daemon::accept() {
             if (acceptor_.is_open()) accept();
             return;
         }
-        std::shared_ptr<Session> session;
-        std::shared_ptr<Session> evicted;
-        {
-            std::lock_guard lock(sessions_mutex_);
-            if (token_) {
-                // Unauthenticated connections have their own cap; the oldest makes way, so a flood
-                // of connections that never authenticate cannot keep a real client out.
-                if (unauthenticated_.size() >= config_.max_unauthenticated) {
-                    evicted = unauthenticated_.front().lock();
-                    unauthenticated_.pop_front();
-                }
-                session = std::make_shared<Session>(*this, std::move(socket));
-                unauthenticated_.push_back(session);
-            } else if (sessions_.size() >= config_.max_clients) {
-                log::warn("daemon", "refusing a client: {} connected (--max-clients)", sessions_.size());
-                boost::system::error_code ignored;
-                socket.close(ignored);
-            } else {
-                session = std::make_shared<Session>(*this, std::move(socket));
-            }
-            if (session) {
-                sessions_.insert(session);
-                metrics_.set_connections(sessions_.size());
-            }
-        }
-        if (evicted) {
-            log::info("daemon", "closing the oldest unauthenticated connection (--max-unauthenticated {})",
-                      config_.max_unauthenticated);
-            evicted->close();
-        }
-        if (session) session->start();
+        admit(make_tcp_transport(std::move(socket)));
         accept();
     });
 }
 
-void Daemon::start_metrics_server() {
-    if (!config_.metrics_listen) return;
-    const auto [host, port] = split_host_port(*config_.metrics_listen, "--metrics-listen");
-    const bool needs_token = !is_loopback(host);
-    if (needs_token && !token_) {
-        throw InputError(fmt::format("--metrics-listen on {} (not loopback) needs --token-file", host));
+void Daemon::admit(std::unique_ptr<Transport> transport) {
+    if (shutting_down_) {
+        transport->close();
+        return;
     }
-    metrics_acceptor_.emplace(io_, tcp::endpoint(asio::ip::make_address(host == "localhost" ? "127.0.0.1" : host), port));
-    log::info("daemon", "ops HTTP on {}:{} (/healthz /readyz /metrics){}", host, metrics_acceptor_->local_endpoint().port(),
-              needs_token ? ", bearer token required for /metrics" : "");
-    auto route = [this, needs_token](const http::request<http::string_body>& request) -> std::pair<unsigned, std::string> {
-        // Health needs no token: it tells nothing but up or ready, and orchestrators' HTTP probes
-        // (Kubernetes httpGet, load balancers) cannot carry a secret.
-        const std::string target(request.target());
-        if (target == "/healthz") return {200, "ok\n"};
-        if (target == "/readyz") return ready_ ? std::pair<unsigned, std::string>{200, "ready\n"}
-                                               : std::pair<unsigned, std::string>{503, "not ready\n"};
-        if (needs_token) {
-            const auto header = request[http::field::authorization];
-            const std::string given = header.starts_with("Bearer ") ? std::string(header.substr(7)) : std::string();
-            if (!protocol::same_token(given, *token_)) return {401, "unauthorized\n"};
-        }
-        if (target == "/metrics") {
-            metrics_.set_queue_depth(render_->queue_depth());
-            return {200, metrics_.prometheus_text()};
-        }
-        return {404, "not found\n"};
-    };
-    auto serve = std::make_shared<std::function<void()>>();
-    *serve = [this, route, serve] {
-        metrics_acceptor_->async_accept(asio::make_strand(io_), [this, route, serve](boost::system::error_code error,
-                                                                                     tcp::socket socket) {
-            if (error) return;
-            if (ops_connections_.fetch_add(1) >= config_.max_ops_connections) {
-                --ops_connections_;
-                boost::system::error_code ignored;
-                socket.close(ignored);  // over the cap: refused, not queued
-            } else {
-                std::make_shared<OpsExchange>(std::move(socket), route, [this] { --ops_connections_; })
-                    ->start(config_.ops_timeout);
+    std::shared_ptr<Session> session;
+    std::shared_ptr<Session> evicted;
+    {
+        std::lock_guard lock(sessions_mutex_);
+        if (token_) {
+            // Unauthenticated connections have their own cap; the oldest makes way, so a flood
+            // of connections that never authenticate cannot keep a real client out.
+            if (unauthenticated_.size() >= config_.max_unauthenticated) {
+                evicted = unauthenticated_.front().lock();
+                unauthenticated_.pop_front();
             }
-            (*serve)();
-        });
-    };
-    (*serve)();
+            session = std::make_shared<Session>(*this, std::move(transport));
+            unauthenticated_.push_back(session);
+        } else if (sessions_.size() >= config_.max_clients) {
+            log::warn("daemon", "refusing a {} client: {} connected (--max-clients)", transport->kind(), sessions_.size());
+            transport->close();
+        } else {
+            session = std::make_shared<Session>(*this, std::move(transport));
+        }
+        if (session) {
+            sessions_.insert(session);
+            metrics_.set_connections(sessions_.size());
+        }
+    }
+    if (evicted) {
+        log::info("daemon", "closing the oldest unauthenticated connection (--max-unauthenticated {})",
+                  config_.max_unauthenticated);
+        evicted->close();
+    }
+    if (session) session->start();
+}
+
+void Daemon::start_http_server() {
+    if (!config_.metrics_listen) return;
+    http_ = std::make_unique<HttpServer>(*this, *config_.metrics_listen, config_.serve_viewer);
+    http_->start();
 }
 
 void Daemon::begin_shutdown() {
     if (shutting_down_.exchange(true)) return;
     ready_ = false;
+    streams_.stop_all();
     log::info("daemon", "shutting down: {} requests in flight", in_flight_.load());
     boost::system::error_code ignored;
     acceptor_.close(ignored);
@@ -317,14 +234,14 @@ int Daemon::run() {
     acceptor_.bind(endpoint);
     acceptor_.listen();
     const auto port = acceptor_.local_endpoint().port();
-    start_metrics_server();
+    start_http_server();
     if (config_.port_file) {
         // The protocol port, then the ops HTTP port when there is one (either may be asked as :0).
         const auto temporary = config_.port_file->string() + ".tmp";
         {
             std::ofstream out(temporary);
             out << port << "\n";
-            if (metrics_acceptor_) out << metrics_acceptor_->local_endpoint().port() << "\n";
+            if (http_) out << http_->port() << "\n";
         }
         std::filesystem::rename(temporary, *config_.port_file);
     }

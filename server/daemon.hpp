@@ -8,6 +8,7 @@
 #include "server/render_service.hpp"
 #include "server/request_handlers.hpp"
 #include "server/scene_requests.hpp"
+#include "server/streams.hpp"
 
 #include <boost/asio.hpp>
 
@@ -36,7 +37,8 @@ struct DaemonConfig {
     std::uint64_t max_pixels = 4096ull * 4096ull;
     std::size_t max_in_flight = 8;    // per connection: reading pauses while this many are pending
     std::size_t queue_capacity = 64;  // render jobs waiting across all clients
-    std::optional<std::string> metrics_listen;  // HOST:PORT
+    std::optional<std::string> metrics_listen;  // HOST:PORT of the HTTP listener (--http-listen, --metrics-listen)
+    bool serve_viewer = false;                  // the viewer page and /ws on it (--http-listen)
     std::chrono::milliseconds heartbeat{15000};
     std::chrono::milliseconds drain_timeout{10000};
     std::size_t max_output_bytes = 512u << 20;  // a reader slower than this much queued output is dropped
@@ -57,6 +59,8 @@ struct DaemonConfig {
 };
 
 class Session;
+class HttpServer;
+class Transport;
 
 class Daemon {
 public:
@@ -80,6 +84,7 @@ public:
     boost::asio::io_context& io() { return io_; }
     Metrics& metrics() { return metrics_; }
     RequestHandlers& handlers() { return handlers_; }
+    StreamHub& streams() { return streams_; }
     boost::asio::thread_pool& encode_pool() { return encode_pool_; }
     // CPU methods (the path-traced reference) run here, never on the render thread.
     boost::asio::thread_pool& cpu_pool() { return cpu_pool_; }
@@ -95,12 +100,16 @@ public:
     void request_started();
     void request_finished();
     void forget(Session* session);
+    // A new client connection (TCP, or a WebSocket the HTTP listener upgraded): admitted under the
+    // connection caps, or closed.
+    void admit(std::unique_ptr<Transport> transport);
+    bool ready() const { return ready_.load(); }
     // Numbers connections in the logs (request ids read CONNECTION-REQUEST).
     std::uint64_t next_connection_number() { return ++connections_accepted_; }
 
 private:
     void accept();
-    void start_metrics_server();
+    void start_http_server();
     void begin_shutdown();
 
     DaemonConfig config_;
@@ -110,13 +119,14 @@ private:
     Metrics metrics_;
     ByteBudget inflight_bytes_{config_.max_inflight_bytes};
     RequestHandlers handlers_{*this};
+    StreamHub streams_{*this};
     boost::asio::io_context io_;
+    std::unique_ptr<HttpServer> http_;  // after io_: closed before it
     boost::asio::thread_pool encode_pool_{2};
     boost::asio::thread_pool cpu_pool_{1};  // one trace at a time: it uses every core through TBB
     boost::asio::thread_pool precompute_pool_{1};
     std::atomic<int> cpu_jobs_{0};
     boost::asio::ip::tcp::acceptor acceptor_;
-    std::optional<boost::asio::ip::tcp::acceptor> metrics_acceptor_;
     boost::asio::signal_set signals_;
     boost::asio::steady_timer drain_timer_;
     std::atomic<bool> shutting_down_{false};
@@ -125,7 +135,6 @@ private:
     std::mutex sessions_mutex_;
     std::set<std::shared_ptr<Session>> sessions_;
     std::deque<std::weak_ptr<Session>> unauthenticated_;  // oldest first
-    std::atomic<std::size_t> ops_connections_{0};
     std::atomic<std::uint64_t> connections_accepted_{0};
     std::chrono::steady_clock::time_point drain_deadline_;
 };

@@ -104,6 +104,8 @@ std::vector<Limit> daemon_limits() {
          [](auto v, Config& c) { c.max_unauthenticated = v; }},
         {"--auth-timeout-ms", "time a connection has to authenticate [10000]", 10, 3600000, false,
          [](auto v, Config& c) { c.auth_timeout = milliseconds(v); }},
+        {"--max-output-bytes", "replies a client leaves unread before it is dropped [512M]", 4096, 1ull << 40, true,
+         [](auto v, Config& c) { c.max_output_bytes = v; }},
         {"--drain-seconds", "on SIGTERM, finish in-flight work for at most N s, then cancel it; a second signal "
                             "exits at once [10]",
          0, 3600, false, [](auto v, Config& c) { c.drain_timeout = std::chrono::seconds(v); }},
@@ -121,7 +123,7 @@ Options parse(int argc, char** argv) {
     app.footer("Byte counts (the -bytes flags, --gpu-memory-budget) take a K, M, G or T suffix (powers of 1024).");
 
     std::string listen, device, log_level = "info", log_format = "text", size;
-    std::string port_file, scene_root, cache_dir, token_file, metrics_listen;
+    std::string port_file, scene_root, cache_dir, token_file, metrics_listen, http_listen;
     std::vector<std::string> knobs;
     std::vector<Limit> limits = daemon_limits();
     const char* daemon_group = "Daemon";
@@ -133,8 +135,13 @@ Options parse(int argc, char** argv) {
     app.add_option("--cache-dir", cache_dir, "where baked structures are cached")->group(daemon_group);
     app.add_option("--token-file", token_file, "clients must send this token (required off loopback)")
         ->group(daemon_group);
-    app.add_option("--metrics-listen", metrics_listen, "ops HTTP on HOST:PORT: /healthz /readyz /metrics [off]")
-        ->group(daemon_group);
+    auto* metrics_option =
+        app.add_option("--metrics-listen", metrics_listen, "ops HTTP on HOST:PORT: /healthz /readyz /metrics [off]")
+            ->group(daemon_group);
+    app.add_option("--http-listen", http_listen,
+                   "HTTP on HOST:PORT: the ops routes, the browser viewer at / and the protocol over WebSocket at /ws [off]")
+        ->group(daemon_group)
+        ->excludes(metrics_option);
     for (Limit& limit : limits) {
         app.add_option(limit.flag, limit.text, limit.help)->type_name(limit.is_bytes ? "BYTES" : "N")->group(daemon_group);
     }
@@ -205,6 +212,10 @@ Options parse(int argc, char** argv) {
     if (!cache_dir.empty()) options.daemon.cache_dir = cache_dir;
     if (!token_file.empty()) options.daemon.token_file = token_file;
     if (!metrics_listen.empty()) options.daemon.metrics_listen = metrics_listen;
+    if (!http_listen.empty()) {
+        options.daemon.metrics_listen = http_listen;
+        options.daemon.serve_viewer = true;
+    }
     options.daemon.device = options.device;
     return options;
 }

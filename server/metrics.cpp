@@ -72,6 +72,21 @@ void Metrics::set_connections(std::size_t connections) {
     connections_ = connections;
 }
 
+void Metrics::set_streams_active(std::size_t streams) {
+    std::lock_guard lock(mutex_);
+    streams_active_ = streams;
+}
+
+void Metrics::count_stream_frame() {
+    std::lock_guard lock(mutex_);
+    ++stream_frames_;
+}
+
+void Metrics::count_stream_dropped(std::uint64_t states) {
+    std::lock_guard lock(mutex_);
+    stream_dropped_ += states;
+}
+
 std::uint64_t Metrics::frames() const {
     std::lock_guard lock(mutex_);
     return frames_;
@@ -130,6 +145,13 @@ std::string Metrics::prometheus_text() const {
     out += fmt::format("bounce_queue_depth {}\n", queue_depth_);
     out += "# HELP bounce_connections Open client connections.\n# TYPE bounce_connections gauge\n";
     out += fmt::format("bounce_connections {}\n", connections_);
+    out += "# HELP bounce_streams_active Open preview streams.\n# TYPE bounce_streams_active gauge\n";
+    out += fmt::format("bounce_streams_active {}\n", streams_active_);
+    out += "# HELP bounce_stream_frames_total Frames preview streams sent.\n# TYPE bounce_stream_frames_total counter\n";
+    out += fmt::format("bounce_stream_frames_total {}\n", stream_frames_);
+    out += "# HELP bounce_stream_dropped_stale_total Stream states superseded before a frame of them started.\n"
+           "# TYPE bounce_stream_dropped_stale_total counter\n";
+    out += fmt::format("bounce_stream_dropped_stale_total {}\n", stream_dropped_);
     out += "# HELP bounce_resident_bytes GPU bytes a scene holds.\n# TYPE bounce_resident_bytes gauge\n";
     for (const auto& [scene, bytes] : resident_bytes_) {
         out += fmt::format("bounce_resident_bytes{{scene=\"{}\"}} {}\n", escape_label(scene), bytes);

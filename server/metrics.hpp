@@ -20,6 +20,10 @@ public:
     void set_resident_bytes(const std::string& scene, std::size_t bytes);
     void forget_scene(const std::string& scene);
     void set_connections(std::size_t connections);
+    // Preview streams: how many are open, frames they sent, states superseded before a frame.
+    void set_streams_active(std::size_t streams);
+    void count_stream_frame();
+    void count_stream_dropped(std::uint64_t states);
     // What the daemon runs on and its configured limits, exported so that alerts need no copy of them.
     void set_identity(std::string renderer, bool software, std::size_t queue_capacity, std::size_t max_clients);
 
@@ -47,6 +51,8 @@ private:
     std::uint64_t frames_ = 0;
     std::size_t queue_depth_ = 0;
     std::size_t connections_ = 0;
+    std::size_t streams_active_ = 0;
+    std::uint64_t stream_frames_ = 0, stream_dropped_ = 0;
     std::map<std::string, std::size_t> resident_bytes_;
     std::map<std::string, Histogram> render_seconds_;  // by method
     std::map<std::string, Histogram> total_seconds_;

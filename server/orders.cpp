@@ -133,11 +133,8 @@ LightOrder parse_light(const json& body) {
     return order;
 }
 
-CameraOrder parse_camera(const json& body) {
-    CameraOrder order;
-    order.scene = protocol::get_string(body, "scene");
-    order.camera = protocol::get_optional_string(body, "camera");
-    if (order.camera) return order;
+// The view fields of camera.set, and of an inline camera object.
+void parse_view_fields(const json& body, CameraOrder& order) {
     order.position = optional_vec3(body, "position", kMaxCoordinate);
     order.look_at = optional_vec3(body, "look_at", kMaxCoordinate);
     if (!order.look_at) {
@@ -152,7 +149,34 @@ CameraOrder parse_camera(const json& body) {
         if (!(*fov > 0.1 && *fov < 179.0)) throw FieldError("fov_deg", "field 'fov_deg' is outside (0.1, 179)");
         order.fov = glm::radians(static_cast<float>(*fov));
     }
+}
+
+CameraOrder parse_camera(const json& body) {
+    CameraOrder order;
+    order.scene = protocol::get_string(body, "scene");
+    order.camera = protocol::get_optional_string(body, "camera");
+    if (!order.camera) parse_view_fields(body, order);
     return order;
+}
+
+// A render's `camera`: a name, or an object of inline view fields.
+std::optional<CameraOrder> parse_render_view(const json& body, const std::string& scene) {
+    const auto it = body.find("camera");
+    if (it == body.end() || it->is_null()) return std::nullopt;
+    CameraOrder view;
+    view.scene = scene;
+    if (it->is_string()) {
+        view.camera = it->get<std::string>();
+    } else if (it->is_object()) {
+        try {
+            parse_view_fields(*it, view);
+        } catch (const FieldError& error) {
+            throw FieldError(fmt::format("camera.{}", error.field), error.what());
+        }
+    } else {
+        throw FieldError("camera", "field 'camera' must be a camera's name or an object of view fields");
+    }
+    return view;
 }
 
 }  // namespace
@@ -160,7 +184,7 @@ CameraOrder parse_camera(const json& body) {
 RenderOrder parse_render(const json& body, std::uint64_t max_pixels) {
     RenderOrder order;
     order.scene = protocol::get_string(body, "scene");
-    order.camera = protocol::get_optional_string(body, "camera");
+    order.view = parse_render_view(body, order.scene);
     RenderRequest& request = order.request;
     request.method = protocol::get_optional_string(body, "method").value_or("direct");
     request.preset = protocol::get_optional_string(body, "preset").value_or("medium");

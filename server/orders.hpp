@@ -82,7 +82,9 @@ struct RenderOrder {
     int jpeg_quality = 90;
     bool exr_half = false;
     std::optional<std::uint64_t> min_scene_version;
-    std::optional<std::string> camera;  // a camera of the scene, for this render only
+    // A view for this render only: a camera of the scene by name (CameraOrder::camera), or inline
+    // fields over the scene's default camera. The scene's own cameras are untouched.
+    std::optional<CameraOrder> view;
 };
 struct BakeOrder {
     RenderOrder frame;

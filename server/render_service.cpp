@@ -59,6 +59,16 @@ bool RenderService::submit(Job job) {
     return true;
 }
 
+bool RenderService::post(Job job) {
+    {
+        std::lock_guard lock(mutex_);
+        if (stopping_) return false;
+        jobs_.push_back(std::move(job));
+    }
+    wake_.notify_one();
+    return true;
+}
+
 bool RenderService::resume(Job job) {
     {
         std::lock_guard lock(mutex_);

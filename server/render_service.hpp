@@ -26,6 +26,9 @@ public:
 
     // Queues a job; false when the queue is full (the caller answers `busy`) or stopping.
     bool submit(Job job);
+    // Queues a job at the back past the capacity: work whose count is bounded elsewhere (a preview
+    // stream's tick: one per stream at most). False only when stopping.
+    bool post(Job job);
     // Queues a job ahead of the others, past the capacity: the continuation of work already admitted
     // (a frame whose bake finished off the thread). False only when stopping.
     bool resume(Job job);

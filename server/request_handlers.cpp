@@ -13,15 +13,39 @@ using protocol::ErrorCode;
 using protocol::MessageType;
 using Clock = std::chrono::steady_clock;
 
-// The camera a render names, as a one-off: the scene's own view is untouched.
-std::optional<scene::Camera> named_camera(const scene::Scene& scene, const RenderOrder& order) {
-    if (!order.camera) return std::nullopt;
-    const auto index = scene.find_camera(*order.camera);
-    if (!index) {
-        throw RequestError(ErrorCode::not_found, fmt::format("scene '{}' has no camera '{}'", order.scene, *order.camera),
-                           "camera");
+// The view a render asks for, as a one-off: the scene's own cameras are untouched.
+std::optional<scene::Camera> view_camera(const scene::Scene& scene, const RenderOrder& order) {
+    if (!order.view) return std::nullopt;
+    try {
+        return camera_from(scene, *order.view);
+    } catch (const RequestError& error) {
+        if (error.code() == ErrorCode::not_found) {
+            throw RequestError(ErrorCode::not_found,
+                               fmt::format("scene '{}' has no camera '{}'", order.scene, order.view->camera.value_or("")),
+                               "camera");
+        }
+        throw;
+    } catch (const protocol::FieldError& error) {
+        throw protocol::FieldError(fmt::format("camera.{}", error.field), error.what());
     }
-    return scene.cameras[*index];
+}
+
+// The scene a request changed (its version, its presence), for the streams that show it.
+std::optional<std::string> changed_scene(const Request& request) {
+    if (request.message().type == static_cast<std::uint16_t>(MessageType::scene_describe)) return std::nullopt;
+    return std::visit(
+        [](const auto& o) -> std::optional<std::string> {
+            using T = std::decay_t<decltype(o)>;
+            if constexpr (std::is_same_v<T, LoadOrder> || std::is_same_v<T, SceneNameOrder>) {
+                return o.name;  // loaded anew or unloaded
+            } else if constexpr (std::is_same_v<T, TransformOrder> || std::is_same_v<T, LightOrder> ||
+                                 std::is_same_v<T, RemoveLightOrder> || std::is_same_v<T, CameraOrder>) {
+                return o.scene;
+            } else {
+                return std::nullopt;
+            }
+        },
+        request.order.value());
 }
 
 void check_scene_version(const SceneEntry& entry, const RenderOrder& order) {
@@ -110,6 +134,7 @@ void RequestHandlers::execute(const std::shared_ptr<Request>& request, Renderer&
                 }
             },
             request->order.value());
+        if (const auto scene = changed_scene(*request)) daemon_.streams().scene_changed(*scene);
         if (!reply.is_null()) request->answer(protocol::make_ok(request->id(), reply));
     } catch (...) {
         request->fail(std::current_exception());
@@ -122,7 +147,7 @@ void RequestHandlers::render_on_gpu(const std::shared_ptr<Request>& request, con
     SceneEntry& entry = registry.get(order.scene);
     check_scene_version(entry, order);
     RenderRequest frame = order.request;
-    if (auto camera = named_camera(*entry.scene, order)) frame.camera = std::move(camera);
+    if (auto camera = view_camera(*entry.scene, order)) frame.camera = std::move(camera);
     if (wait_for_pending_work(request, order.scene, entry, frame, renderer)) return;
     auto result = std::make_shared<const RenderResult>(renderer.render(*entry.resources, frame, request->cancelled.get()));
     clock.rendered = Clock::now();
@@ -139,7 +164,7 @@ void RequestHandlers::render_on_cpu(const std::shared_ptr<Request>& request, con
     check_scene_version(entry, order);
     auto snapshot = std::make_shared<const scene::Scene>(*entry.scene);
     RenderRequest frame = order.request;
-    if (auto camera = named_camera(*snapshot, order)) frame.camera = std::move(camera);
+    if (auto camera = view_camera(*snapshot, order)) frame.camera = std::move(camera);
     if (!daemon_.try_start_cpu_job()) {
         throw RequestError(ErrorCode::busy, fmt::format("{} CPU renders are already queued", Daemon::kMaxCpuJobs));
     }
@@ -265,6 +290,7 @@ json RequestHandlers::stats(Renderer& renderer, SceneRegistry& registry) {
     reply["errors"] = errors;
     reply["queue_depth"] = daemon_.render_service().queue_depth();
     reply["renderer"] = renderer.gpu_info().renderer;
+    reply["streams"] = daemon_.streams().stats();
     reply["gpu_memory"] = {{"budget_bytes", renderer.memory_budget().bytes},
                            {"budget_source", renderer.memory_budget().source},
                            {"resident_bytes", renderer.resident_bytes()}};

@@ -38,8 +38,11 @@ public:
     // Refusals (bad fields, unknown methods or knobs, a full queue) answer the request at once.
     void admit(const std::shared_ptr<Request>& request);
 
-private:
+    // On the render thread: runs an admitted request (its order set) as if just dequeued. Preview
+    // streams start their frames here.
     void execute(const std::shared_ptr<Request>& request, Renderer& renderer, SceneRegistry& registry);
+
+private:
     void render_on_gpu(const std::shared_ptr<Request>& request, const RenderOrder& order, Renderer& renderer,
                        SceneRegistry& registry);
     void render_on_cpu(const std::shared_ptr<Request>& request, const RenderOrder& order, SceneRegistry& registry);

@@ -243,14 +243,12 @@ void apply_remove_light(scene::Scene& scene, const RemoveLightOrder& order) {
     scene.lights.erase(scene.lights.begin() + static_cast<std::ptrdiff_t>(*index));
 }
 
-void apply_camera(scene::Scene& scene, const CameraOrder& order) {
-    auto& cameras = scene.cameras;
+scene::Camera camera_from(const scene::Scene& scene, const CameraOrder& order) {
+    const auto& cameras = scene.cameras;
     if (order.camera) {
         const auto index = scene.find_camera(*order.camera);
         if (!index) throw RequestError(ErrorCode::not_found, fmt::format("scene has no camera '{}'", *order.camera), "camera");
-        const auto at = cameras.begin() + static_cast<std::ptrdiff_t>(*index);
-        std::rotate(cameras.begin(), at, at + 1);
-        return;
+        return cameras[*index];
     }
     scene::Camera camera = cameras.empty() ? scene::Camera{} : cameras.front();
     if (order.position) camera.position = *order.position;
@@ -267,6 +265,19 @@ void apply_camera(scene::Scene& scene, const CameraOrder& order) {
     }
     if (order.fov) camera.vertical_fov = *order.fov;
     camera.name = cameras.empty() ? "default" : cameras.front().name;
+    return camera;
+}
+
+void apply_camera(scene::Scene& scene, const CameraOrder& order) {
+    auto& cameras = scene.cameras;
+    if (order.camera) {
+        const auto index = scene.find_camera(*order.camera);
+        if (!index) throw RequestError(ErrorCode::not_found, fmt::format("scene has no camera '{}'", *order.camera), "camera");
+        const auto at = cameras.begin() + static_cast<std::ptrdiff_t>(*index);
+        std::rotate(cameras.begin(), at, at + 1);
+        return;
+    }
+    scene::Camera camera = camera_from(scene, order);
     if (cameras.empty()) {
         cameras.push_back(camera);
     } else {

@@ -50,5 +50,9 @@ void apply_transform(scene::Scene& scene, const TransformOrder& order);
 void apply_light(scene::Scene& scene, const LightOrder& order);
 void apply_remove_light(scene::Scene& scene, const RemoveLightOrder& order);
 void apply_camera(scene::Scene& scene, const CameraOrder& order);
+// The camera an order describes, from the scene's default camera, the scene left as it is: a
+// named camera of the scene, or the default one with the order's fields replacing its own (a
+// render's or a stream's inline view).
+scene::Camera camera_from(const scene::Scene& scene, const CameraOrder& order);
 
 }  // namespace bounce::server

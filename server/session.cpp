@@ -17,17 +17,16 @@ using protocol::MessageType;
 
 }  // namespace
 
-Session::Session(Daemon& daemon, asio::ip::tcp::socket socket)
+Session::Session(Daemon& daemon, std::unique_ptr<Transport> transport)
     : daemon_(daemon),
-      socket_(std::move(socket)),
-      heartbeat_(socket_.get_executor()),
-      auth_deadline_(socket_.get_executor()),
+      transport_(std::move(transport)),
+      strand_(transport_->executor()),
+      heartbeat_(strand_),
+      auth_deadline_(strand_),
       body_memory_(daemon.inflight_bytes()),
       connection_number_(daemon.next_connection_number()) {
     authorized_ = !daemon_.token().has_value();
-    boost::system::error_code error;
-    const auto remote = socket_.remote_endpoint(error);
-    peer_ = error ? "?" : fmt::format("{}:{}", remote.address().to_string(), remote.port());
+    peer_ = transport_->peer();
 }
 
 std::string Session::log_id(std::uint64_t request_id) const { return fmt::format("{}-{}", connection_number_, request_id); }
@@ -69,8 +68,6 @@ void Session::end_access(std::uint64_t request_id, std::string_view status, std:
 }
 
 void Session::start() {
-    boost::system::error_code ignored;
-    socket_.set_option(asio::ip::tcp::no_delay(true), ignored);
     arm_heartbeat();
     if (!authorized_) arm_auth_deadline();
     read_header();
@@ -90,7 +87,7 @@ void Session::arm_auth_deadline() {
 
 void Session::read_header() {
     if (closed_) return;
-    asio::async_read(socket_, asio::buffer(header_), [self = shared_from_this()](boost::system::error_code error, std::size_t) {
+    transport_->read(asio::buffer(header_), [self = shared_from_this()](boost::system::error_code error, std::size_t) {
         if (error) {
             self->close();
             return;
@@ -140,7 +137,7 @@ void Session::read_body_chunk(const protocol::Header& header) {
     }
     body_.reserve(capacity);
     body_.resize(have + chunk);
-    asio::async_read(socket_, asio::buffer(body_.data() + have, chunk),
+    transport_->read(asio::buffer(body_.data() + have, chunk),
                      [self = shared_from_this(), header](boost::system::error_code error, std::size_t) {
                          if (error) {
                              self->close();
@@ -158,7 +155,7 @@ void Session::skip_body(std::size_t remaining) {
         return;
     }
     const std::size_t chunk = std::min(remaining, skip_scratch_.size());
-    asio::async_read(socket_, asio::buffer(skip_scratch_.data(), chunk),
+    transport_->read(asio::buffer(skip_scratch_.data(), chunk),
                      [self = shared_from_this(), remaining, chunk](boost::system::error_code error, std::size_t) {
                          if (error) {
                              self->close();
@@ -227,10 +224,8 @@ void Session::dispatch(protocol::Message message) {
         switch (static_cast<MessageType>(message.type)) {
             case MessageType::cancel: cancel(message); return;
             case MessageType::stream_start:
-            case MessageType::stream_stop:
-                fail(id, ErrorCode::unsupported,
-                     fmt::format("'{}' is not available in this daemon yet", protocol::message_type_name(message.type)));
-                return;
+            case MessageType::stream_update:
+            case MessageType::stream_stop: stream_request(message); return;
             default: submit(std::move(message)); return;
         }
     } catch (...) {
@@ -276,6 +271,50 @@ void Session::cancel(const protocol::Message& message) {
     send(protocol::make_ok(message.request_id, {{"cancelled", it != pending_.end()}}));
 }
 
+void Session::stream_request(const protocol::Message& message) {
+    const std::uint64_t id = message.request_id;
+    StreamHub& hub = daemon_.streams();
+    switch (static_cast<MessageType>(message.type)) {
+        case MessageType::stream_start: {
+            if (streams_.count(id)) {
+                fail(id, ErrorCode::bad_request, fmt::format("stream {} is already open on this connection", id));
+                return;
+            }
+            const json reply = hub.open(shared_from_this(), connection_number_, id, message.body);
+            streams_.insert(id);
+            send(protocol::make_ok(id, reply));
+            hub.schedule(connection_number_, id);  // after the ok: no frame precedes it
+            return;
+        }
+        case MessageType::stream_update: {
+            const auto stream = static_cast<std::uint64_t>(protocol::get_integer(message.body, "stream", 0, INT64_MAX));
+            send(protocol::make_ok(id, hub.update(connection_number_, stream, message.body)));
+            return;
+        }
+        default: {
+            const auto stream = static_cast<std::uint64_t>(protocol::get_integer(message.body, "stream", 0, INT64_MAX));
+            json reply = hub.stop(connection_number_, stream);
+            streams_.erase(stream);  // on this strand: no event of it is written after the ok
+            send(protocol::make_ok(id, reply));
+            return;
+        }
+    }
+}
+
+void Session::send_stream_event(std::uint64_t stream_id, protocol::Message message, std::function<void()> done,
+                                bool ends_stream) {
+    auto bytes = protocol::encode(message);
+    asio::post(strand_, [self = shared_from_this(), stream_id, bytes = std::move(bytes),
+                                        done = std::move(done), ends_stream]() mutable {
+        if (self->closed_ || !self->streams_.count(stream_id)) {
+            if (done) done();
+            return;
+        }
+        if (ends_stream) self->streams_.erase(stream_id);
+        self->enqueue(std::move(bytes), std::move(done));
+    });
+}
+
 void Session::submit(protocol::Message message) {
     const std::uint64_t id = message.request_id;
     if (pending_.count(id)) {
@@ -296,7 +335,7 @@ void Session::send_error(std::uint64_t request_id, const Failure& failure) {
 }
 
 void Session::end_request(std::uint64_t request_id) {
-    asio::post(socket_.get_executor(), [self = shared_from_this(), request_id] { self->finish(request_id); });
+    asio::post(strand_, [self = shared_from_this(), request_id] { self->finish(request_id); });
 }
 
 void Session::finish(std::uint64_t request_id) {
@@ -318,7 +357,7 @@ void Session::fail(std::uint64_t request_id, ErrorCode code, const std::string& 
 void Session::broken_frame(const protocol::ProtocolError& error) {
     log::info("session", "closing a connection after a broken frame: {}", error.what());
     fail(error.request_id.value_or(0), error.code, error.what());
-    asio::post(socket_.get_executor(), [self = shared_from_this()] {
+    asio::post(strand_, [self = shared_from_this()] {
         self->close_after_write_ = true;
         if (!self->writing_) self->close();
     });
@@ -334,22 +373,25 @@ void Session::send(protocol::Message message) {
         case MessageType::ping: break;
         default: status = "ok"; break;
     }
-    asio::post(socket_.get_executor(), [self = shared_from_this(), bytes = std::move(bytes), status = std::move(status),
+    asio::post(strand_, [self = shared_from_this(), bytes = std::move(bytes), status = std::move(status),
                                         id = message.request_id]() mutable {
         if (!status.empty()) self->end_access(id, status, bytes.size());
         self->enqueue(std::move(bytes));
     });
 }
 
-void Session::enqueue(std::vector<std::uint8_t> bytes) {
-    if (closed_) return;
+void Session::enqueue(std::vector<std::uint8_t> bytes, std::function<void()> written) {
+    if (closed_) {
+        if (written) written();
+        return;
+    }
     output_bytes_ += bytes.size();
+    output_.push_back({std::move(bytes), std::move(written)});
     if (output_bytes_ > daemon_.config().max_output_bytes) {
         log::warn("session", "dropping a client that does not read: {} bytes queued", output_bytes_);
         close();
         return;
     }
-    output_.push_back(std::move(bytes));
     if (!writing_) write_next();
 }
 
@@ -360,14 +402,16 @@ void Session::write_next() {
         return;
     }
     writing_ = true;
-    asio::async_write(socket_, asio::buffer(output_.front()), [self = shared_from_this()](boost::system::error_code error,
-                                                                                          std::size_t) {
+    transport_->write(asio::buffer(output_.front().bytes), [self = shared_from_this()](boost::system::error_code error,
+                                                                                        std::size_t) {
         if (error) {
             self->close();
             return;
         }
-        self->output_bytes_ -= self->output_.front().size();
+        Outgoing sent = std::move(self->output_.front());
+        self->output_bytes_ -= sent.bytes.size();
         self->output_.pop_front();
+        if (sent.written) sent.written();
         self->write_next();
     });
 }
@@ -390,15 +434,19 @@ void Session::arm_heartbeat() {
 }
 
 void Session::close() {
-    asio::dispatch(socket_.get_executor(), [self = shared_from_this()] {
+    asio::dispatch(strand_, [self = shared_from_this()] {
         if (self->closed_) return;
         self->closed_ = true;
-        boost::system::error_code ignored;
         self->heartbeat_.cancel();
         self->auth_deadline_.cancel();
-        self->socket_.shutdown(asio::ip::tcp::socket::shutdown_both, ignored);
-        self->socket_.close(ignored);
+        self->transport_->close();
         for (auto& [id, pending] : self->pending_) pending.cancelled->store(true);
+        self->daemon_.streams().drop_connection(self->connection_number_);
+        self->streams_.clear();
+        // What was queued is never written: streams waiting on it learn so.
+        for (auto& outgoing : self->output_) {
+            if (outgoing.written) std::exchange(outgoing.written, {})();
+        }
         self->daemon_.forget(self.get());
     });
 }

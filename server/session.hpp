@@ -7,6 +7,8 @@
 #include "protocol/protocol.hpp"
 #include "server/byte_budget.hpp"
 #include "server/request.hpp"
+#include "server/streams.hpp"
+#include "server/transport.hpp"
 
 #include <boost/asio.hpp>
 
@@ -14,22 +16,26 @@
 #include <atomic>
 #include <chrono>
 #include <deque>
+#include <functional>
 #include <map>
 #include <memory>
+#include <set>
 #include <vector>
 
 namespace bounce::server {
 
 class Daemon;
 
-class Session final : public ReplyChannel, public std::enable_shared_from_this<Session> {
+class Session final : public ReplyChannel, public StreamSink, public std::enable_shared_from_this<Session> {
 public:
-    Session(Daemon& daemon, boost::asio::ip::tcp::socket socket);
+    Session(Daemon& daemon, std::unique_ptr<Transport> transport);
     void start();
     // Thread-safe: queues a message for this client.
     void send(protocol::Message message) override;
     void send_error(std::uint64_t request_id, const Failure& failure) override;
     void end_request(std::uint64_t request_id) override;
+    void send_stream_event(std::uint64_t stream_id, protocol::Message message, std::function<void()> done,
+                           bool ends_stream) override;
     // Thread-safe: closes the connection (pending replies are dropped).
     void close();
 
@@ -59,25 +65,34 @@ private:
     void dispatch(protocol::Message message);
     void hello(const protocol::Message& message);
     void cancel(const protocol::Message& message);
+    // stream.start, stream.update, stream.stop: answered here, the streams run in the daemon's hub.
+    void stream_request(const protocol::Message& message);
     void submit(protocol::Message message);
     void finish(std::uint64_t request_id);
     void fail(std::uint64_t request_id, protocol::ErrorCode code, const std::string& message,
               std::optional<std::string> field = {});
     void broken_frame(const protocol::ProtocolError& error);
-    void enqueue(std::vector<std::uint8_t> bytes);
+    // `written` runs once the bytes are written, or dropped with the connection.
+    void enqueue(std::vector<std::uint8_t> bytes, std::function<void()> written = {});
     void write_next();
     void arm_heartbeat();
     void arm_auth_deadline();
 
     Daemon& daemon_;
-    boost::asio::ip::tcp::socket socket_;
+    std::unique_ptr<Transport> transport_;
+    boost::asio::any_io_executor strand_;
     boost::asio::steady_timer heartbeat_;
     boost::asio::steady_timer auth_deadline_;
     std::array<std::uint8_t, protocol::kHeaderSize> header_{};
     std::vector<std::uint8_t> body_;  // grows as its bytes arrive, each chunk reserved first
     ByteBudget::Reservation body_memory_;
     std::array<std::uint8_t, 16384> skip_scratch_{};
-    std::deque<std::vector<std::uint8_t>> output_;
+    struct Outgoing {
+        std::vector<std::uint8_t> bytes;
+        std::function<void()> written;
+    };
+    std::deque<Outgoing> output_;
+    std::set<std::uint64_t> streams_;  // open streams: their events are written, others' dropped
     std::size_t output_bytes_ = 0;
     bool writing_ = false;
     bool reading_paused_ = false;

@@ -441,7 +441,7 @@ TEST(ProtocolNames, MessageTypes) {
         {16, "scene.load"},  {17, "scene.unload"}, {18, "scene.list"},  {19, "scene.describe"},
         {20, "object.set_transform"}, {21, "light.set"}, {22, "light.remove"}, {23, "camera.set"},
         {24, "render"},      {25, "stream.start"}, {26, "stream.stop"}, {27, "bake"},
-        {28, "stats"},
+        {28, "stats"},       {29, "stream.update"},
     };
     for (const auto& [number, name] : table) {
         EXPECT_EQ(message_type_name(number), name);
@@ -450,7 +450,7 @@ TEST(ProtocolNames, MessageTypes) {
         ASSERT_TRUE(type) << name;
         EXPECT_EQ(static_cast<std::uint16_t>(*type), number);
     }
-    for (const std::uint16_t unknown : {0, 9, 15, 29, 65535}) {
+    for (const std::uint16_t unknown : {0, 9, 15, 30, 65535}) {
         EXPECT_FALSE(is_known_message_type(unknown));
         EXPECT_EQ(message_type_name(unknown), "unknown");
     }

@@ -44,6 +44,7 @@ MESSAGE_TYPES: dict[str, int] = {
     "stream.stop": 26,
     "bake": 27,
     "stats": 28,
+    "stream.update": 29,
 }
 MESSAGE_NAMES: dict[int, str] = {number: name for name, number in MESSAGE_TYPES.items()}
 
