@@ -1,11 +1,23 @@
 #include "client/client.hpp"
 
+#include <poll.h>
+
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <fstream>
 
 namespace bounce::client {
 namespace {
 namespace asio = boost::asio;
+}
+
+ServerError ServerError::from_body(const nlohmann::json& body) {
+    const auto code =
+        protocol::error_code_from_name(body.value("code", "internal")).value_or(protocol::ErrorCode::internal);
+    std::optional<std::string> field;
+    if (body.contains("field") && body["field"].is_string()) field = body["field"].get<std::string>();
+    return ServerError(code, body.value("message", "error"), field, body.value("retryable", false));
 }
 
 Endpoint Endpoint::parse(const std::string& text) {
@@ -113,6 +125,23 @@ protocol::Message Client::read() {
     }
 }
 
+bool Client::wait_readable(std::chrono::milliseconds timeout) {
+    // read() takes whole messages straight from the socket, so nothing waits in a buffer of ours:
+    // the socket's own readiness is the whole answer.
+    pollfd descriptor{socket_.native_handle(), POLLIN, 0};
+    const int ready = ::poll(&descriptor, 1, static_cast<int>(timeout.count()));
+    if (ready < 0 && errno != EINTR) {
+        throw ConnectionError(std::string("waiting for the daemon failed: ") + std::strerror(errno));
+    }
+    return ready > 0;  // a closed connection is readable too: the next read() says so
+}
+
+std::uint64_t Client::send(protocol::MessageType type, nlohmann::json body, std::vector<std::uint8_t> attachment) {
+    const std::uint64_t id = next_id_++;
+    send_raw(protocol::encode({static_cast<std::uint16_t>(type), id, std::move(body), std::move(attachment)}));
+    return id;
+}
+
 protocol::Message Client::send_raw_and_read(std::span<const std::uint8_t> bytes) {
     send_raw(bytes);
     return read();
@@ -120,8 +149,7 @@ protocol::Message Client::send_raw_and_read(std::span<const std::uint8_t> bytes)
 
 protocol::Message Client::request(protocol::MessageType type, nlohmann::json body, std::vector<std::uint8_t> attachment,
                                   const std::function<void(const nlohmann::json&)>& on_progress) {
-    const std::uint64_t id = next_id_++;
-    send_raw(protocol::encode({static_cast<std::uint16_t>(type), id, std::move(body), std::move(attachment)}));
+    const std::uint64_t id = send(type, std::move(body), std::move(attachment));
     for (;;) {
         protocol::Message reply = read();
         if (reply.request_id != id) continue;  // a late reply to an earlier, abandoned request
@@ -129,13 +157,7 @@ protocol::Message Client::request(protocol::MessageType type, nlohmann::json bod
             if (on_progress) on_progress(reply.body);
             continue;
         }
-        if (reply.type == static_cast<std::uint16_t>(protocol::MessageType::error)) {
-            const auto code = protocol::error_code_from_name(reply.body.value("code", "internal"))
-                                  .value_or(protocol::ErrorCode::internal);
-            std::optional<std::string> field;
-            if (reply.body.contains("field") && reply.body["field"].is_string()) field = reply.body["field"].get<std::string>();
-            throw ServerError(code, reply.body.value("message", "error"), field, reply.body.value("retryable", false));
-        }
+        if (reply.type == static_cast<std::uint16_t>(protocol::MessageType::error)) throw ServerError::from_body(reply.body);
         return reply;
     }
 }

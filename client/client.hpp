@@ -22,6 +22,9 @@ class ServerError : public std::runtime_error {
 public:
     ServerError(protocol::ErrorCode code, const std::string& message, std::optional<std::string> field, bool retryable)
         : std::runtime_error(message), code_(code), field_(std::move(field)), retryable_(retryable) {}
+    // The error an `error` message's body stands for; a code this client does not know reads as
+    // `internal`.
+    static ServerError from_body(const nlohmann::json& body);
     protocol::ErrorCode code() const { return code_; }
     const std::optional<std::string>& field() const { return field_; }
     bool retryable() const { return retryable_; }
@@ -70,11 +73,18 @@ public:
     protocol::Message request(protocol::MessageType type, nlohmann::json body = nlohmann::json::object(),
                               std::vector<std::uint8_t> attachment = {},
                               const std::function<void(const nlohmann::json&)>& on_progress = {});
+    // Sends a request without waiting for its reply and returns the id it carries: the reply, and
+    // the events of a stream it starts, come with that id, to be read with read().
+    std::uint64_t send(protocol::MessageType type, nlohmann::json body = nlohmann::json::object(),
+                       std::vector<std::uint8_t> attachment = {});
     // Sends raw bytes (tests use this to send broken frames) and reads one reply.
     protocol::Message send_raw_and_read(std::span<const std::uint8_t> bytes);
     void send_raw(std::span<const std::uint8_t> bytes);
     // Reads the next message, answering pings; throws when the connection closes.
     protocol::Message read();
+    // Waits up to `timeout` for the daemon's next bytes; false when none came. A reader of stream
+    // events uses it to look up from the connection now and then, since read() blocks.
+    bool wait_readable(std::chrono::milliseconds timeout);
     bool connected() const { return socket_.is_open(); }
 
 private:

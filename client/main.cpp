@@ -3,6 +3,7 @@
 // --flag=value works. With several daemons (--connect a:7878,b:7878, or a name that resolves to
 // several addresses) every scene goes to one of them by rendezvous hashing (client/router.hpp).
 #include "client/router.hpp"
+#include "client/stream_commands.hpp"
 
 #include <CLI/CLI.hpp>
 
@@ -104,7 +105,7 @@ std::vector<std::uint8_t> read_file(const std::string& path) {
     return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
-// What every frame-producing command takes (render, bake, load-test).
+// What every frame-producing command takes (render, bake, watch, load-test).
 struct FrameOptions {
     std::string scene, method, preset, size, tone;
     double exposure = 0.0;
@@ -272,7 +273,7 @@ int run(int argc, char** argv) {
     app.set_version_flag("--version", std::string("bounce ") + BOUNCE_VERSION, "print the version and exit");
 
     // Each command binds its own options (CLI11 keeps one Option per command).
-    FrameOptions render_frame, bake_frame, test_frame;
+    FrameOptions render_frame, bake_frame, watch_frame, test_frame;
     SourceOptions render_source, bake_source;
     std::string output, format, camera;
     auto* render = app.add_subcommand("render", "render a frame to a file (-o -: stdout); prints its stats as JSON");
@@ -321,13 +322,41 @@ int run(int argc, char** argv) {
     auto* list = app.add_subcommand("list", "the scenes of every daemon");
     auto* stats = app.add_subcommand("stats", "every daemon's counters");
 
-    int clients = 1, frames = 1, move_every = 0;
-    auto* load_test_command = app.add_subcommand("load-test", "N clients render M frames each; prints one JSON line");
+    bounce::cli::WatchOptions watch_options;
+    std::string stream_format = "jpeg", look_at;
+    double fov_deg = 0.0;
+    int reference_spp = 256;
+    bool no_refine = false;
+    auto* watch = app.add_subcommand("watch", "stream a view: each frame to DIR, one JSON line per frame");
+    watch_frame.add_to(*watch);
+    watch->add_option("-o,--output", watch_options.directory, "DIR for frame-NNNNNN.jpg|png|webp (created)")->required();
+    watch->add_option("--format", stream_format, "jpeg, png or webp")->check(CLI::IsMember({"jpeg", "jpg", "png", "webp"}));
+    auto* position_given = watch->add_option("--position", position, "inline camera: X,Y,Z");
+    auto* look_at_given = watch->add_option("--look-at", look_at, "inline camera: X,Y,Z it looks at");
+    auto* fov_given = watch->add_option("--fov", fov_deg, "inline camera: vertical field of view in degrees");
+    watch->add_flag("--no-refine", no_refine, "stop the ladder at full-size frames of the method (no reference rungs)");
+    auto* reference_spp_given = watch->add_option("--reference-spp", reference_spp, "samples per pixel of the last rung")
+        ->check(CLI::Range(1, 65536));
+    watch->add_option("--frames", watch_options.frames, "stop after N frames (default: no limit)")
+        ->check(CLI::Range(1, 1000000000));
+    watch->add_flag("--until-final", watch_options.until_final, "stop after the first frame of the ladder's last rung");
+
+    int clients = 1, frames = 1, move_every = 0, viewers = 0;
+    bool stream_test = false;
+    auto* load_test_command = app.add_subcommand(
+        "load-test", "N clients render M frames each (--stream: N viewers receive M frames each); prints one JSON line");
     test_frame.add_to(*load_test_command);
     load_test_command->add_option("--clients", clients, "concurrent clients")->required()->check(CLI::Range(1, 1024));
-    load_test_command->add_option("--frames", frames, "frames per client")->required()->check(CLI::Range(1, 1000000));
+    load_test_command->add_option("--frames", frames, "frames per client (per viewer with --stream)")
+        ->required()
+        ->check(CLI::Range(1, 1000000));
     load_test_command->add_option("--move-every", move_every, "move an object every K frames (0: never)")
         ->check(CLI::Range(0, 1000000));
+    auto* stream_given = load_test_command->add_flag(
+        "--stream", stream_test, "viewers hold streams while one more connection moves an object; measures motion to photon");
+    load_test_command->add_option("--viewers", viewers, "stream connections (default: --clients)")
+        ->check(CLI::Range(1, 1024))
+        ->needs(stream_given);
 
     try {
         app.parse(argc, argv);
@@ -336,7 +365,7 @@ int run(int argc, char** argv) {
         const auto remaining = app.remaining();
         if (app.get_subcommands().empty() && !remaining.empty()) {
             throw UsageError("unknown command '" + remaining.front() +
-                             "' (commands: render bake load upload unload move light describe list stats load-test)");
+                             "' (commands: render bake watch load upload unload move light describe list stats load-test)");
         }
         const int code = app.exit(error);
         return code == 0 ? kOk : kUsage;
@@ -359,7 +388,28 @@ int run(int argc, char** argv) {
     } catch (const std::invalid_argument& error) {
         throw UsageError(std::string("--connect: ") + error.what());
     }
+    if (*load_test_command && stream_test) {
+        // Streams of a still scene end at their ladder's last rung, so the run needs moves to go on.
+        if (move_every == 0) throw UsageError("load-test --stream needs --move-every K (1 or more)");
+        json body = test_frame.body();
+        body["format"] = "jpeg";
+        const bounce::cli::StreamLoadTestOptions options{viewers > 0 ? viewers : clients, frames, move_every};
+        return bounce::cli::stream_load_test(endpoints, token, body, options) ? kOk : kRefused;
+    }
     if (*load_test_command) return load_test(endpoints, token, test_frame, clients, frames, move_every);
+    if (*watch) {
+        json body = watch_frame.body();
+        body["format"] = stream_format == "jpg" ? "jpeg" : stream_format;
+        // Any camera flag makes an inline view; the fields it leaves out take the scene's camera's.
+        json view = json::object();
+        if (position_given->count() > 0) view["position"] = parse_numbers(position, 3, "--position");
+        if (look_at_given->count() > 0) view["look_at"] = parse_numbers(look_at, 3, "--look-at");
+        if (fov_given->count() > 0) view["fov_deg"] = fov_deg;
+        if (!view.empty()) body["camera"] = view;
+        if (no_refine) body["refine"] = false;
+        if (reference_spp_given->count() > 0) body["reference_spp"] = reference_spp;
+        return bounce::cli::watch(endpoints, token, body, watch_options) ? kOk : kRefused;
+    }
     Router router(endpoints, token);
 
     if (*render) {

@@ -27,6 +27,8 @@ COMMANDS = """commands:
   render  --scene S [--method M] [--preset P] [--set KNOB=VALUE ...] [--size WxH]
           [--exposure E] [--tone none|reinhard|aces] [--camera NAME] -o OUT.(png|jpg|exr)|-
   bake    --scene S [--method cssm] [--preset P] [--set KNOB=VALUE ...]   (progress on stderr)
+  watch   --scene S [--method M] [--preset P] [--size WxH] [--format jpeg|png|webp]
+          [--frames N] [--until-final] -o DIR   (a stream's frames; one JSON line each)
   load    PATH --name S          (PATH under the daemon's --scene-root)
   upload  FILE.glb --name S      (sends the file)
   move    --scene S --object O [--translate X,Y,Z] [--rotate-deg RX,RY,RZ] [--scale K]
@@ -112,6 +114,12 @@ class _Parser:
         self.option(render, "--camera", metavar="NAME")
         self.option(render, "-o", dest="out", required=True, metavar="OUT.(png|jpg|exr)|-")
         frame_options(command("bake", "build a method's precomputed structures"))
+        watch = command("watch", "stream a view: each frame to DIR, one JSON line per frame")
+        frame_options(watch)
+        self.option(watch, "--format", choices=("jpeg", "jpg", "png", "webp"), default="jpeg")
+        self.option(watch, "--frames", metavar="N")
+        watch.add_argument("--until-final", action="store_true")
+        self.option(watch, "-o", dest="out", required=True, metavar="DIR")
         for name, help in (("load", "load a scene file under the daemon's --scene-root"),
                            ("upload", "send a .glb and load it")):
             parser = command(name, help)
@@ -202,6 +210,12 @@ def _write_file(path: str, data: bytes) -> None:
         raise
 
 
+def _count(text: str, what: str) -> int:
+    if not text.isdigit() or int(text) < 1:
+        raise UsageError(f"{what} expects a whole number of 1 or more, got '{text}'")
+    return int(text)
+
+
 def _progress(event: dict[str, Any]) -> None:
     fraction = event.get("fraction", 0.0)
     percent = int(100.0 * fraction) if isinstance(fraction, (int, float)) else 0
@@ -225,11 +239,12 @@ def _run(args: argparse.Namespace) -> int:
     # A Router sends each scene to its daemon; a single endpoint needs only a Client.
     target: Client | Router = Router(endpoints, token) if routed else Client(*endpoints[0], token=token)
     with target:
-        action(target, routed)
-    return EXIT_OK
+        code = action(target, routed)
+    return EXIT_OK if code is None else code
 
 
-Action = Callable[[Any, bool], None]
+# Runs a command on a Client or Router; returns its exit code, or None for success.
+Action = Callable[[Any, bool], int | None]
 
 
 def _prepare(args: argparse.Namespace) -> Action:
@@ -256,6 +271,8 @@ def _prepare(args: argparse.Namespace) -> Action:
             fields.pop(unused)
         fields["method"] = fields["method"] or "cssm"
         return lambda target, routed: print(_dump(target.bake(args.scene, on_progress=_progress, **fields)))
+    if command == "watch":
+        return _prepare_watch(args)
     if command == "load":
         return lambda target, routed: print(_dump(target.load(args.path, args.name)))
     if command == "upload":
@@ -295,6 +312,43 @@ def _prepare(args: argparse.Namespace) -> Action:
         if all(answer is None for answer in answers.values()):
             raise ConnectionFailed("no daemon reachable: " + ", ".join(answers))
     return survey
+
+
+def _prepare_watch(args: argparse.Namespace) -> Action:
+    """watch: starts a stream, saves each frame as DIR/frame-NNNNNN.EXT and prints a JSON line for
+    it, then stops the stream after --frames frames or the first final one (else it runs until
+    interrupted)."""
+    fields = _frame_fields(args)
+    fmt = "jpeg" if args.format == "jpg" else args.format
+    extension = "jpg" if fmt == "jpeg" else fmt
+    frames = None if args.frames is None else _count(args.frames, "--frames")
+
+    def watch(target, routed):
+        # A stream lives on one connection: the scene's daemon's.
+        client = target.client(target.owner(args.scene)) if routed else target
+        os.makedirs(args.out, exist_ok=True)
+        stream = client.stream_start(args.scene, format=fmt, **fields)
+        saved = 0
+        while frames is None or saved < frames:
+            try:
+                image, body = client.next_frame()
+            except ServerError as error:
+                # The stream's frame failed and the stream ended: refused, whatever the code.
+                print(f"bounce: {error.code}: {error.message}", file=sys.stderr)
+                return EXIT_FAILURE
+            path = os.path.join(args.out, f"frame-{saved:06d}.{extension}")
+            _write_file(path, image)
+            info = body.get("stream", {})
+            print(_dump({"file": path, "scene_version": body.get("scene_version"), "rung": info.get("rung"),
+                         "stage": info.get("stage"), "final": info.get("final"), "width": body.get("width"),
+                         "height": body.get("height"),
+                         "total_ms": body.get("timings_ms", {}).get("total")}), flush=True)
+            saved += 1
+            if args.until_final and info.get("final"):
+                break
+        client.stream_stop(stream)
+        return None
+    return watch
 
 
 def main(argv: list[str] | None = None) -> int:

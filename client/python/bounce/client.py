@@ -1,7 +1,8 @@
 """One blocking connection to bounced (the Python twin of client/client.cpp).
 
 Every call sends one request and waits for its reply. While waiting, the daemon's pings are
-answered and `progress` events go to the caller's callback; an `error` reply raises ServerError.
+answered, `progress` events go to the caller's callback and the events of the connection's streams
+are queued for next_frame(); an `error` reply raises ServerError.
 """
 
 from __future__ import annotations
@@ -10,11 +11,13 @@ import logging
 import os
 import select
 import socket
+import time
+from collections import deque
 from collections.abc import Callable, Iterable, Mapping
 from typing import Any, NoReturn
 
 from . import protocol
-from .errors import ConnectionFailed, ConnectTimeout, ProtocolError, ReplyTimeout, ServerError
+from .errors import BounceError, ConnectionFailed, ConnectTimeout, ProtocolError, ReplyTimeout, ServerError
 from .protocol import Limits, Message
 
 __all__ = ["Client", "parse_endpoint", "parse_endpoints", "read_token_file", "format_endpoint"]
@@ -28,6 +31,7 @@ DEFAULT_PORT = 7878
 _CHUNK = 1 << 20
 # Before hello's limits are known, a reply may hold what a hello reply needs and no attachment.
 _HELLO_LIMITS = Limits(max_json_bytes=1 << 20, max_attachment_bytes=0)
+_STREAM_START = protocol.message_type("stream.start")
 
 ProgressCallback = Callable[[dict[str, Any]], None]
 
@@ -110,10 +114,26 @@ def _put(body: dict[str, Any], field: str, value: Any) -> None:
         body[field] = value
 
 
+def _camera_field(camera: str | Mapping[str, Any] | None) -> str | dict[str, Any] | None:
+    """A request's `camera`: the name of a camera of the scene, or an inline view {"position",
+    "look_at" or "orientation", "fov_deg"} whose vectors are checked here. A None inside a view is
+    kept: in a stream.update it removes that field."""
+    if camera is None or isinstance(camera, str):
+        return camera
+    view = dict(camera)
+    for field, count in (("position", 3), ("look_at", 3), ("orientation", 4)):
+        if view.get(field) is not None:
+            view[field] = _numbers(view[field], count, f"camera.{field}")
+    if view.get("fov_deg") is not None:
+        view["fov_deg"] = float(view["fov_deg"])
+    return view
+
+
 def render_body(scene: str, *, method: str | None = None, preset: str | None = None,
                 knobs: Mapping[str, float] | None = None, width: int | None = None,
                 height: int | None = None, format: str | None = "png", exposure: float | None = None,
-                tone: str | None = None, camera: str | None = None, jpeg_quality: int | None = None,
+                tone: str | None = None, camera: str | Mapping[str, Any] | None = None,
+                jpeg_quality: int | None = None,
                 exr_half: bool | None = None, min_scene_version: int | None = None,
                 timeout_ms: int | None = None) -> dict[str, Any]:
     """The JSON body of a `render` (or, without the image fields, a `bake`); None fields are left
@@ -128,11 +148,23 @@ def render_body(scene: str, *, method: str | None = None, preset: str | None = N
     _put(body, "format", format)
     _put(body, "exposure", None if exposure is None else float(exposure))
     _put(body, "tone", tone)
-    _put(body, "camera", camera)
+    _put(body, "camera", _camera_field(camera))
     _put(body, "jpeg_quality", None if jpeg_quality is None else int(jpeg_quality))
     _put(body, "exr_half", None if exr_half is None else bool(exr_half))
     _put(body, "min_scene_version", None if min_scene_version is None else int(min_scene_version))
     _put(body, "timeout_ms", None if timeout_ms is None else int(timeout_ms))
+    return body
+
+
+def stream_fields(*, refine: bool | None = None, reference_spp: int | None = None,
+                  interactive_scale: float | None = None,
+                  interactive_quality: int | None = None) -> dict[str, Any]:
+    """The fields of a stream.start that a `render` lacks: its ladder's; None fields are left out."""
+    body: dict[str, Any] = {}
+    _put(body, "refine", None if refine is None else bool(refine))
+    _put(body, "reference_spp", None if reference_spp is None else int(reference_spp))
+    _put(body, "interactive_scale", None if interactive_scale is None else float(interactive_scale))
+    _put(body, "interactive_quality", None if interactive_quality is None else int(interactive_quality))
     return body
 
 
@@ -206,6 +238,9 @@ class Client:
         self._sock: socket.socket | None = None
         self._closed = False
         self._next_id = 1  # 0 is what the daemon uses for its own pings and id-less errors
+        self._streams: set[int] = set()  # ids of the streams running on this connection
+        # Their frame and error events that came while a request waited, for next_frame().
+        self._stream_events: deque[Message] = deque()
         self.info: dict[str, Any] = {}
         self._connect()
 
@@ -262,7 +297,9 @@ class Client:
             else announced("max_attachment_bytes", default.max_attachment_bytes))
 
     def _drop(self) -> None:
-        """Closes the socket; the next request connects again."""
+        """Closes the socket; the next request connects again. Its streams end with it (events
+        already queued are still delivered)."""
+        self._streams.clear()
         if self._sock is not None:
             try:
                 self._sock.close()
@@ -337,9 +374,24 @@ class Client:
             if message.type != protocol.PING:
                 return message
 
+    def _keep_stream_event(self, message: Message) -> bool:
+        """Queues a `frame` or `error` event of a running stream for next_frame(); False for
+        anything else."""
+        if message.request_id not in self._streams or message.type not in (protocol.FRAME, protocol.ERROR):
+            return False
+        if message.type == protocol.ERROR:
+            self._streams.discard(message.request_id)  # an error ends its stream: nothing follows
+        self._stream_events.append(message)
+        return True
+
+    def _forget_stream(self, stream_id: int) -> None:
+        self._streams.discard(stream_id)
+        self._stream_events = deque(event for event in self._stream_events if event.request_id != stream_id)
+
     def _discard_stale(self) -> None:
-        """Before a request: answers pings that arrived while idle, drops late replies to
-        abandoned requests, and reconnects when the daemon closed the idle connection."""
+        """Before a request: answers pings that arrived while idle, queues stream events, drops
+        late replies to abandoned requests, and reconnects when the daemon closed the idle
+        connection."""
         while self._sock is not None:
             try:
                 readable, _, _ = select.select([self._sock], [], [], 0)
@@ -354,6 +406,8 @@ class Client:
             if stale.type == protocol.ERROR and stale.request_id == 0:
                 # An id-less error comes before the daemon closes the connection.
                 self._drop()
+            else:
+                self._keep_stream_event(stale)
         if not self._closed:
             self._connect()
 
@@ -361,6 +415,9 @@ class Client:
                   on_progress: ProgressCallback | None = None) -> Message:
         request_id = self._next_id
         self._next_id += 1
+        starts_stream = kind == _STREAM_START
+        if starts_stream:
+            self._streams.add(request_id)  # its events carry its id, and may come before its `ok`
         self._send(protocol.encode(kind, request_id, body, attachment))
         while True:
             reply = self._read_message()
@@ -369,12 +426,17 @@ class Client:
                     # The daemon could not tell which request broke the frame; it closes next.
                     self._drop()
                     raise ServerError.from_body(reply.body, protocol.message_name(kind))
-                continue  # a late reply to an earlier, abandoned request
+                self._keep_stream_event(reply)  # else a late reply to an earlier, abandoned request
+                continue
             if reply.type == protocol.PROGRESS:
                 if on_progress is not None:
                     on_progress(reply.body)
                 continue
+            if starts_stream and reply.type == protocol.FRAME:
+                self._keep_stream_event(reply)
+                continue
             if reply.type == protocol.ERROR:
+                self._streams.discard(request_id)
                 raise ServerError.from_body(reply.body, protocol.message_name(kind))
             return reply
 
@@ -476,13 +538,16 @@ class Client:
     def render(self, scene: str, method: str | None = None, preset: str | None = None,
                knobs: Mapping[str, float] | None = None, width: int | None = None,
                height: int | None = None, format: str = "png", exposure: float | None = None,
-               tone: str | None = None, camera: str | None = None, *, jpeg_quality: int | None = None,
+               tone: str | None = None, camera: str | Mapping[str, Any] | None = None, *,
+               jpeg_quality: int | None = None,
                exr_half: bool | None = None, min_scene_version: int | None = None,
                timeout_ms: int | None = None,
                on_progress: ProgressCallback | None = None) -> tuple[bytes, dict[str, Any]]:
         """Renders one frame; returns (encoded image, stats). Fields left None take the daemon's
-        defaults (method direct, preset medium, 512x512, exposure 0, tone aces). `on_progress`
-        receives the progress of a bake the frame needs first."""
+        defaults (method direct, preset medium, 512x512, exposure 0, tone aces). `camera` names a
+        camera of the scene or is an inline view for this frame only, {"position", "look_at" or
+        "orientation", "fov_deg"}. `on_progress` receives the progress of a bake the frame needs
+        first."""
         body = render_body(scene, method=method, preset=preset, knobs=knobs, width=width, height=height,
                            format=format, exposure=exposure, tone=tone, camera=camera,
                            jpeg_quality=jpeg_quality, exr_half=exr_half,
@@ -501,3 +566,72 @@ class Client:
     def stats(self) -> dict[str, Any]:
         """Frames rendered, errors by code, queue depth, resident bytes, GPU memory budget."""
         return self.request("stats").body
+
+    # -- streams ---------------------------------------------------------------------------------
+
+    def stream_start(self, scene: str, *, method: str | None = None, preset: str | None = None,
+                     knobs: Mapping[str, float] | None = None, width: int | None = None,
+                     height: int | None = None, format: str | None = None, exposure: float | None = None,
+                     tone: str | None = None, camera: str | Mapping[str, Any] | None = None,
+                     jpeg_quality: int | None = None, refine: bool | None = None, reference_spp: int | None = None,
+                     interactive_scale: float | None = None, interactive_quality: int | None = None) -> int:
+        """Starts a stream: a view the daemon renders again whenever the scene or the view changes,
+        and refines while neither does (docs/protocol.md, "stream.start, stream.update,
+        stream.stop"). Takes render's fields, `format` "jpeg" (the daemon's default), "png" or
+        "webp", and the ladder's. Returns the stream's id; next_frame() reads its frames."""
+        body = render_body(scene, method=method, preset=preset, knobs=knobs, width=width, height=height,
+                           format=format, exposure=exposure, tone=tone, camera=camera,
+                           jpeg_quality=jpeg_quality)
+        body.update(stream_fields(refine=refine, reference_spp=reference_spp,
+                                  interactive_scale=interactive_scale, interactive_quality=interactive_quality))
+        reply = self.request("stream.start", body)
+        return int(reply.body.get("stream", reply.request_id))
+
+    def stream_update(self, stream_id: int, **fields: Any) -> int:
+        """Changes a stream's fields. `fields` is a JSON merge patch over them (RFC 7386): a value
+        replaces the field's, a dict (an inline `camera`, `knobs`) is merged into it, and None
+        removes the field. Returns the view version from which frames show the change."""
+        body = dict(fields)
+        if "camera" in body:
+            body["camera"] = _camera_field(body["camera"])
+        body["stream"] = int(stream_id)
+        return int(self.request("stream.update", body).body["view_version"])
+
+    def stream_stop(self, stream_id: int) -> dict[str, Any]:
+        """Stops a stream; its frames still queued are dropped. Returns {"stream", "frames",
+        "dropped_stale"}."""
+        try:
+            return self.request("stream.stop", {"stream": int(stream_id)}).body
+        finally:
+            self._forget_stream(int(stream_id))
+
+    def next_frame(self, timeout: float | None = None) -> tuple[bytes, dict[str, Any]] | None:
+        """The next `frame` event of this connection's streams: (encoded image, body), where
+        body["stream"] gives its stream's id, rung, stage and whether it is `final`. Waits at most
+        `timeout` seconds (None: until one comes; a still view sends none) and returns None when
+        none came. Raises ServerError for a stream's `error` event: that stream has ended."""
+        deadline = None if timeout is None else time.monotonic() + timeout
+        while not self._stream_events:
+            if not self._streams:
+                if self._sock is None:
+                    raise ConnectionFailed(f"{self.endpoint}: the connection closed, and its streams with it",
+                                           self.endpoint)
+                raise BounceError("no stream is running on this connection: call stream_start() first")
+            remaining = None if deadline is None else max(0.0, deadline - time.monotonic())
+            # A still view is silent for as long as nothing changes: wait here, not in a read that
+            # the client's `timeout` would end.
+            try:
+                readable, _, _ = select.select([self._sock], [], [], remaining)
+            except (OSError, ValueError):
+                readable = [True]  # let the read say what broke
+            if not readable:
+                return None
+            message = self._read_frame()
+            if message.type == protocol.ERROR and message.request_id == 0:
+                self._drop()
+                raise ServerError.from_body(message.body, "stream.start")
+            self._keep_stream_event(message)  # else a ping, or a late reply to an abandoned request
+        event = self._stream_events.popleft()
+        if event.type == protocol.ERROR:
+            raise ServerError.from_body(event.body, "stream.start")
+        return event.attachment, event.body

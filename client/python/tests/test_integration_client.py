@@ -137,6 +137,38 @@ class ClientAgainstDaemon(unittest.TestCase):
         self.assertTrue(progress, "no progress events")
         self.assertEqual(progress[-1]["fraction"], 1.0)
 
+    def test_a_stream_refines_follows_its_camera_and_stops(self):
+        view = {"position": [0.278, 0.273, -0.8], "look_at": [0.278, 0.273, 0.0], "fov_deg": 39.3}
+        stream = self.client.stream_start("cornell", method="direct", width=32, height=32, format="png",
+                                          camera=view, refine=False)
+        draft, draft_body = self.client.next_frame(timeout=30)
+        still, still_body = self.client.next_frame(timeout=30)
+        self.assertEqual(support.png_size(draft), (16, 16))  # interactive_scale 0.5 by default
+        self.assertEqual((draft_body["stream"]["id"], draft_body["stream"]["rung"]), (stream, 0))
+        self.assertEqual((still_body["stream"]["rung"], still_body["stream"]["final"]), (1, True))
+        # The still rung is the one-off frame of the same view, to the byte.
+        one_off, _ = self.client.render("cornell", method="direct", width=32, height=32, camera=view)
+        self.assertEqual(still, one_off)
+        self.assertIsNone(self.client.next_frame(timeout=0.3))  # a still view sends nothing more
+
+        moved = {"position": [0.1, 0.273, -0.8]}  # merged into the view: look_at and fov stay
+        version = self.client.stream_update(stream, camera=moved)
+        while True:
+            image, body = self.client.next_frame(timeout=30)
+            if body["stream"]["view_version"] >= version and body["stream"]["final"]:
+                break
+        one_off, _ = self.client.render("cornell", method="direct", width=32, height=32,
+                                        camera={**view, **moved})
+        self.assertEqual(image, one_off)
+        self.assertNotEqual(image, still)
+
+        stopped = self.client.stream_stop(stream)
+        self.assertEqual(stopped["stream"], stream)
+        self.assertGreaterEqual(stopped["frames"], 4)
+        with self.assertRaises(ServerError) as caught:
+            self.client.stream_update(stream, width=64)
+        self.assertEqual((caught.exception.code, caught.exception.field), ("not_found", "stream"))
+
     def test_generic_request(self):
         reply = self.client.request("scene.list")
         self.assertEqual(reply.name, "ok")
