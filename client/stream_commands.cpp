@@ -271,9 +271,15 @@ void run_mover(StreamRun& run, const Endpoint& daemon, const std::optional<std::
             lock.lock();
             run.moves.push_back({replied, reply.body.value("scene_version", std::uint64_t{0})});
             run.changed.notify_all();
-            run.changed.wait(lock, [&] {
+            const auto due = [&] {
                 return run.enough() || run.move_due(paced_by, frames_at_move, static_cast<std::size_t>(move_every));
-            });
+            };
+            while (!run.changed.wait_for(lock, kPollInterval, due)) {
+                // Between moves the mover sends nothing: answer the daemon's pings, or it hangs up.
+                lock.unlock();
+                while (mover.wait_readable(std::chrono::milliseconds(0))) mover.read();
+                lock.lock();
+            }
         }
     } catch (const ServerError& error) {
         std::lock_guard lock(run.mutex);

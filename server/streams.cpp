@@ -28,6 +28,7 @@ struct StreamHub::Stream {
     bool stopped = false;
     bool owes_tick = false;  // a tick on the render queue is meant for it
     bool in_flight = false;  // from the tick that starts a frame until its bytes are written
+    bool waits_for_cpu = false;  // its next rung renders on the CPU, which another stream's rung holds
     int in_flight_rung = -1;
     std::shared_ptr<std::atomic<bool>> in_flight_cancel;
     std::unique_ptr<boost::asio::steady_timer> retry_timer;
@@ -61,6 +62,7 @@ public:
         }
         {
             std::lock_guard lock(hub_.mutex_);
+            hub_.release_cpu(stream_);  // rendered: the next CPU rung need not wait for this one's writing
             ++stream_->frames;
             ++hub_.frames_;
             marks_["frames"] = stream_->frames;
@@ -166,6 +168,7 @@ void StreamHub::stop_all() {
 
 void StreamHub::remove(const StreamPtr& stream) {
     stream->stopped = true;
+    stream->waits_for_cpu = false;
     if (stream->in_flight_cancel) stream->in_flight_cancel->store(true);
     const auto it = std::find(streams_.begin(), streams_.end(), stream);
     if (it == streams_.end()) return;
@@ -194,6 +197,7 @@ void StreamHub::changed(Stream& stream) {
 
 void StreamHub::wake(const StreamPtr& stream) {
     if (stopped_ || stream->stopped || !stream->scheduled || stream->owes_tick || stream->in_flight) return;
+    stream->waits_for_cpu = false;  // a change sends it back to rung 0; a freed CPU lets it go on
     stream->owes_tick = true;
     daemon_.render_service().post([this](Renderer& renderer, SceneRegistry& registry) { tick(renderer, registry); });
 }
@@ -205,25 +209,38 @@ void StreamHub::tick(Renderer& renderer, SceneRegistry& registry) {
     {
         std::lock_guard lock(mutex_);
         if (stopped_ || streams_.empty()) return;
+        // Round-robin over the streams owed a tick. One whose next rung needs the CPU while another
+        // stream's CPU rung renders waits for it (release_cpu) and the tick goes to the next one.
         for (std::size_t k = 0; k < streams_.size() && !stream; ++k) {
             const std::size_t index = (cursor_ + k) % streams_.size();
-            if (!streams_[index]->owes_tick) continue;
-            stream = streams_[index];
-            cursor_ = index + 1;
-        }
-        if (!stream) return;
-        stream->owes_tick = false;
-        if (stream->stopped || stream->in_flight) return;
-
-        const auto entry = registry.entries().find(stream->order.view.scene);
-        if (entry == registry.entries().end()) {
-            missing_scene = Failure{ErrorCode::not_found, fmt::format("scene '{}' is not loaded", stream->order.view.scene), "scene"};
-            stream->in_flight = true;
-        } else {
+            const StreamPtr& candidate = streams_[index];
+            if (!candidate->owes_tick) continue;
+            candidate->owes_tick = false;
+            if (candidate->stopped || candidate->in_flight) continue;
+            const auto entry = registry.entries().find(candidate->order.view.scene);
+            if (entry == registry.entries().end()) {
+                missing_scene = Failure{ErrorCode::not_found,
+                                        fmt::format("scene '{}' is not loaded", candidate->order.view.scene), "scene"};
+                candidate->in_flight = true;
+                stream = candidate;
+                cursor_ = index + 1;
+                break;
+            }
             const std::uint64_t version = entry->second.version;
-            const bool state_changed = stream->shown_scene_version != version || stream->shown_view_version != stream->view_version;
-            const int rung = state_changed ? 0 : stream->shown_rung + 1;
-            if (rung >= static_cast<int>(stream->order.ladder.size())) return;  // converged: idle until a change
+            const bool state_changed =
+                candidate->shown_scene_version != version || candidate->shown_view_version != candidate->view_version;
+            const int rung = state_changed ? 0 : candidate->shown_rung + 1;
+            if (rung >= static_cast<int>(candidate->order.ladder.size())) continue;  // converged: idle until a change
+            const Rung& step = candidate->order.ladder[static_cast<std::size_t>(rung)];
+            const bool on_cpu = step.frame.plan.site == FrameSite::cpu;
+            if (on_cpu && cpu_holder_ && cpu_holder_ != candidate) {
+                candidate->waits_for_cpu = true;
+                continue;
+            }
+            stream = candidate;
+            cursor_ = index + 1;
+            if (on_cpu) cpu_holder_ = stream;
+
             if (state_changed) {
                 // States that came and went while the last frame was in flight were never rendered.
                 const std::uint64_t superseded = stream->unshown_changes > 1 ? stream->unshown_changes - 1 : 0;
@@ -236,7 +253,6 @@ void StreamHub::tick(Renderer& renderer, SceneRegistry& registry) {
             stream->shown_view_version = stream->view_version;
             stream->shown_rung = rung;
 
-            const Rung& step = stream->order.ladder[static_cast<std::size_t>(rung)];
             const int rungs = static_cast<int>(stream->order.ladder.size());
             json marks = {{"id", stream->id}, {"view_version", stream->view_version}, {"rung", rung}, {"rungs", rungs},
                           {"stage", step.stage}, {"final", rung + 1 == rungs}};
@@ -249,6 +265,7 @@ void StreamHub::tick(Renderer& renderer, SceneRegistry& registry) {
             stream->in_flight_rung = rung;
             stream->in_flight_cancel = request->cancelled;
         }
+        if (!stream) return;
     }
     if (missing_scene) {
         frame_failed(stream, *missing_scene);
@@ -259,6 +276,7 @@ void StreamHub::tick(Renderer& renderer, SceneRegistry& registry) {
 
 void StreamHub::frame_done(const StreamPtr& stream) {
     std::lock_guard lock(mutex_);
+    release_cpu(stream);
     stream->in_flight = false;
     stream->in_flight_cancel.reset();
     wake(stream);
@@ -268,6 +286,7 @@ void StreamHub::frame_failed(const StreamPtr& stream, const Failure& failure) {
     std::shared_ptr<StreamSink> sink;
     {
         std::lock_guard lock(mutex_);
+        release_cpu(stream);
         stream->in_flight = false;
         stream->in_flight_cancel.reset();
         if (stream->stopped) return;
@@ -291,6 +310,20 @@ void StreamHub::frame_failed(const StreamPtr& stream, const Failure& failure) {
     message.body["stream"] = stream->id;
     message.body["stream_ended"] = true;
     sink->send_stream_event(stream->id, std::move(message), {}, true);
+}
+
+void StreamHub::release_cpu(const StreamPtr& stream) {
+    if (cpu_holder_ != stream) return;
+    cpu_holder_.reset();
+    // The least refined view waiting goes next (the lowest rung; the earliest in round-robin order
+    // from the cursor among equals): a view at its first reference rung is worth more samples than
+    // one already at its last.
+    StreamPtr next;
+    for (std::size_t k = 0; k < streams_.size(); ++k) {
+        const StreamPtr& candidate = streams_[(cursor_ + k) % streams_.size()];
+        if (candidate->waits_for_cpu && (!next || candidate->shown_rung < next->shown_rung)) next = candidate;
+    }
+    if (next) wake(next);
 }
 
 void StreamHub::retry_later(const StreamPtr& stream) {

@@ -76,11 +76,16 @@ private:
     void frame_done(const StreamPtr& stream);
     void frame_failed(const StreamPtr& stream, const Failure& failure);
     void retry_later(const StreamPtr& stream);
+    void release_cpu(const StreamPtr& stream);  // mutex_ held: its CPU rung has rendered or ended
 
     Daemon& daemon_;
     mutable std::mutex mutex_;
     std::vector<StreamPtr> streams_;  // in order of opening; the round-robin walks it
     std::size_t cursor_ = 0;          // where the next tick starts looking
+    // The stream whose CPU rung (a `reference` frame) is rendering. One at a time: the path tracer
+    // takes every core, so a second would only queue behind it, in the order the rungs came, where
+    // the hub serves the least refined view first (streams waiting for the CPU hold waits_for_cpu).
+    StreamPtr cpu_holder_;
     bool stopped_ = false;
     std::uint64_t frames_ = 0, dropped_stale_ = 0, rungs_stopped_ = 0;
 };

@@ -8,6 +8,7 @@
 
 #include <atomic>
 #include <fstream>
+#include <set>
 #include <thread>
 
 namespace bounce::test {
@@ -285,6 +286,55 @@ TEST(Streams, EightViewersAreServedFairlyUnderLoad) {
     for (int v = 0; v < 8; ++v) RecordProperty("viewer_" + std::to_string(v), counts[v]);
     EXPECT_GE(least, 5);
     EXPECT_GE(2 * least, most);
+}
+
+// Reference rungs take every core, so they render one at a time across streams, and a view that
+// has just changed gets its first path-traced frame before the others get more of theirs: between
+// its still frame and its first reference frame at most one other reference frame comes (the one
+// rendering when it asked). Were the rungs queued as they came, its first would wait behind as many
+// as the CPU queue holds (four), each up to seconds of samples.
+TEST(Streams, AChangedViewsFirstReferenceRungGoesBeforeOthersLaterRungs) {
+    DaemonProcess daemon;
+    Client viewer(daemon.endpoint());
+    constexpr int kStreams = 6;
+    // 32x32 up to 4096 samples: each stream's ladder is seconds of tracing, so all are climbing.
+    for (int id = 1; id <= kStreams; ++id) {
+        json camera = kEye;
+        camera["position"] = {-0.3 + 0.1 * id, 1.0, 3.4};
+        open_stream(viewer, id, stream_fields({{"width", 32}, {"height", 32}, {"camera", camera}, {"reference_spp", 4096}}));
+    }
+    // Every stream past its first reference rung.
+    std::set<std::uint64_t> refining;
+    while (refining.size() < kStreams) {
+        const auto frame = viewer.read();
+        ASSERT_EQ(frame.type, static_cast<std::uint16_t>(MessageType::frame)) << frame.body.dump();
+        if (frame.body["stream"]["rung"].get<int>() >= 2) refining.insert(frame.request_id);
+    }
+    constexpr std::uint64_t kChanged = 1;
+    std::vector<protocol::Message> frames;
+    const auto updated = request_beside(viewer, 100, MessageType::stream_update,
+                                        {{"stream", kChanged}, {"camera", {{"fov_deg", 45}}}}, &frames);
+    ASSERT_EQ(updated.type, static_cast<std::uint16_t>(MessageType::ok)) << updated.body.dump();
+    const std::uint64_t view_version = updated.body["view_version"];
+    // Read on until the changed view's first reference frame.
+    const auto of_changed_view = [&](const protocol::Message& frame, int rung) {
+        return frame.request_id == kChanged && frame.body["stream"]["view_version"] == view_version &&
+               frame.body["stream"]["rung"] == rung;
+    };
+    while (frames.empty() || !of_changed_view(frames.back(), 2)) {
+        frames.push_back(viewer.read());
+        ASSERT_EQ(frames.back().type, static_cast<std::uint16_t>(MessageType::frame)) << frames.back().body.dump();
+    }
+    const auto still = std::find_if(frames.begin(), frames.end(), [&](const auto& frame) { return of_changed_view(frame, 1); });
+    ASSERT_NE(still, frames.end());
+    const auto others_reference = std::count_if(still, frames.end(), [&](const protocol::Message& frame) {
+        return frame.request_id != kChanged && frame.body["stream"]["stage"] == "reference";
+    });
+    EXPECT_LE(others_reference, 1);
+    for (int id = 1; id <= kStreams; ++id) {
+        const auto stopped = request_beside(viewer, 200 + id, MessageType::stream_stop, {{"stream", id}});
+        EXPECT_EQ(stopped.type, static_cast<std::uint16_t>(MessageType::ok)) << stopped.body.dump();
+    }
 }
 
 TEST(Streams, StopEndsTheEventsAndAnUnloadedSceneEndsTheStream) {
