@@ -319,6 +319,9 @@ int run(int argc, char** argv) {
 
     auto* describe = app.add_subcommand("describe", "a scene's objects, lights, cameras and resident structures");
     describe->add_option("--scene", scene, "scene name")->required();
+    bool analyze = false;
+    describe->add_flag("--analyze", analyze,
+                       "add the scene analysis: light by bounce, thin walls per vct preset, indirect visibility");
     auto* list = app.add_subcommand("list", "the scenes of every daemon");
     auto* stats = app.add_subcommand("stats", "every daemon's counters");
 
@@ -450,7 +453,9 @@ int run(int argc, char** argv) {
         if (intensity_given->count() > 0) body["intensity"] = intensity;
         std::cout << router.request(scene, MessageType::light_set, body).body.dump() << "\n";
     } else if (*describe) {
-        std::cout << router.request(scene, MessageType::scene_describe, {{"name", scene}}).body.dump(2) << "\n";
+        json body = {{"name", scene}};
+        if (analyze) body["analyze"] = true;
+        std::cout << router.request(scene, MessageType::scene_describe, body).body.dump(2) << "\n";
     } else if (*list) {
         return print_from_every_daemon(router, MessageType::scene_list);
     } else if (*stats) {

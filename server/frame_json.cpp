@@ -8,6 +8,23 @@ double ms_between(FrameClock::Clock::time_point from, FrameClock::Clock::time_po
     return std::chrono::duration<double, std::milli>(to - from).count();
 }
 
+json analysis_json(const SceneAnalysis& analysis) {
+    json needed = json::object();
+    for (const char* tolerance : {"0.1", "0.05", "0.02", "0.01"}) needed[tolerance] = analysis.bounces.bounces_for(std::stod(tolerance));
+    json presets = json::object();
+    for (const auto& [name, preset] : analysis.thin_walls.presets) {
+        presets[name] = {{"voxel_size_m", preset.voxel_size}, {"leaking_area", preset.leaking_area},
+                         {"leaks", analysis.thin_walls.leaks(name)}};
+    }
+    const double thinnest = analysis.thin_walls.thinnest_separator;
+    return {{"bounces", {{"share", analysis.bounces.share}, {"tail", analysis.bounces.tail}, {"needed", needed}}},
+            {"thin_walls", {{"thinnest_separator_m", thinnest < 0.0 ? json() : json(thinnest)}, {"presets", presets}}},
+            {"indirect_visibility", {{"pairs", analysis.visibility.pairs},
+                                     {"occluded_fraction", analysis.visibility.occluded_fraction},
+                                     {"isr_unsuitable", analysis.visibility.isr_unsuitable()}}},
+            {"analysis_ms", analysis.analysis_ms}};
+}
+
 json resident_json(const std::vector<methods::ResidentStructure>& structures) {
     json resident = json::array();
     for (const auto& s : structures) resident.push_back({{"structure", s.name}, {"bytes", s.bytes}, {"reason", s.reason}});

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "renderer/renderer.hpp"
+#include "renderer/scene_analysis.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -29,6 +30,11 @@ struct FrameClock {
 // render, gpu, readback, encode, total, passes).
 nlohmann::json frame_json(const RenderResult& result, std::uint64_t scene_version, std::string_view format,
                           const FrameClock& clock);
+
+// scene.describe's `analysis`: bounces {share, tail, needed {tolerance: bounces}}, thin_walls
+// {thinnest_separator_m, presets {name: {voxel_size_m, leaking_area, leaks}}}, indirect_visibility
+// {pairs, occluded_fraction, isr_unsuitable}, analysis_ms.
+nlohmann::json analysis_json(const SceneAnalysis& analysis);
 
 double ms_between(FrameClock::Clock::time_point from, FrameClock::Clock::time_point to);
 

@@ -239,7 +239,8 @@ Order parse_order(const protocol::Message& message, std::uint64_t max_pixels) {
     switch (static_cast<MessageType>(message.type)) {
         case MessageType::scene_load: return parse_load(body, !message.attachment.empty());
         case MessageType::scene_unload:
-        case MessageType::scene_describe: return SceneNameOrder{protocol::get_string(body, "name")};
+        case MessageType::scene_describe:
+            return SceneNameOrder{protocol::get_string(body, "name"), protocol::get_optional_bool(body, "analyze").value_or(false)};
         case MessageType::scene_list: return ListOrder{};
         case MessageType::stats: return StatsOrder{};
         case MessageType::object_set_transform: return parse_transform(body);

@@ -30,6 +30,7 @@ struct LoadOrder {
 // scene.unload, scene.describe.
 struct SceneNameOrder {
     std::string name;
+    bool analyze = false;  // scene.describe: add the scene analysis (renderer/scene_analysis.hpp)
 };
 
 struct ListOrder {};

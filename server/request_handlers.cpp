@@ -104,7 +104,9 @@ void RequestHandlers::execute(const std::shared_ptr<Request>& request, Renderer&
                     return load_scene(registry, daemon_.scene_root(), order, attachment);
                 } else if constexpr (std::is_same_v<T, SceneNameOrder>) {
                     if (request->message().type == static_cast<std::uint16_t>(MessageType::scene_describe)) {
-                        return describe_scene(registry, order);
+                        if (!order.analyze) return describe_scene(registry, order);
+                        describe_with_analysis(request, order, registry);
+                        return nullptr;  // answered from the CPU pool
                     }
                     json unloaded = unload_scene(registry, order);
                     daemon_.metrics().forget_scene(order.name);
@@ -179,6 +181,28 @@ void RequestHandlers::render_on_cpu(const std::shared_ptr<Request>& request, con
                 bounce::render_on_cpu(*snapshot, frame, order.plan, request->cancelled.get()));
             clock.rendered = Clock::now();
             deliver(request, order, std::move(result), version, clock);
+        } catch (...) {
+            request->fail(std::current_exception());
+        }
+    });
+}
+
+// The analysis traces rays and paths (tenths of a second on small scenes, more on large ones): on
+// the CPU pool, from a snapshot, holding a CPU slot as a CPU frame does.
+void RequestHandlers::describe_with_analysis(const std::shared_ptr<Request>& request, const SceneNameOrder& order,
+                                            SceneRegistry& registry) {
+    json description = describe_scene(registry, order);
+    auto snapshot = std::make_shared<const scene::Scene>(*registry.get(order.name).scene);
+    if (!daemon_.try_start_cpu_job()) {
+        throw RequestError(ErrorCode::busy, fmt::format("{} CPU renders are already queued", Daemon::kMaxCpuJobs));
+    }
+    auto slot = std::make_shared<CpuSlot>(daemon_);
+    boost::asio::post(daemon_.cpu_pool(), [request, snapshot, slot, description = std::move(description)]() mutable {
+        const log::RequestScope scope(request->log_id);
+        try {
+            request->check_still_wanted();
+            description["analysis"] = analysis_json(analyze_scene(*snapshot, {}, request->cancelled.get()));
+            request->answer(protocol::make_ok(request->id(), std::move(description)));
         } catch (...) {
             request->fail(std::current_exception());
         }

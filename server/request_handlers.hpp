@@ -46,6 +46,8 @@ private:
     void render_on_gpu(const std::shared_ptr<Request>& request, const RenderOrder& order, Renderer& renderer,
                        SceneRegistry& registry);
     void render_on_cpu(const std::shared_ptr<Request>& request, const RenderOrder& order, SceneRegistry& registry);
+    void describe_with_analysis(const std::shared_ptr<Request>& request, const SceneNameOrder& order,
+                                SceneRegistry& registry);
     nlohmann::json bake(const std::shared_ptr<Request>& request, const BakeOrder& order, Renderer& renderer,
                         SceneRegistry& registry);
     nlohmann::json stats(Renderer& renderer, SceneRegistry& registry);

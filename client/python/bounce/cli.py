@@ -34,7 +34,7 @@ COMMANDS = """commands:
   move    --scene S --object O [--translate X,Y,Z] [--rotate-deg RX,RY,RZ] [--scale K]
   light   --scene S --light L [--type point|spot|directional] [--position X,Y,Z]
           [--direction X,Y,Z] [--color R,G,B] [--intensity I]
-  describe --scene S | list | stats
+  describe --scene S [--analyze] | list | stats
 
 --connect and --token-file default to $BOUNCE_CONNECT and $BOUNCE_TOKEN_FILE, then 127.0.0.1:7878.
 With several endpoints (--connect a:7878,b:7878) each scene goes to its daemon by rendezvous
@@ -139,7 +139,10 @@ class _Parser:
         self.option(light, "--direction", metavar="X,Y,Z")
         self.option(light, "--color", metavar="R,G,B")
         self.option(light, "--intensity", metavar="I")
-        self.option(command("describe", "describe a scene"), "--scene", required=True)
+        described = command("describe", "describe a scene")
+        self.option(described, "--scene", required=True)
+        described.add_argument("--analyze", action="store_true",
+                               help="add the scene analysis: light by bounce, thin walls, indirect visibility")
         command("list", "list the scenes (of every daemon)")
         command("stats", "the daemon's counters (of every daemon)")
 
@@ -297,7 +300,7 @@ def _prepare(args: argparse.Namespace) -> Action:
                  "intensity": None if args.intensity is None else _number(args.intensity, "--intensity")}
         return lambda target, routed: print(_dump(target.light(args.scene, args.light, **light)))
     if command == "describe":
-        return lambda target, routed: print(_dump(target.describe(args.scene), pretty=True))
+        return lambda target, routed: print(_dump(target.describe(args.scene, analyze=args.analyze), pretty=True))
 
     def survey(target, routed):
         """list and stats: one daemon's answer, or every daemon's keyed by endpoint."""

@@ -503,9 +503,13 @@ class Client:
         """The daemon's scenes: [{"name", "objects", "triangles", "resident_bytes", "scene_version"}]."""
         return self.request("scene.list").body.get("scenes", [])
 
-    def describe(self, scene: str) -> dict[str, Any]:
-        """Objects (bounds, transform), lights, cameras, materials and resident structures."""
-        return self.request("scene.describe", {"name": scene}).body
+    def describe(self, scene: str, analyze: bool = False) -> dict[str, Any]:
+        """Objects (bounds, transform), lights, cameras, materials and resident structures; with
+        `analyze`, the scene analysis too (light by bounce, thin walls, indirect visibility)."""
+        body: dict[str, Any] = {"name": scene}
+        if analyze:
+            body["analyze"] = True
+        return self.request("scene.describe", body).body
 
     def move(self, scene: str, object: str, translation: Iterable[float] | None = None,
              rotation_deg: Iterable[float] | None = None, scale: float | None = None,

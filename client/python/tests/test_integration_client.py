@@ -169,6 +169,22 @@ class ClientAgainstDaemon(unittest.TestCase):
             self.client.stream_update(stream, width=64)
         self.assertEqual((caught.exception.code, caught.exception.field), ("not_found", "stream"))
 
+    def test_describe_with_the_scene_analysis(self):
+        plain = self.client.describe("cornell")
+        self.assertNotIn("analysis", plain)
+        analysis = self.client.describe("cornell", analyze=True)["analysis"]
+        bounces = analysis["bounces"]
+        self.assertAlmostEqual(sum(bounces["share"]) + bounces["tail"], 1.0, places=9)
+        # An open-fronted box of albedo about 0.6 keeps more than a tenth of its light past bounce 1.
+        self.assertGreaterEqual(bounces["needed"]["0.02"], bounces["needed"]["0.1"])
+        self.assertGreater(bounces["needed"]["0.1"], 1)
+        self.assertEqual(set(analysis["thin_walls"]["presets"]), {"draft", "low", "medium", "high", "ultra"})
+        self.assertFalse(any(p["leaks"] for p in analysis["thin_walls"]["presets"].values()))
+        self.assertFalse(analysis["indirect_visibility"]["isr_unsuitable"])
+        with self.assertRaises(ServerError) as caught:
+            self.client.request("scene.describe", {"name": "cornell", "analyze": "yes"})
+        self.assertEqual((caught.exception.code, caught.exception.field), ("bad_request", "analyze"))
+
     def test_generic_request(self):
         reply = self.client.request("scene.list")
         self.assertEqual(reply.name, "ok")

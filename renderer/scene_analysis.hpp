@@ -1,0 +1,71 @@
+// What a scene needs of a method, measured on the scene itself: how much of its light arrives after
+// each bounce, where a wall is thinner than vct's voxels, and how often indirect light is occluded
+// on its way (which isr does not model). The planner reads these to model only what the scene
+// requires; `scene.describe` shows them.
+#pragma once
+
+#include "renderer/scene/scene.hpp"
+
+#include <atomic>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace bounce {
+
+struct AnalysisSettings {
+    // Bounce energies: the reference at this size and these samples, once per bounce count, with one
+    // seed so that the differences between counts are not noise (common random numbers).
+    int bounce_image_size = 24;
+    int bounce_spp = 16;
+    int max_bounces = 12;
+    int surface_samples = 4096;  // thin walls
+    int visibility_pairs = 2048;  // receiver-VPL pairs for indirect visibility
+    std::uint32_t seed = 1;
+};
+
+struct BounceEnergy {
+    // share[k]: the part of the image's light (mean over pixels, all channels) that bounce k adds;
+    // share[0] is direct light and emission. Past max_bounces the geometric tail of the last two
+    // bounces is added to `tail`, so shares and tail sum to 1.
+    std::vector<double> share;
+    double tail = 0.0;
+    // The fewest indirect bounces whose frame lacks at most `tolerance` of the light.
+    int bounces_for(double tolerance) const;
+};
+
+struct ThinWalls {
+    // Per vct preset: the voxel size (the scene's largest extent over the preset's resolution) and
+    // the share of the surface area that is a wall thinner than one voxel between two spaces each
+    // wider than one voxel: where vct's voxels take light from one side to the other.
+    struct Preset {
+        double voxel_size = 0.0;
+        double leaking_area = 0.0;
+    };
+    std::map<std::string, Preset> presets;
+    double thinnest_separator = -1.0;  // metres; -1 where no surface separates two spaces
+    static constexpr double kLeakAreaThreshold = 0.01;
+    bool leaks(const std::string& preset) const;
+};
+
+struct IndirectVisibility {
+    int pairs = 0;                   // receiver-VPL pairs that face each other
+    double occluded_fraction = 0.0;  // of those, the share with a surface between them
+    // isr gathers VPL light without occlusion: where most of it is occluded, its answer is wrong.
+    static constexpr double kMostlyOccluded = 0.5;
+    bool isr_unsuitable() const { return pairs > 0 && occluded_fraction > kMostlyOccluded; }
+};
+
+struct SceneAnalysis {
+    BounceEnergy bounces;
+    ThinWalls thin_walls;
+    IndirectVisibility visibility;
+    double analysis_ms = 0.0;
+};
+
+// Runs on CPU threads (Embree, the reference), from a scene no one mutates meanwhile. Throws
+// Cancelled when `cancelled` is set.
+SceneAnalysis analyze_scene(const scene::Scene& scene, const AnalysisSettings& settings = {},
+                            const std::atomic<bool>* cancelled = nullptr);
+
+}  // namespace bounce
