@@ -13,6 +13,12 @@ namespace bounce::bench {
 inline constexpr std::string_view kIsrBegin = "<!-- isr sections: bench/quality writes them (alone with --isr-only) -->";
 inline constexpr std::string_view kIsrEnd = "<!-- end of isr sections -->";
 
+// bench/quality's Cornell variants, and the same tables for the bench corpus (--corpus).
+inline constexpr std::string_view kQualityBegin = "<!-- quality: bench/quality writes it -->";
+inline constexpr std::string_view kQualityEnd = "<!-- end of quality -->";
+inline constexpr std::string_view kCorpusBegin = "<!-- corpus: bench/quality --corpus writes it -->";
+inline constexpr std::string_view kCorpusEnd = "<!-- end of corpus -->";
+
 inline constexpr std::string_view kCssmBegin = "<!-- cssm sections: bench/cssm writes them -->";
 inline constexpr std::string_view kCssmEnd = "<!-- end of cssm sections -->";
 

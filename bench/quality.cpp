@@ -6,13 +6,16 @@
 // bench/isr's and bench/cssm's; it keeps them.
 #include "bench/common.hpp"
 #include "bench/markdown_blocks.hpp"
+#include "bench/corpus.hpp"
 #include "bench/scenes.hpp"
 #include "renderer/base/hash.hpp"
 #include "renderer/base/log.hpp"
 #include "renderer/image/codec.hpp"
 #include "renderer/image/metrics.hpp"
+#include "renderer/image/tone.hpp"
 #include "renderer/methods/reference/path_tracer.hpp"
 #include "renderer/renderer.hpp"
+#include "renderer/scene_analysis.hpp"
 #include "renderer/scene/builtin.hpp"
 
 #include <algorithm>
@@ -34,6 +37,9 @@ using bench::ms_since;
 struct Options {
     int size = 128;
     int reference_spp = 1024;
+    bool corpus = false;  // bench/corpus.hpp's scenes
+    std::optional<fs::path> previews;  // each scene's reference as PNG, to see what is measured
+    int detail = 1;
     int reference_bounces = 4;
     int repeats = 3;
     fs::path out = "bench/results";
@@ -174,8 +180,14 @@ std::string leak_markdown(Renderer& renderer, const scene::Scene& scene, const i
 void write_markdown(const fs::path& path, const std::vector<Row>& rows, const Options& options, const std::string& gpu,
                     const std::string& command, const std::string& details) {
     std::ostringstream md;
-    md << "# Benchmarks\n\n"
-       << "## Speed and accuracy (bench/quality)\n\n"
+    const std::string_view begin = options.corpus ? bench::kCorpusBegin : bench::kQualityBegin;
+    const std::string_view end = options.corpus ? bench::kCorpusEnd : bench::kQualityEnd;
+    md << begin << "\n\n"
+       << (options.corpus ? "## Speed and accuracy on the bench corpus (bench/quality --corpus)\n\n"
+                          : "## Speed and accuracy (bench/quality)\n\n")
+       << (options.corpus ? "The scenes of bench/corpus.hpp, generated in code (previews of their references in "
+                            "bench/results/corpus/).\n\n"
+                          : "")
        << "Written by `" << command << "` on " << bench::today() << ".\n\n"
        << "- Machine: " << bench::machine_description() << "\n"
        << "- GPU: " << gpu << "\n"
@@ -188,7 +200,7 @@ void write_markdown(const fs::path& path, const std::vector<Row>& rows, const Op
        << "  (structures that depend only on the scene, such as shadow maps, are then reused); wall time\n"
        << "  includes readback. Reference times are CPU wall time for a fresh image. `direct`'s presets\n"
        << "  differ only in shadow-map size, which costs time only in frames where the maps are redrawn.\n\n"
-       << "![error against time](../bench/results/quality.png)\n\n"
+       << (options.corpus ? "" : "![error against time](../bench/results/quality.png)\n\n")
        << "| scene | method | preset | bounces | wall ms | GPU ms | resident MiB | relMSE | relMSE same bounces | RMSE | mean / ref |\n"
        << "|---|---|---|---|---|---|---|---|---|---|---|\n";
     for (const Row& r : rows) {
@@ -200,12 +212,24 @@ void write_markdown(const fs::path& path, const std::vector<Row>& rows, const Op
     for (const Row& r : rows) {
         if (r.method == "reference") md << fmt::format("| {} | {} | {:.3g} |\n", r.scene, r.preset, r.rays_per_second);
     }
-    md << details;
-    const auto isr = bench::find_block(path, bench::kIsrBegin, bench::kIsrEnd);
-    const auto cssm = bench::find_block(path, bench::kCssmBegin, bench::kCssmEnd);
-    std::ofstream(path) << md.str();
-    if (isr) bench::splice_block(path, bench::kIsrBegin, bench::kIsrEnd, *isr);
-    if (cssm) bench::splice_block(path, bench::kCssmBegin, bench::kCssmEnd, *cssm);
+    md << details << "\n" << end << "\n";
+    // Only this bench's block changes: the other benches' sections and the hand-written ones stay.
+    if (!fs::exists(path)) std::ofstream(path) << "# Benchmarks\n\n";
+    bench::splice_block(path, begin, end, md.str());
+}
+
+// One row of the corpus's analysis table.
+std::string analysis_row(const bench::BenchScene& bench_scene) {
+    const SceneAnalysis analysis = analyze_scene(bench_scene.scene);
+    std::string leaks;
+    for (const auto& preset : methods::preset_names()) {
+        if (analysis.thin_walls.leaks(preset)) leaks += (leaks.empty() ? "" : ", ") + preset;
+    }
+    const BounceEnergy& bounces = analysis.bounces;
+    return fmt::format("| {} | {} | {} / {} / {} | {} | {:.2f} | {} |\n", bench_scene.name, bench_scene.scene.triangle_count(),
+                       bounces.bounces_for(0.1), bounces.bounces_for(0.05), bounces.bounces_for(0.02),
+                       leaks.empty() ? "none" : leaks, analysis.visibility.occluded_fraction,
+                       analysis.visibility.isr_unsuitable() ? "no" : "yes");
 }
 
 }  // namespace
@@ -223,10 +247,16 @@ int main(int argc, char** argv) {
         else if (flag == "--cache") options.cache = arguments.value();
         else if (flag == "--markdown") options.markdown = arguments.value();
         else if (flag == "--scene") options.scenes.push_back(arguments.value());
+        else if (flag == "--corpus") options.corpus = true;
+        else if (flag == "--previews") options.previews = arguments.value();
+        else if (flag == "--detail") options.detail = std::max(1, arguments.number());
         else {
             std::fprintf(stderr,
                          "usage: quality [--size N] [--reference-spp N] [--reference-bounces N] [--repeats N]\n"
-                         "               [--scene NAME ...] [--out DIR] [--cache DIR] [--markdown FILE]\n"
+                         "               [--scene NAME ...] [--corpus [--detail N]] [--previews DIR] [--out DIR]\n"
+                         "               [--cache DIR]\n"
+                         "               [--markdown FILE]\n"
+                         "(--corpus: bench/corpus.hpp's scenes instead of the Cornell variants)\n"
                          "(the isr sections are bench/isr's: bounce_bench_isr)\n");
             return 2;
         }
@@ -235,15 +265,25 @@ int main(int argc, char** argv) {
     try {
         Renderer renderer(gpu::DeviceChoice::resolve(std::nullopt));
         std::vector<Row> rows;
-        std::string details;
+        std::string details, analysis_rows;
         const auto& registry = methods::MethodRegistry::builtin();
-        for (const auto& bench_scene : bench::quality_scenes()) {
+        const std::vector<bench::BenchScene> scenes =
+            options.corpus ? bench::corpus_scenes(options.detail) : bench::quality_scenes();
+        for (const auto& bench_scene : scenes) {
             if (!options.scenes.empty() &&
                 std::find(options.scenes.begin(), options.scenes.end(), bench_scene.name) == options.scenes.end()) {
                 continue;
             }
             methods::reference::PathTracer tracer(bench_scene.scene);
             const image::Frame truth = reference_image(bench_scene, tracer, options, options.reference_bounces);
+            if (options.previews) {
+                image::Frame preview = truth;
+                image::make_display_image(preview, {});
+                fs::create_directories(*options.previews);
+                const auto png = image::encode_image(preview, image::ImageFormat::png);
+                std::ofstream(*options.previews / (bench_scene.name + ".png"), std::ios::binary)
+                    .write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
+            }
             std::map<int, image::Frame> truth_by_bounces;
             auto truth_at = [&](int bounces) -> const image::Frame& {
                 if (bounces == options.reference_bounces) return truth;
@@ -253,6 +293,7 @@ int main(int argc, char** argv) {
                 }
                 return it->second;
             };
+            if (options.corpus) analysis_rows += analysis_row(bench_scene);
             auto resources = renderer.upload(bench_scene.scene);
             for (const auto& method : registry.names()) {
                 if (plan_frame(linear_request(method, "medium", {}, options.size)).site != FrameSite::gpu) {
@@ -326,6 +367,15 @@ int main(int argc, char** argv) {
                 log::info("bench", "{} reference {} spp: {:.0f} ms relMSE {:.4f}", row.scene, spp, row.wall_ms, row.rel_mse);
                 rows.push_back(row);
             }
+        }
+        if (options.corpus) {
+            details += "\n## What each scene needs (scene analysis)\n\n`bounce describe --analyze` on each scene "
+                       "(renderer/scene_analysis.hpp): the indirect bounces whose frame lacks at most 10%, 5% and 2% "
+                       "of the light, the vct presets with walls thinner than a voxel between two spaces, and the "
+                       "share of light-to-receiver pairs that are occluded (isr ignores it).\n\n"
+                       "| scene | triangles | bounces for 10% / 5% / 2% | vct leaks at | occluded | isr suitable |\n"
+                       "|---|---|---|---|---|---|\n" +
+                       analysis_rows;
         }
         fs::create_directories(options.out);
         write_csv(options.out / "quality.csv", rows);

@@ -194,6 +194,30 @@ std::optional<Separation> separation_behind(const scene::Scene& scene, const ray
     return separation;
 }
 
+// Whether any light reaches `point` directly, on the side its normal faces.
+bool directly_lit(const scene::Scene& scene, const raytrace::RayScene& rays, const SurfacePoint& point, float epsilon,
+                  float reach) {
+    for (const scene::Light& light : scene.lights) {
+        if (!(glm::compMax(light.radiant()) > 0.0f)) continue;
+        glm::vec3 to_light;
+        float distance = reach;
+        if (light.type == scene::LightType::directional) {
+            to_light = -light.direction;
+        } else {
+            const glm::vec3 offset = light.position - point.position;
+            distance = glm::length(offset);
+            if (!(distance > epsilon)) continue;
+            to_light = offset / distance;
+            if (light.type == scene::LightType::spot && glm::dot(-to_light, light.direction) < std::cos(light.outer_cone)) {
+                continue;
+            }
+        }
+        if (glm::dot(to_light, point.normal) <= 0.0f) continue;
+        if (!rays.occluded(point.position, to_light, epsilon, distance - epsilon)) return true;
+    }
+    return false;
+}
+
 ThinWalls thin_walls(const scene::Scene& scene, const raytrace::RayScene& rays, const SurfaceSampler& surfaces,
                      const AnalysisSettings& settings, const std::atomic<bool>* cancelled) {
     const scene::Aabb bounds = scene.world_bounds();
@@ -208,7 +232,10 @@ ThinWalls thin_walls(const scene::Scene& scene, const raytrace::RayScene& rays, 
     std::map<std::string, int> leaking;
     for (int i = 0; i < settings.surface_samples; ++i) {
         if (i % 256 == 0) check_cancelled(cancelled);
-        const auto separation = separation_behind(scene, rays, surfaces.sample(random), epsilon, 2.0f * extent);
+        // Light leaks from a lit face through its wall into the space behind it.
+        const SurfacePoint point = surfaces.sample(random);
+        if (!directly_lit(scene, rays, point, epsilon, 4.0f * extent)) continue;
+        const auto separation = separation_behind(scene, rays, point, epsilon, 2.0f * extent);
         if (!separation) continue;
         for (const auto& [name, preset] : walls.presets) {
             const auto voxel = static_cast<float>(preset.voxel_size);

@@ -36,14 +36,14 @@ struct BounceEnergy {
 
 struct ThinWalls {
     // Per vct preset: the voxel size (the scene's largest extent over the preset's resolution) and
-    // the share of the surface area that is a wall thinner than one voxel between two spaces each
-    // wider than one voxel: where vct's voxels take light from one side to the other.
+    // the share of the surface area that is lit directly and is the face of a wall thinner than one
+    // voxel between two spaces each wider than one voxel: where vct's voxels carry light through.
     struct Preset {
         double voxel_size = 0.0;
         double leaking_area = 0.0;
     };
     std::map<std::string, Preset> presets;
-    double thinnest_separator = -1.0;  // metres; -1 where no surface separates two spaces
+    double thinnest_separator = -1.0;  // metres; -1 where no lit surface separates two spaces
     static constexpr double kLeakAreaThreshold = 0.01;
     bool leaks(const std::string& preset) const;
 };
