@@ -1,5 +1,7 @@
 #include "renderer/renderer.hpp"
 
+#include "renderer/base/hash.hpp"
+
 #include "renderer/base/bytes.hpp"
 #include "renderer/base/error.hpp"
 #include "renderer/base/log.hpp"
@@ -55,6 +57,44 @@ SceneResources::SceneResources(const scene::Scene& scene) : id(next_resources_id
 
 SceneResources::~SceneResources() {
     if (live_) live_->erase(this);
+}
+
+namespace {
+
+std::uint64_t lights_fingerprint(const scene::Scene& scene) {
+    Hasher hash;
+    for (const scene::Light& light : scene.lights) {
+        hash.add(light.type).add(light.position.x).add(light.position.y).add(light.position.z);
+        hash.add(light.direction.x).add(light.direction.y).add(light.direction.z);
+        hash.add(light.color.r).add(light.color.g).add(light.color.b).add(light.intensity);
+        hash.add(light.inner_cone).add(light.outer_cone);
+    }
+    return hash.value();
+}
+
+// Knobs a method leaves to the scene: `bounce_tolerance` above 0 sets `bounces` from the scene
+// analysis (the fewest whose frame lacks at most that share of the light, within the knob's range),
+// unless the request set `bounces` itself.
+void resolve_scene_knobs(SceneResources& resources, const RenderRequest& request, const methods::MethodInfo& info,
+                         methods::KnobValues& knobs) {
+    const auto tolerance = knobs.find("bounce_tolerance");
+    if (tolerance == knobs.end() || !(tolerance->second > 0.0) || request.knobs.contains("bounces")) return;
+    const auto range = std::find_if(info.knobs.begin(), info.knobs.end(), [](const auto& k) { return k.name == "bounces"; });
+    if (range == info.knobs.end()) return;
+    const int needed = resources.analysis().bounces.bounces_for(tolerance->second);
+    knobs["bounces"] = std::clamp(static_cast<double>(needed), range->min, range->max);
+}
+
+}  // namespace
+
+const SceneAnalysis& SceneResources::analysis() {
+    const scene::Scene& scene = gpu_scene.scene();
+    const std::uint64_t lights = lights_fingerprint(scene);
+    if (!analysis_ || analysis_lights_ != lights) {
+        analysis_ = analyze_scene(scene);
+        analysis_lights_ = lights;
+    }
+    return *analysis_;
 }
 
 std::uint64_t SceneResources::resident_bytes() const {
@@ -157,11 +197,12 @@ void Renderer::fill_stats(FrameStats& stats, const RenderRequest& request, const
 template <typename Run>
 void Renderer::with_frame(SceneResources& resources, const RenderRequest& request, const methods::Precompute& precompute,
                           Run&& run, const std::atomic<bool>* cancelled) {
-    const FramePlan plan = plan_frame(request);
+    FramePlan plan = plan_frame(request);
     if (plan.site != FrameSite::gpu) throw InputError(fmt::format("method '{}' {}", request.method, kRunsOnCpu));
-    const methods::KnobValues& knobs = plan.knobs;
     const scene::Scene& scene = resources.gpu_scene.scene();
     const auto& info = methods::MethodRegistry::builtin().find(request.method);
+    resolve_scene_knobs(resources, request, info, plan.knobs);
+    const methods::KnobValues& knobs = plan.knobs;
     {
         // What this frame replaces (the method's structures and the output target) is not held elsewhere.
         std::uint64_t replaced = output_.bytes() + tonemap_.bytes();

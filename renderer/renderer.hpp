@@ -12,6 +12,7 @@
 #include "renderer/image/tone.hpp"
 #include "renderer/methods/registry.hpp"
 #include "renderer/passes/tonemap_pass.hpp"
+#include "renderer/scene_analysis.hpp"
 
 #include <atomic>
 #include <filesystem>
@@ -87,8 +88,14 @@ public:
     std::vector<methods::ResidentStructure> resident() const;
     std::uint64_t resident_bytes() const;
 
+    // What the scene needs (renderer/scene_analysis.hpp): made on the first frame that asks for it,
+    // on the calling thread, and made again when the lights change (moving objects keep it).
+    const SceneAnalysis& analysis();
+
 private:
     friend class Renderer;
+    std::optional<SceneAnalysis> analysis_;
+    std::uint64_t analysis_lights_ = 0;  // the lights it was made for
     std::set<const SceneResources*>* live_ = nullptr;  // the uploading Renderer's list, for its memory budget
 };
 

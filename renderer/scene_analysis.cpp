@@ -3,7 +3,7 @@
 #include "renderer/base/error.hpp"
 #include "renderer/methods/registry.hpp"
 #include "renderer/raytrace/ray_scene.hpp"
-#include "renderer/renderer.hpp"
+#include "renderer/methods/reference/path_tracer.hpp"
 
 #include <glm/gtc/constants.hpp>
 #include <glm/gtx/component_wise.hpp>
@@ -110,16 +110,17 @@ double mean_radiance(const image::Frame& frame) {
 }
 
 BounceEnergy bounce_energy(const scene::Scene& scene, const AnalysisSettings& settings, const std::atomic<bool>* cancelled) {
+    // One tracer (one acceleration structure) for every bounce count.
+    const methods::reference::PathTracer tracer(scene);
+    const scene::Camera camera = scene.cameras.empty() ? scene::framing_camera(scene.world_bounds()) : scene.cameras.front();
     std::vector<double> totals;  // the image's mean with 0, 1, ... bounces
     for (int bounces = 0; bounces <= settings.max_bounces; ++bounces) {
-        check_cancelled(cancelled);
-        RenderRequest request;
-        request.method = "reference";
-        request.width = request.height = settings.bounce_image_size;
-        request.make_display_image = false;
-        request.knobs = {{"spp", settings.bounce_spp}, {"bounces", bounces}, {"seed", settings.seed}};
-        const FramePlan plan = plan_frame(request);
-        totals.push_back(mean_radiance(render_on_cpu(scene, request, plan, cancelled).frame));
+        methods::reference::PathTracerSettings trace;
+        trace.max_bounces = bounces;
+        trace.seed = settings.seed;
+        methods::reference::Accumulator accumulator(settings.bounce_image_size, settings.bounce_image_size);
+        tracer.render(accumulator, camera, settings.bounce_spp, trace, cancelled);
+        totals.push_back(mean_radiance(accumulator.frame()));
     }
     std::vector<double> added(totals.size());
     for (std::size_t k = 0; k < totals.size(); ++k) added[k] = std::max(0.0, k == 0 ? totals[0] : totals[k] - totals[k - 1]);

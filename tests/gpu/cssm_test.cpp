@@ -6,6 +6,7 @@
 #include "renderer/image/metrics.hpp"
 #include "renderer/methods/reference/path_tracer.hpp"
 #include "renderer/scene/builtin.hpp"
+#include "renderer/scene_analysis.hpp"
 
 #include <gtest/gtest.h>
 
@@ -71,6 +72,35 @@ TEST(Cssm, TwoAndThreeBouncesMatchTheReferenceWithTheSameBounces) {
         EXPECT_LT(high, 0.008) << bounces;
         EXPECT_LT(high, 0.8 * low) << bounces;
     }
+}
+
+// `bounce_tolerance` asks the scene analysis how many bounces the scene needs. The light it adds
+// over one bounce is what the analysis attributes to bounces 2..n, less what cssm's own
+// approximations lose: up to 3% of the mean by its fifth bounce (docs/benchmarks.md, "Bounces
+// the scene needs"), 15% of that gain; the test allows 20%.
+TEST(Cssm, BounceToleranceBouncesAsTheSceneAnalysisSays) {
+    const scene::Scene scene = scene::make_cornell_box();
+    const BounceEnergy energy = analyze_scene(scene).bounces;
+    constexpr double kTolerance = 0.02;
+    const int needed = std::min(energy.bounces_for(kTolerance), 8);
+    ASSERT_GT(needed, 2);
+    const RenderResult automatic = render_cssm(scene, "medium", {{"bounce_tolerance", kTolerance}});
+    EXPECT_EQ(automatic.stats.knobs.at("bounces"), needed);
+    // A request's own bounce count wins.
+    EXPECT_EQ(render_cssm(scene, "medium", {{"bounce_tolerance", kTolerance}, {"bounces", 2}}).stats.knobs.at("bounces"), 2);
+
+    const RenderResult one = render_cssm(scene, "medium", {{"bounces", 1}});
+    const image::Frame& truth = cornell_reference(8);  // 8 bounces: all but 0.2% of the light
+    const image::ErrorMetrics automatic_error = image::compare(automatic.frame, truth);
+    const image::ErrorMetrics one_error = image::compare(one.frame, truth);
+    double predicted = 0.0;
+    for (int k = 2; k <= needed; ++k) predicted += energy.share[static_cast<std::size_t>(k)];
+    const double gained = (automatic_error.mean_test - one_error.mean_test) / automatic_error.mean_reference;
+    RecordProperty("gained", std::to_string(gained));
+    RecordProperty("predicted", std::to_string(predicted));
+    EXPECT_GT(gained, 0.8 * predicted);
+    EXPECT_LT(gained, predicted * 1.05);
+    EXPECT_LT(automatic_error.rel_mse, 0.5 * one_error.rel_mse);
 }
 
 TEST(Cssm, CubeMapVisibilityIsWhatMakesItMatch) {

@@ -181,6 +181,9 @@ MethodInfo method_info() {
         {"face_size", 4, 256, true, "pixels per side of each depth cube-map face"},
         {"traversal", 0, 2, true, "order the cube maps are baked and compressed in: 0 greedy, 1 zig-zag, 2 spiral"},
         {"bounces", 1, 8, true, "indirect diffuse bounces (the last one is the per-pixel final gather)"},
+        {"bounce_tolerance", 0, 1, false,
+         "above 0: bounces as many as the scene needs for its frame to lack at most this share of the light (the "
+         "scene analysis; a request's own `bounces` wins); 0: `bounces` as set"},
         {"threshold", 0, 100, false,
          "radiosity: refine a sender while its tone-mapped radiance bound at the receiver texel exceeds this (0: every texel)"},
         {"final_threshold", 0, 100, false, "final gather: the same threshold for pixels"},
@@ -193,16 +196,17 @@ MethodInfo method_info() {
          "0: the last bounce gathered per pixel (final gathering); 1: all n bounces on the atlas, pixels read the "
          "texels around them (view-dependent lightmap)"},
         {"shadow_map_size", 16, 8192, true, "texels per side of each shadow map (direct light)"}};
-    auto preset = [](double atlas, double face, double threshold, double pcf) {
+    // The presets bounce once (bounce_tolerance 0); `bounce_tolerance` asks the scene analysis instead.
+    auto preset = [](double atlas, double face, double threshold, double pcf, double bounce_tolerance) {
         return KnobValues{{"atlas_resolution", atlas}, {"face_size", face},      {"traversal", 2}, {"csm_directions", 256}, {"per_texel", 0}, {"jitter_frames", 0},
                           {"bounces", 1},              {"threshold", threshold}, {"final_threshold", threshold},
-                          {"pcf", pcf},                {"shadow_map_size", 2048}};
+                          {"pcf", pcf},                {"shadow_map_size", 2048}, {"bounce_tolerance", bounce_tolerance}};
     };
-    info.presets = {{"draft", preset(12, 16, 0.3, 1)},
-                    {"low", preset(20, 16, 0.2, 1)},
-                    {"medium", preset(32, 24, 0.1, 3)},
-                    {"high", preset(48, 32, 0.05, 3)},
-                    {"ultra", preset(64, 32, 0.02, 3)}};
+    info.presets = {{"draft", preset(12, 16, 0.3, 1, 0)},
+                    {"low", preset(20, 16, 0.2, 1, 0)},
+                    {"medium", preset(32, 24, 0.1, 3, 0)},
+                    {"high", preset(48, 32, 0.05, 3, 0)},
+                    {"ultra", preset(64, 32, 0.02, 3, 0)}};
     info.create = [] { return std::make_unique<CssmMethod>(); };
     info.estimate = estimate;
     return info;
