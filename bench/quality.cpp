@@ -38,6 +38,9 @@ struct Options {
     int size = 128;
     int reference_spp = 1024;
     bool corpus = false;  // bench/corpus.hpp's scenes
+    // The reference's camera rays through pixel centres, as raster methods shade: the error is then
+    // the lighting's alone, not also the antialiasing the reference's jittered pixels add.
+    bool pixel_centre = false;
     std::optional<fs::path> previews;  // each scene's reference as PNG, to see what is measured
     int detail = 1;
     int reference_bounces = 4;
@@ -80,8 +83,8 @@ std::uint64_t scene_hash(const scene::Scene& scene) {
 // The reference image, from the cache when the same scene, camera, size, bounces and code made it.
 image::Frame reference_image(const bench::BenchScene& bench_scene, const methods::reference::PathTracer& tracer,
                              const Options& options, int bounces) {
-    const std::string key = fmt::format("{}-{:016x}-{}px-{}b-{}spp.exr", bench_scene.name, scene_hash(bench_scene.scene),
-                                        options.size, bounces, options.reference_spp);
+    const std::string key = fmt::format("{}-{:016x}-{}px-{}b-{}spp{}.exr", bench_scene.name, scene_hash(bench_scene.scene),
+                                        options.size, bounces, options.reference_spp, options.pixel_centre ? "-centre" : "");
     const fs::path path = options.cache / key;
     if (fs::exists(path)) {
         std::ifstream in(path, std::ios::binary);
@@ -98,6 +101,7 @@ image::Frame reference_image(const bench::BenchScene& bench_scene, const methods
     methods::reference::PathTracerSettings settings;
     settings.max_bounces = bounces;
     settings.seed = 20260101;
+    settings.pixel_jitter = !options.pixel_centre;
     methods::reference::Accumulator accumulator(options.size, options.size);
     // In slices, so a long reference shows progress.
     const int slice = std::max(1, options.reference_spp / 8);
@@ -218,6 +222,14 @@ void write_markdown(const fs::path& path, const std::vector<Row>& rows, const Op
     bench::splice_block(path, begin, end, md.str());
 }
 
+// A frame tone-mapped to PNG, to see what was measured.
+void write_preview(const fs::path& path, image::Frame frame) {
+    image::make_display_image(frame, {});
+    fs::create_directories(path.parent_path());
+    const auto png = image::encode_image(frame, image::ImageFormat::png);
+    std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
+}
+
 // One row of the corpus's analysis table.
 std::string analysis_row(const bench::BenchScene& bench_scene) {
     const SceneAnalysis analysis = analyze_scene(bench_scene.scene);
@@ -248,12 +260,14 @@ int main(int argc, char** argv) {
         else if (flag == "--markdown") options.markdown = arguments.value();
         else if (flag == "--scene") options.scenes.push_back(arguments.value());
         else if (flag == "--corpus") options.corpus = true;
+        else if (flag == "--pixel-centre") options.pixel_centre = true;
         else if (flag == "--previews") options.previews = arguments.value();
         else if (flag == "--detail") options.detail = std::max(1, arguments.number());
         else {
             std::fprintf(stderr,
                          "usage: quality [--size N] [--reference-spp N] [--reference-bounces N] [--repeats N]\n"
-                         "               [--scene NAME ...] [--corpus [--detail N]] [--previews DIR] [--out DIR]\n"
+                         "               [--scene NAME ...] [--corpus [--detail N]] [--pixel-centre] [--previews DIR]\n"
+                         "               [--out DIR]\n"
                          "               [--cache DIR]\n"
                          "               [--markdown FILE]\n"
                          "(--corpus: bench/corpus.hpp's scenes instead of the Cornell variants)\n"
@@ -276,14 +290,7 @@ int main(int argc, char** argv) {
             }
             methods::reference::PathTracer tracer(bench_scene.scene);
             const image::Frame truth = reference_image(bench_scene, tracer, options, options.reference_bounces);
-            if (options.previews) {
-                image::Frame preview = truth;
-                image::make_display_image(preview, {});
-                fs::create_directories(*options.previews);
-                const auto png = image::encode_image(preview, image::ImageFormat::png);
-                std::ofstream(*options.previews / (bench_scene.name + ".png"), std::ios::binary)
-                    .write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
-            }
+            if (options.previews) write_preview(*options.previews / (bench_scene.name + ".png"), truth);
             std::map<int, image::Frame> truth_by_bounces;
             auto truth_at = [&](int bounces) -> const image::Frame& {
                 if (bounces == options.reference_bounces) return truth;
@@ -307,6 +314,9 @@ int main(int argc, char** argv) {
                     std::sort(results.begin(), results.end(),
                               [](const auto& a, const auto& b) { return a.stats.render_ms < b.stats.render_ms; });
                     const RenderResult& median = results[results.size() / 2];
+                    if (options.previews && preset == "medium") {
+                        write_preview(*options.previews / fmt::format("{}-{}.png", bench_scene.name, method), median.frame);
+                    }
                     Row row;
                     row.scene = bench_scene.name;
                     row.method = method;

@@ -62,8 +62,20 @@ bool cut_out(float alpha) {
     return alpha <= unit_float(h);
 }
 
+// MASK tests the base level's alpha, as the reference does (it has no mipmaps). A mip averages a
+// cut-out's alpha, which falls below the cutoff where most texels under it are above: minified
+// foliage would lose its leaves. BLEND keeps the filtered alpha, whose average is its coverage.
+float mask_alpha(vec2 uv[2]) {
+    float alpha = u_base_color.a;
+    if (u_base_color_uv >= 0) {
+        alpha *= textureLod(u_base_color_map, texture_uv(uv, u_base_color_uv, u_base_color_uv_transform), 0.0).a;
+    }
+    return alpha;
+}
+
 // The base-colour alpha alone, for passes that need nothing else (shadow maps).
 float material_alpha(vec2 uv[2]) {
+    if (u_alpha_mode == BOUNCE_ALPHA_MASK) return mask_alpha(uv);
     float alpha = u_base_color.a;
     if (u_base_color_uv >= 0) alpha *= texture(u_base_color_map, texture_uv(uv, u_base_color_uv, u_base_color_uv_transform)).a;
     return alpha;
@@ -96,7 +108,7 @@ SurfacePoint evaluate_surface(vec3 interpolated_normal, vec4 tangent, vec2 uv[2]
     }
     s.normal = n;
     s.base_color = clamp(base.rgb, 0.0, 1.0);
-    s.alpha = base.a;
+    s.alpha = u_alpha_mode == BOUNCE_ALPHA_MASK ? mask_alpha(uv) : base.a;
     s.metallic = saturate(s.metallic);
     s.roughness = saturate(s.roughness);
     s.specular = u_specular;

@@ -250,3 +250,45 @@ TEST(AlphaMask, TheReferenceSamplesEmittersWhereTheyAreAndAsBrightAsTheyAre) {
 
 }  // namespace
 }  // namespace bounce::test
+
+namespace bounce::test {
+namespace {
+
+// A cut-out seen from afar: a square under a sun, its texture one-texel stripes (3 columns in 10
+// kept) repeated 16 times across it, seen top-down at 32x32 so that each pixel spans about 19
+// texels. Every mip above the base level averages the stripes to alpha 0.3, under the cutoff: a
+// test on filtered alpha loses the whole square. The reference tests texels, so the square stays
+// with its stripes' 30% coverage. Through pixel centres both see the same texels; the tolerance is
+// 5% of the mean, for bilinear alpha near the stripes' edges.
+TEST(AlphaMask, AMinifiedCutOutKeepsItsCoverage) {
+    scene::Scene scene;
+    scene::Texture stripes;
+    stripes.width = 20;
+    stripes.height = 1;
+    for (int x = 0; x < stripes.width; ++x) {
+        const std::uint8_t alpha = x % 10 < 3 ? 255 : 0;
+        stripes.rgba8.insert(stripes.rgba8.end(), {255, 255, 255, alpha});
+    }
+    scene.textures.push_back(stripes);
+    scene::Material cut_out = matte(glm::vec3(0.8f));
+    cut_out.base_color_texture.texture = 0;
+    cut_out.base_color_texture.uv_transform = glm::mat3(glm::vec3(16, 0, 0), glm::vec3(0, 16, 0), glm::vec3(0, 0, 1));
+    cut_out.alpha_mode = scene::AlphaMode::mask;
+    scene.materials.push_back(cut_out);
+    add_square(scene, "cut_out", glm::vec3(0.0f), 1.0f, {0, 1, 0}, 0);
+    scene.lights.push_back(directional_light({0.0f, -1.0f, 0.0f}, 2.0f));
+    scene.cameras = {top_down_camera(3.0f, 0.7f)};
+
+    constexpr int kFar = 32;
+    methods::reference::PathTracerSettings direct_only;
+    direct_only.max_bounces = 0;
+    const image::ErrorMetrics error =
+        image::compare(render_scene(scene, method_request("direct", "medium", kFar)).frame,
+                       pixel_centre_reference(scene, kFar, 4, direct_only));
+    RecordProperty("mean_ratio", std::to_string(error.mean_test / error.mean_reference));
+    EXPECT_GT(error.mean_reference, 0.0);
+    EXPECT_NEAR(error.mean_test, error.mean_reference, 0.05 * error.mean_reference);
+}
+
+}  // namespace
+}  // namespace bounce::test
