@@ -360,6 +360,7 @@ int main(int argc, char** argv) {
                 methods::reference::PathTracerSettings settings;
                 settings.max_bounces = options.reference_bounces;
                 settings.seed = 7;
+                settings.pixel_jitter = !options.pixel_centre;  // as the reference it is compared with
                 const auto rays_before = tracer.rays_traced();
                 const auto start = Clock::now();
                 const image::Frame frame = tracer.render(bench_scene.scene.cameras[0], options.size, options.size, spp, settings);
