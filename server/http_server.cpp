@@ -163,6 +163,12 @@ struct HttpServer::Exchange : std::enable_shared_from_this<Exchange> {
         response.keep_alive(false);
         response.prepare_payload();
         http::async_write(stream, response, [self = shared_from_this()](boost::system::error_code, std::size_t) {
+            // The exchange is over: it leaves the cap before the peer can see the connection end,
+            // so a client that connects again at once is never refused by its own last exchange.
+            if (self->counted) {
+                --self->server.open_exchanges_;
+                self->counted = false;
+            }
             boost::system::error_code ignored;
             self->stream.socket().shutdown(tcp::socket::shutdown_both, ignored);
         });
