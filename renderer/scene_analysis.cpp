@@ -3,6 +3,7 @@
 #include "renderer/base/error.hpp"
 #include "renderer/methods/registry.hpp"
 #include "renderer/raytrace/ray_scene.hpp"
+#include "renderer/scene/mesh_utils.hpp"
 #include "renderer/methods/reference/path_tracer.hpp"
 
 #include <glm/gtc/constants.hpp>
@@ -30,7 +31,6 @@ void check_cancelled(const std::atomic<bool>* cancelled) {
 struct WorldTriangle {
     glm::vec3 a, b, c;
     glm::vec3 normal() const { return glm::normalize(glm::cross(b - a, c - a)); }
-    double area() const { return 0.5 * glm::length(glm::cross(b - a, c - a)); }
 };
 
 WorldTriangle world_triangle(const scene::Scene& scene, std::uint32_t object, std::uint32_t primitive,
@@ -57,11 +57,10 @@ public:
             const auto& primitives = scene.meshes[static_cast<std::size_t>(object.mesh)].primitives;
             for (std::size_t p = 0; p < primitives.size(); ++p) {
                 for (std::size_t t = 0; t < primitives[p].triangle_count(); ++t) {
-                    const WorldTriangle triangle = world_triangle(scene, static_cast<std::uint32_t>(o),
-                                                                  static_cast<std::uint32_t>(p), static_cast<std::uint32_t>(t));
-                    const double area = triangle.area();
+                    const double area = scene::world_triangle_area(object.transform, primitives[p], t);
                     if (!(area > 0.0)) continue;
-                    triangles_.push_back(triangle);
+                    triangles_.push_back(world_triangle(scene, static_cast<std::uint32_t>(o), static_cast<std::uint32_t>(p),
+                                                        static_cast<std::uint32_t>(t)));
                     total_ += area;
                     cumulative_.push_back(total_);
                 }

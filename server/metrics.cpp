@@ -121,37 +121,27 @@ void Metrics::set_identity(std::string renderer, bool software, std::size_t queu
 std::string Metrics::prometheus_text() const {
     std::lock_guard lock(mutex_);
     std::string out;
+    // A metric of one unlabelled sample: its HELP, its TYPE and its value.
+    const auto scalar = [&out](std::string_view name, std::string_view type, std::string_view help, auto value) {
+        out += fmt::format("# HELP {0} {1}\n# TYPE {0} {2}\n{0} {3}\n", name, help, type, value);
+    };
     out += "# HELP bounce_build_info The daemon's version and the renderer it runs on.\n# TYPE bounce_build_info gauge\n";
     out += fmt::format("bounce_build_info{{version=\"{}\",renderer=\"{}\",software=\"{}\"}} 1\n", BOUNCE_VERSION,
                        escape_label(renderer_), software_ ? "true" : "false");
-    out += "# HELP bounce_queue_capacity Render jobs that may wait (--queue); past it requests get busy.\n"
-           "# TYPE bounce_queue_capacity gauge\n";
-    out += fmt::format("bounce_queue_capacity {}\n", queue_capacity_);
-    out += "# HELP bounce_max_clients Connections the daemon accepts (--max-clients).\n# TYPE bounce_max_clients gauge\n";
-    out += fmt::format("bounce_max_clients {}\n", max_clients_);
-    out += "# HELP bounce_gpu_memory_budget_bytes What every scene's GPU structures may hold (--gpu-memory-budget).\n"
-           "# TYPE bounce_gpu_memory_budget_bytes gauge\n";
-    out += fmt::format("bounce_gpu_memory_budget_bytes {}\n", gpu_budget_bytes_);
-    out += "# HELP bounce_gpu_resident_bytes What every scene's GPU structures hold, after the last frame.\n"
-           "# TYPE bounce_gpu_resident_bytes gauge\n";
-    out += fmt::format("bounce_gpu_resident_bytes {}\n", gpu_resident_bytes_);
-    out += "# HELP bounce_frames_total Frames rendered and sent.\n# TYPE bounce_frames_total counter\n";
-    out += fmt::format("bounce_frames_total {}\n", frames_);
+    scalar("bounce_queue_capacity", "gauge", "Render jobs that may wait (--queue); past it requests get busy.", queue_capacity_);
+    scalar("bounce_max_clients", "gauge", "Connections the daemon accepts (--max-clients).", max_clients_);
+    scalar("bounce_gpu_memory_budget_bytes", "gauge", "What every scene's GPU structures may hold (--gpu-memory-budget).", gpu_budget_bytes_);
+    scalar("bounce_gpu_resident_bytes", "gauge", "What every scene's GPU structures hold, after the last frame.", gpu_resident_bytes_);
+    scalar("bounce_frames_total", "counter", "Frames rendered and sent.", frames_);
     out += "# HELP bounce_requests_total Requests received, by message type.\n# TYPE bounce_requests_total counter\n";
     for (const auto& [type, count] : requests_) out += fmt::format("bounce_requests_total{{type=\"{}\"}} {}\n", escape_label(type), count);
     out += "# HELP bounce_errors_total Error replies, by code.\n# TYPE bounce_errors_total counter\n";
     for (const auto& [code, count] : errors_) out += fmt::format("bounce_errors_total{{code=\"{}\"}} {}\n", escape_label(code), count);
-    out += "# HELP bounce_queue_depth Jobs waiting for the render thread.\n# TYPE bounce_queue_depth gauge\n";
-    out += fmt::format("bounce_queue_depth {}\n", queue_depth_);
-    out += "# HELP bounce_connections Open client connections.\n# TYPE bounce_connections gauge\n";
-    out += fmt::format("bounce_connections {}\n", connections_);
-    out += "# HELP bounce_streams_active Open preview streams.\n# TYPE bounce_streams_active gauge\n";
-    out += fmt::format("bounce_streams_active {}\n", streams_active_);
-    out += "# HELP bounce_stream_frames_total Frames preview streams sent.\n# TYPE bounce_stream_frames_total counter\n";
-    out += fmt::format("bounce_stream_frames_total {}\n", stream_frames_);
-    out += "# HELP bounce_stream_dropped_stale_total Stream states superseded before a frame of them started.\n"
-           "# TYPE bounce_stream_dropped_stale_total counter\n";
-    out += fmt::format("bounce_stream_dropped_stale_total {}\n", stream_dropped_);
+    scalar("bounce_queue_depth", "gauge", "Jobs waiting for the render thread.", queue_depth_);
+    scalar("bounce_connections", "gauge", "Open client connections.", connections_);
+    scalar("bounce_streams_active", "gauge", "Open preview streams.", streams_active_);
+    scalar("bounce_stream_frames_total", "counter", "Frames preview streams sent.", stream_frames_);
+    scalar("bounce_stream_dropped_stale_total", "counter", "Stream states superseded before a frame of them started.", stream_dropped_);
     out += "# HELP bounce_resident_bytes GPU bytes a scene holds.\n# TYPE bounce_resident_bytes gauge\n";
     for (const auto& [scene, bytes] : resident_bytes_) {
         out += fmt::format("bounce_resident_bytes{{scene=\"{}\"}} {}\n", escape_label(scene), bytes);
