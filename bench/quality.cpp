@@ -5,6 +5,7 @@
 // bench/plot_quality.py, a plot of error against time. The isr and cssm sections of the Markdown are
 // bench/isr's and bench/cssm's; it keeps them.
 #include "bench/common.hpp"
+#include "bench/reference_cache.hpp"
 #include "bench/markdown_blocks.hpp"
 #include "bench/corpus.hpp"
 #include "bench/scenes.hpp"
@@ -61,60 +62,8 @@ struct Row {
     double rays_per_second = 0;
 };
 
-// Changes whenever the reference's results may change; part of the cache key.
-constexpr int kReferenceCacheVersion = 1;
-
-std::uint64_t scene_hash(const scene::Scene& scene) {
-    Hasher hash;
-    for (const auto& light : scene.lights) {
-        hash.add(light.type).add(light.position).add(light.direction).add(light.color).add(light.intensity);
-        hash.add(light.inner_cone).add(light.outer_cone);
-    }
-    for (const auto& material : scene.materials) {
-        hash.add(material.base_color).add(material.metallic).add(material.roughness).add(material.specular);
-        hash.add(material.emissive);
-    }
-    for (const auto& object : scene.objects) hash.add(object.transform);
-    for (const auto& camera : scene.cameras) hash.add(camera.position).add(camera.orientation).add(camera.vertical_fov);
-    hash.add(kReferenceCacheVersion);
-    return hash.value();
-}
-
-// The reference image, from the cache when the same scene, camera, size, bounces and code made it.
-image::Frame reference_image(const bench::BenchScene& bench_scene, const methods::reference::PathTracer& tracer,
-                             const Options& options, int bounces) {
-    const std::string key = fmt::format("{}-{:016x}-{}px-{}b-{}spp{}.exr", bench_scene.name, scene_hash(bench_scene.scene),
-                                        options.size, bounces, options.reference_spp, options.pixel_centre ? "-centre" : "");
-    const fs::path path = options.cache / key;
-    if (fs::exists(path)) {
-        std::ifstream in(path, std::ios::binary);
-        const std::vector<std::uint8_t> bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-        const auto decoded = image::decode_image(bytes);
-        image::Frame frame;
-        frame.width = decoded.width;
-        frame.height = decoded.height;
-        frame.rgba = decoded.pixels;
-        log::info("bench", "reference {} from the cache", key);
-        return frame;
-    }
-    const auto start = Clock::now();
-    methods::reference::PathTracerSettings settings;
-    settings.max_bounces = bounces;
-    settings.seed = 20260101;
-    settings.pixel_jitter = !options.pixel_centre;
-    methods::reference::Accumulator accumulator(options.size, options.size);
-    // In slices, so a long reference shows progress.
-    const int slice = std::max(1, options.reference_spp / 8);
-    while (accumulator.samples() < options.reference_spp) {
-        tracer.render(accumulator, bench_scene.scene.cameras[0], std::min(slice, options.reference_spp - accumulator.samples()),
-                      settings);
-        log::info("bench", "reference {} bounces={}: {}/{} spp, {:.0f} s", bench_scene.name, bounces, accumulator.samples(),
-                  options.reference_spp, ms_since(start) / 1000.0);
-    }
-    image::Frame frame = accumulator.frame();
-    fs::create_directories(options.cache);
-    image::write_file_atomic(path, image::encode_image(frame, image::ImageFormat::exr));
-    return frame;
+bench::ReferenceSpec reference_spec(const Options& options) {
+    return {options.size, options.reference_spp, options.pixel_centre, options.cache};
 }
 
 void write_csv(const fs::path& path, const std::vector<Row>& rows) {
@@ -289,14 +238,14 @@ int main(int argc, char** argv) {
                 continue;
             }
             methods::reference::PathTracer tracer(bench_scene.scene);
-            const image::Frame truth = reference_image(bench_scene, tracer, options, options.reference_bounces);
+            const image::Frame truth = bench::reference_image(bench_scene, tracer, reference_spec(options), options.reference_bounces);
             if (options.previews) write_preview(*options.previews / (bench_scene.name + ".png"), truth);
             std::map<int, image::Frame> truth_by_bounces;
             auto truth_at = [&](int bounces) -> const image::Frame& {
                 if (bounces == options.reference_bounces) return truth;
                 auto it = truth_by_bounces.find(bounces);
                 if (it == truth_by_bounces.end()) {
-                    it = truth_by_bounces.emplace(bounces, reference_image(bench_scene, tracer, options, bounces)).first;
+                    it = truth_by_bounces.emplace(bounces, bench::reference_image(bench_scene, tracer, reference_spec(options), bounces)).first;
                 }
                 return it->second;
             };

@@ -111,6 +111,9 @@ struct FrameOptions {
     double exposure = 0.0;
     CLI::Option* exposure_given = nullptr;
     std::vector<std::string> knobs;
+    double budget_ms = 0.0, target_error = 0.0;
+    CLI::Option* budget_ms_given = nullptr;
+    CLI::Option* target_error_given = nullptr;
 
     void add_to(CLI::App& command) {
         command.add_option("--scene", scene, "scene name")->required();
@@ -121,6 +124,11 @@ struct FrameOptions {
         command.add_option("--size", size, "frame size WxH");
         exposure_given = command.add_option("--exposure", exposure, "exposure in stops (PNG/JPEG)");
         command.add_option("--tone", tone, "none, reinhard or aces");
+        budget_ms_given = command.add_option("--budget-ms", budget_ms,
+                                             "plan the most accurate frame predicted within this many ms (method auto "
+                                             "unless --method names one)");
+        target_error_given = command.add_option("--target-error", target_error,
+                                                "plan the fastest frame predicted within this relMSE against the reference");
     }
 
     json body() const {
@@ -141,6 +149,15 @@ struct FrameOptions {
             values[knob.substr(0, equals)] = parse_number(knob.substr(equals + 1), "--set");
         }
         if (!values.empty()) body["knobs"] = values;
+        const bool budget_ms_set = budget_ms_given && budget_ms_given->count() > 0;
+        const bool target_error_set = target_error_given && target_error_given->count() > 0;
+        if (budget_ms_set || target_error_set) {
+            json budget = json::object();
+            if (budget_ms_set) budget["max_ms"] = budget_ms;
+            if (target_error_set) budget["max_error"] = target_error;
+            body["budget"] = budget;
+            if (method.empty()) body["method"] = "auto";
+        }
         return body;
     }
 };

@@ -12,6 +12,7 @@
 #include "renderer/image/tone.hpp"
 #include "renderer/methods/registry.hpp"
 #include "renderer/passes/tonemap_pass.hpp"
+#include "renderer/planning/costs.hpp"
 #include "renderer/scene_analysis.hpp"
 
 #include <atomic>
@@ -91,6 +92,12 @@ public:
     // What the scene needs (renderer/scene_analysis.hpp): made on the first frame that asks for it,
     // on the calling thread, and made again when the lights change (moving objects keep it).
     const SceneAnalysis& analysis();
+    // The analysis if a frame or a plan made it, without making it.
+    const SceneAnalysis* analysis_if_made() const { return analysis_ ? &*analysis_ : nullptr; }
+
+    // What this scene's frames measured, for the planner (renderer/planning/). Shared: CPU frames
+    // record into it from the CPU pool, and may outlive the resources.
+    const std::shared_ptr<planning::SceneMeasurements> measurements = std::make_shared<planning::SceneMeasurements>();
 
 private:
     friend class Renderer;

@@ -1,6 +1,7 @@
 #include "renderer/scene_analysis.hpp"
 
 #include "renderer/base/error.hpp"
+#include "renderer/image/metrics.hpp"
 #include "renderer/methods/registry.hpp"
 #include "renderer/raytrace/ray_scene.hpp"
 #include "renderer/scene/mesh_utils.hpp"
@@ -110,17 +111,36 @@ double mean_radiance(const image::Frame& frame) {
 
 BounceEnergy bounce_energy(const scene::Scene& scene, const AnalysisSettings& settings, const std::atomic<bool>* cancelled) {
     // One tracer (one acceleration structure) for every bounce count.
+    const auto build_start = std::chrono::steady_clock::now();
     const methods::reference::PathTracer tracer(scene);
+    const double tracer_build_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - build_start).count();
     const scene::Camera camera = scene.cameras.empty() ? scene::framing_camera(scene.world_bounds()) : scene.cameras.front();
+    BounceEnergy energy;
+    energy.tracer_build_ms = tracer_build_ms;
     std::vector<double> totals;  // the image's mean with 0, 1, ... bounces
+    std::vector<image::Frame> frames;
+    const double samples = static_cast<double>(settings.bounce_image_size) * settings.bounce_image_size * settings.bounce_spp;
+    {
+        // Untimed: the first render starts the worker threads, which is no sample's cost.
+        methods::reference::Accumulator warm_up(4, 4);
+        tracer.render(warm_up, camera, 1, {}, cancelled);
+    }
     for (int bounces = 0; bounces <= settings.max_bounces; ++bounces) {
         methods::reference::PathTracerSettings trace;
         trace.max_bounces = bounces;
         trace.seed = settings.seed;
+        trace.pixel_jitter = false;
         methods::reference::Accumulator accumulator(settings.bounce_image_size, settings.bounce_image_size);
+        const auto start = std::chrono::steady_clock::now();
         tracer.render(accumulator, camera, settings.bounce_spp, trace, cancelled);
-        totals.push_back(mean_radiance(accumulator.frame()));
+        energy.sample_ns.push_back(
+            std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - start).count() / samples);
+        energy.noise_per_sample.push_back(methods::reference::noise_per_sample(accumulator));
+        frames.push_back(accumulator.frame());
+        totals.push_back(mean_radiance(frames.back()));
     }
+    for (const image::Frame& frame : frames) energy.stopped_error.push_back(image::compare(frame, frames.back()).rel_mse);
     std::vector<double> added(totals.size());
     for (std::size_t k = 0; k < totals.size(); ++k) added[k] = std::max(0.0, k == 0 ? totals[0] : totals[k] - totals[k - 1]);
     // Beyond the last bounce traced the bounces fall geometrically. The ratio and the last term come
@@ -142,7 +162,6 @@ BounceEnergy bounce_energy(const scene::Scene& scene, const AnalysisSettings& se
         }
     }
     const double whole = std::accumulate(added.begin(), added.end(), 0.0) + tail;
-    BounceEnergy energy;
     for (double part : added) energy.share.push_back(whole > 0.0 ? part / whole : 0.0);
     energy.tail = whole > 0.0 ? tail / whole : 0.0;
     return energy;
@@ -327,7 +346,11 @@ IndirectVisibility indirect_visibility(const scene::Scene& scene, const raytrace
     IndirectVisibility visibility;
     if (senders.empty() || receivers.empty()) return visibility;
     const float epsilon = 1e-4f * glm::compMax(scene.world_bounds().extent());
-    int occluded = 0;
+    // Each pair weighs as much as the light it could exchange: the form factor's kernel
+    // cos cos / d^2, with d no shorter than a twentieth of the scene (a pair touching at a corner
+    // does not outweigh the room). Distant pairs are occluded most often and exchange least.
+    const float shortest = 0.05f * glm::compMax(scene.world_bounds().extent());
+    double weight = 0.0, occluded = 0.0;
     for (std::size_t i = 0; i < std::max(senders.size(), receivers.size()); ++i) {
         if (i % 256 == 0) check_cancelled(cancelled);
         const SurfacePoint& sender = senders[i % senders.size()];
@@ -337,11 +360,14 @@ IndirectVisibility indirect_visibility(const scene::Scene& scene, const raytrace
         if (!(distance > 2.0f * epsilon)) continue;
         const glm::vec3 direction = between / distance;
         // Only pairs that could exchange light: each in front of the other.
-        if (glm::dot(receiver.normal, direction) <= 0.0f || glm::dot(sender.normal, -direction) <= 0.0f) continue;
+        const float cos_receiver = glm::dot(receiver.normal, direction), cos_sender = glm::dot(sender.normal, -direction);
+        if (cos_receiver <= 0.0f || cos_sender <= 0.0f) continue;
         ++visibility.pairs;
-        if (rays.occluded(receiver.position, direction, epsilon, distance - epsilon)) ++occluded;
+        const double w = cos_receiver * cos_sender / std::max(distance * distance, shortest * shortest);
+        weight += w;
+        if (rays.occluded(receiver.position, direction, epsilon, distance - epsilon)) occluded += w;
     }
-    visibility.occluded_fraction = visibility.pairs > 0 ? static_cast<double>(occluded) / visibility.pairs : 0.0;
+    visibility.occluded_fraction = weight > 0.0 ? occluded / weight : 0.0;
     return visibility;
 }
 

@@ -17,7 +17,10 @@ json analysis_json(const SceneAnalysis& analysis) {
                          {"leaks", analysis.thin_walls.leaks(name)}};
     }
     const double thinnest = analysis.thin_walls.thinnest_separator;
-    return {{"bounces", {{"share", analysis.bounces.share}, {"tail", analysis.bounces.tail}, {"needed", needed}}},
+    const BounceEnergy& energy = analysis.bounces;
+    return {{"bounces", {{"share", energy.share}, {"tail", energy.tail}, {"needed", needed},
+                         {"stopped_error", energy.stopped_error}, {"noise_per_sample", energy.noise_per_sample},
+                         {"sample_ns", energy.sample_ns}, {"tracer_build_ms", energy.tracer_build_ms}}},
             {"thin_walls", {{"thinnest_separator_m", thinnest < 0.0 ? json() : json(thinnest)}, {"presets", presets}}},
             {"indirect_visibility", {{"pairs", analysis.visibility.pairs},
                                      {"occluded_fraction", analysis.visibility.occluded_fraction},

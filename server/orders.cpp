@@ -179,6 +179,32 @@ std::optional<CameraOrder> parse_render_view(const json& body, const std::string
     return view;
 }
 
+// `budget`: {"max_ms": T} and/or {"max_error": E}, nothing else.
+planning::Budget parse_budget(const json& body) {
+    const json& field = body["budget"];
+    if (!field.is_object()) throw FieldError("budget", "field 'budget' must be an object with max_ms and/or max_error");
+    for (const auto& [key, value] : field.items()) {
+        if (key != "max_ms" && key != "max_error") {
+            throw FieldError("budget." + key, fmt::format("budget has no field '{}': it takes max_ms and max_error", key));
+        }
+    }
+    planning::Budget budget;
+    try {
+        if (const auto ms = protocol::get_optional_number(field, "max_ms")) {
+            if (!(*ms > 0.0 && *ms <= 24.0 * 3600 * 1000)) throw FieldError("max_ms", fmt::format("field 'max_ms' is {}, outside (0, 86400000]", *ms));
+            budget.max_ms = *ms;
+        }
+        if (const auto error = protocol::get_optional_number(field, "max_error")) {
+            if (!(*error > 0.0 && *error <= 100.0)) throw FieldError("max_error", fmt::format("field 'max_error' is {}, outside (0, 100]", *error));
+            budget.max_error = *error;
+        }
+    } catch (const FieldError& error) {
+        throw FieldError("budget." + error.field, error.what());
+    }
+    if (!budget.max_ms && !budget.max_error) throw FieldError("budget", "field 'budget' needs max_ms or max_error");
+    return budget;
+}
+
 }  // namespace
 
 RenderOrder parse_render(const json& body, std::uint64_t max_pixels) {
@@ -217,6 +243,21 @@ RenderOrder parse_render(const json& body, std::uint64_t max_pixels) {
     if (const auto version = protocol::get_optional_integer(body, "min_scene_version", 0, INT64_MAX)) {
         order.min_scene_version = static_cast<std::uint64_t>(*version);
     }
+    if (body.contains("budget") && !body["budget"].is_null()) order.budget = parse_budget(body);
+    if (request.method == "auto" && !order.budget) {
+        throw FieldError("budget", "method 'auto' needs a budget: {\"max_ms\": T} or {\"max_error\": E}");
+    }
+    if (order.budget) {
+        // The planner chooses these on the render thread, from the scene.
+        for (const char* field : {"preset", "knobs"}) {
+            if (body.contains(field)) throw FieldError(field, fmt::format("a budget plans the {0}: leave out '{0}'", field));
+        }
+        const auto methods = methods::MethodRegistry::builtin().names();
+        if (request.method != "auto" && std::find(methods.begin(), methods.end(), request.method) == methods.end()) {
+            throw FieldError("method", fmt::format("unknown method '{}'", request.method));
+        }
+        return order;
+    }
     // Method, preset, knobs and size, refused here rather than queued, naming the field at fault.
     try {
         order.plan = plan_frame(request);
@@ -251,6 +292,7 @@ Order parse_order(const protocol::Message& message, std::uint64_t max_pixels) {
         case MessageType::render: return parse_render(body, max_pixels);
         case MessageType::bake: {
             BakeOrder order{parse_render(body, max_pixels)};
+            if (order.frame.budget) throw FieldError("budget", "bake takes a method and a preset, not a budget");
             if (order.frame.plan.site != FrameSite::gpu) {
                 throw FieldError("method", fmt::format("method '{}' has nothing to bake: it runs on CPU threads",
                                                        order.frame.request.method));

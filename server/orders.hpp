@@ -5,6 +5,7 @@
 #pragma once
 
 #include "protocol/protocol.hpp"
+#include "renderer/planning/planner.hpp"
 #include "renderer/renderer.hpp"
 
 #include <glm/glm.hpp>
@@ -86,6 +87,11 @@ struct RenderOrder {
     // A view for this render only: a camera of the scene by name (CameraOrder::camera), or inline
     // fields over the scene's default camera. The scene's own cameras are untouched.
     std::optional<CameraOrder> view;
+    // With a budget the planner (renderer/planning/planner.hpp) chooses the preset and knobs, and the
+    // method when it is `auto`, on the render thread: `plan` is unset until then, and `planned` then
+    // holds what the reply's `plan` says.
+    std::optional<planning::Budget> budget;
+    std::optional<nlohmann::json> planned;
 };
 struct BakeOrder {
     RenderOrder frame;

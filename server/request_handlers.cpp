@@ -1,6 +1,7 @@
 #include "server/request_handlers.hpp"
 
 #include "renderer/base/log.hpp"
+#include "renderer/planning/calibration.hpp"
 #include "renderer/image/codec.hpp"
 #include "server/daemon.hpp"
 #include "server/scene_requests.hpp"
@@ -96,6 +97,9 @@ void RequestHandlers::execute(const std::shared_ptr<Request>& request, Renderer&
     daemon_.metrics().set_queue_depth(daemon_.render_service().queue_depth());
     try {
         request->check_still_wanted();
+        if (auto* render = std::get_if<RenderOrder>(&request->order.value()); render && render->budget && !render->planned) {
+            plan_budgeted(*render, renderer, registry);  // before the visit: it changes the order
+        }
         const std::span<const std::uint8_t> attachment = request->message().attachment;
         const json reply = std::visit(
             [&](const auto& order) -> json {
@@ -128,7 +132,7 @@ void RequestHandlers::execute(const std::shared_ptr<Request>& request, Renderer&
                 } else {
                     static_assert(std::is_same_v<T, RenderOrder>);
                     if (order.plan.site == FrameSite::cpu) {
-                        render_on_cpu(request, order, registry);
+                        render_on_cpu(request, order, renderer, registry);
                     } else {
                         render_on_gpu(request, order, renderer, registry);
                     }
@@ -153,6 +157,10 @@ void RequestHandlers::render_on_gpu(const std::shared_ptr<Request>& request, con
     if (wait_for_pending_work(request, order.scene, entry, frame, renderer)) return;
     auto result = std::make_shared<const RenderResult>(renderer.render(*entry.resources, frame, request->cancelled.get()));
     clock.rendered = Clock::now();
+    if (const planning::DeviceCosts* device = known_device_costs(renderer)) {
+        planning::record_frame(*entry.resources->measurements, entry.resources->analysis_if_made(), *device, result->stats,
+                               frame.width, frame.height);
+    }
     daemon_.metrics().set_resident_bytes(order.scene, result->stats.resident_bytes);
     daemon_.metrics().set_gpu_memory(renderer.memory_budget().bytes, renderer.resident_bytes());
     deliver(request, order, std::move(result), entry.version, clock);
@@ -161,7 +169,7 @@ void RequestHandlers::render_on_gpu(const std::shared_ptr<Request>& request, con
 // On the render thread only long enough to snapshot the scene, so the trace on the CPU pool never
 // races with later mutations and never holds the render thread.
 void RequestHandlers::render_on_cpu(const std::shared_ptr<Request>& request, const RenderOrder& order,
-                                    SceneRegistry& registry) {
+                                    Renderer& renderer, SceneRegistry& registry) {
     const SceneEntry& entry = registry.get(order.scene);
     check_scene_version(entry, order);
     auto snapshot = std::make_shared<const scene::Scene>(*entry.scene);
@@ -172,7 +180,15 @@ void RequestHandlers::render_on_cpu(const std::shared_ptr<Request>& request, con
     }
     auto slot = std::make_shared<CpuSlot>(daemon_);
     const std::uint64_t version = entry.version;
-    boost::asio::post(daemon_.cpu_pool(), [this, request, order, frame, snapshot, version, slot] {
+    // What recording the frame for the planner needs, copied: the CPU pool must not read the render
+    // thread's state.
+    std::shared_ptr<planning::SceneMeasurements> measurements = entry.resources->measurements;
+    std::optional<SceneAnalysis> analysis;
+    if (const SceneAnalysis* made = entry.resources->analysis_if_made()) analysis = *made;
+    std::optional<planning::DeviceCosts> device;
+    if (const planning::DeviceCosts* known = known_device_costs(renderer)) device = *known;
+    boost::asio::post(daemon_.cpu_pool(), [this, request, order, frame, snapshot, version, slot, measurements,
+                                           analysis = std::move(analysis), device = std::move(device)] {
         const log::RequestScope scope(request->log_id);
         try {
             request->check_still_wanted();
@@ -180,6 +196,10 @@ void RequestHandlers::render_on_cpu(const std::shared_ptr<Request>& request, con
             auto result = std::make_shared<const RenderResult>(
                 bounce::render_on_cpu(*snapshot, frame, order.plan, request->cancelled.get()));
             clock.rendered = Clock::now();
+            if (device) {
+                planning::record_frame(*measurements, analysis ? &*analysis : nullptr, *device, result->stats, frame.width,
+                                       frame.height);
+            }
             deliver(request, order, std::move(result), version, clock);
         } catch (...) {
             request->fail(std::current_exception());
@@ -218,6 +238,7 @@ void RequestHandlers::deliver(const std::shared_ptr<Request>& request, const Ren
             auto bytes = image::encode_image(result->frame, format, {order.jpeg_quality, order.exr_half});
             clock.encoded = Clock::now();
             json body = frame_json(*result, scene_version, image::image_format_name(format), clock);
+            if (order.planned) body["plan"] = *order.planned;
             daemon_.metrics().count_frame(order.request.method, ms_between(clock.started, clock.rendered) / 1000.0,
                                           ms_between(clock.received, clock.encoded) / 1000.0);
             request->answer({static_cast<std::uint16_t>(MessageType::frame), request->id(), std::move(body), std::move(bytes)});
@@ -304,6 +325,36 @@ bool RequestHandlers::wait_for_pending_work(const std::shared_ptr<Request>& requ
         }
     });
     return true;
+}
+
+void RequestHandlers::plan_budgeted(RenderOrder& order, Renderer& renderer, SceneRegistry& registry) {
+    SceneEntry& entry = registry.get(order.scene);
+    const planning::DeviceCosts& device = device_costs(renderer);
+    RenderRequest& frame = order.request;
+    const std::optional<std::string> method = frame.method == "auto" ? std::nullopt : std::optional(frame.method);
+    const planning::Plan plan = planning::plan(
+        {entry.resources->analysis(), device, entry.resources->measurements.get(), frame.width, frame.height, method},
+        *order.budget);
+    frame.method = plan.chosen.method;
+    frame.preset = plan.chosen.preset;
+    frame.knobs = plan.chosen.knobs;
+    order.plan = plan_frame(frame);
+    order.planned = planning::plan_json(plan);
+}
+
+const planning::DeviceCosts& RequestHandlers::device_costs(Renderer& renderer) {
+    if (const planning::DeviceCosts* known = known_device_costs(renderer)) return *known;
+    device_costs_ = planning::load_or_calibrate(renderer, daemon_.config().cache_dir);
+    return *device_costs_;
+}
+
+const planning::DeviceCosts* RequestHandlers::known_device_costs(Renderer& renderer) {
+    if (!device_costs_ && !looked_for_cached_costs_ && daemon_.config().cache_dir) {
+        looked_for_cached_costs_ = true;
+        const std::string& name = renderer.gpu_info().renderer;
+        device_costs_ = planning::DeviceCosts::load(planning::DeviceCosts::cache_path(*daemon_.config().cache_dir, name), name);
+    }
+    return device_costs_ ? &*device_costs_ : nullptr;
 }
 
 json RequestHandlers::stats(Renderer& renderer, SceneRegistry& registry) {

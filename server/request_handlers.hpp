@@ -45,7 +45,8 @@ public:
 private:
     void render_on_gpu(const std::shared_ptr<Request>& request, const RenderOrder& order, Renderer& renderer,
                        SceneRegistry& registry);
-    void render_on_cpu(const std::shared_ptr<Request>& request, const RenderOrder& order, SceneRegistry& registry);
+    void render_on_cpu(const std::shared_ptr<Request>& request, const RenderOrder& order, Renderer& renderer,
+                       SceneRegistry& registry);
     void describe_with_analysis(const std::shared_ptr<Request>& request, const SceneNameOrder& order,
                                 SceneRegistry& registry);
     nlohmann::json bake(const std::shared_ptr<Request>& request, const BakeOrder& order, Renderer& renderer,
@@ -60,8 +61,18 @@ private:
     void deliver(const std::shared_ptr<Request>& request, const RenderOrder& order,
                  std::shared_ptr<const RenderResult> result, std::uint64_t scene_version, FrameClock clock);
 
+    // A render with a budget becomes a render of the plan the planner chooses for it.
+    void plan_budgeted(RenderOrder& order, Renderer& renderer, SceneRegistry& registry);
+    // The device's cost model: read from the cache folder, else calibrated (render thread; once).
+    const planning::DeviceCosts& device_costs(Renderer& renderer);
+    // The same if the cache had one or a plan needed it; nullptr otherwise (frames are then not
+    // recorded, since they have no line to be measured against).
+    const planning::DeviceCosts* known_device_costs(Renderer& renderer);
+
     Daemon& daemon_;
     std::map<std::string, std::shared_ptr<SharedWork>> running_work_;  // render thread only, by work key
+    std::optional<planning::DeviceCosts> device_costs_;  // render thread only
+    bool looked_for_cached_costs_ = false;
 };
 
 }  // namespace bounce::server

@@ -69,9 +69,9 @@ std::vector<Rung> build_ladder(const StreamOrder& order) {
 
 StreamOrder parse_stream(const json& fields, std::uint64_t max_pixels) {
     if (!fields.is_object()) throw FieldError("stream", "a stream's fields must be a JSON object");
-    for (const char* refused : {"min_scene_version", "timeout_ms"}) {
+    for (const char* refused : {"min_scene_version", "timeout_ms", "budget"}) {
         if (fields.contains(refused)) {
-            throw FieldError(refused, fmt::format("field '{}' is a render's, not a stream's", refused));
+            throw FieldError(refused, fmt::format("field '{}' is a render's, not a stream's (yet)", refused));
         }
     }
     json body = fields;

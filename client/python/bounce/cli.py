@@ -25,7 +25,8 @@ EXIT_OK, EXIT_FAILURE, EXIT_USAGE, EXIT_CONNECTION, EXIT_RETRYABLE = 0, 1, 2, 3,
 
 COMMANDS = """commands:
   render  --scene S [--method M] [--preset P] [--set KNOB=VALUE ...] [--size WxH]
-          [--exposure E] [--tone none|reinhard|aces] [--camera NAME] -o OUT.(png|jpg|exr)|-
+          [--exposure E] [--tone none|reinhard|aces] [--camera NAME]
+          [--budget-ms T] [--target-error E] -o OUT.(png|jpg|exr)|-   (a budget plans method auto)
   bake    --scene S [--method cssm] [--preset P] [--set KNOB=VALUE ...]   (progress on stderr)
   watch   --scene S [--method M] [--preset P] [--size WxH] [--format jpeg|png|webp]
           [--frames N] [--until-final] -o DIR   (a stream's frames; one JSON line each)
@@ -112,6 +113,8 @@ class _Parser:
         render = command("render", "render one frame to a file")
         frame_options(render)
         self.option(render, "--camera", metavar="NAME")
+        self.option(render, "--budget-ms", metavar="T")
+        self.option(render, "--target-error", metavar="E")
         self.option(render, "-o", dest="out", required=True, metavar="OUT.(png|jpg|exr)|-")
         frame_options(command("bake", "build a method's precomputed structures"))
         watch = command("watch", "stream a view: each frame to DIR, one JSON line per frame")
@@ -256,6 +259,13 @@ def _prepare(args: argparse.Namespace) -> Action:
     if command == "render":
         fmt = _format_of(args.out)
         fields = _frame_fields(args)
+        budget = {}
+        if args.budget_ms is not None:
+            budget["max_ms"] = _number(args.budget_ms, "--budget-ms")
+        if args.target_error is not None:
+            budget["max_error"] = _number(args.target_error, "--target-error")
+        if budget:
+            fields["budget"] = budget
 
         def render(target, routed):
             image, stats = target.render(args.scene, format=fmt, camera=args.camera, **fields)

@@ -135,9 +135,10 @@ def render_body(scene: str, *, method: str | None = None, preset: str | None = N
                 tone: str | None = None, camera: str | Mapping[str, Any] | None = None,
                 jpeg_quality: int | None = None,
                 exr_half: bool | None = None, min_scene_version: int | None = None,
-                timeout_ms: int | None = None) -> dict[str, Any]:
+                timeout_ms: int | None = None, budget: Mapping[str, float] | None = None) -> dict[str, Any]:
     """The JSON body of a `render` (or, without the image fields, a `bake`); None fields are left
-    out, so the daemon's defaults apply."""
+    out, so the daemon's defaults apply. `budget` ({"max_ms": T} and/or {"max_error": E}) lets the
+    daemon plan the preset and knobs, and the method when it is "auto" (the default with a budget)."""
     body: dict[str, Any] = {"scene": scene}
     _put(body, "method", method)
     _put(body, "preset", preset)
@@ -153,6 +154,9 @@ def render_body(scene: str, *, method: str | None = None, preset: str | None = N
     _put(body, "exr_half", None if exr_half is None else bool(exr_half))
     _put(body, "min_scene_version", None if min_scene_version is None else int(min_scene_version))
     _put(body, "timeout_ms", None if timeout_ms is None else int(timeout_ms))
+    if budget is not None:
+        body["budget"] = {str(name): float(value) for name, value in budget.items()}
+        body.setdefault("method", "auto")
     return body
 
 
@@ -545,17 +549,18 @@ class Client:
                tone: str | None = None, camera: str | Mapping[str, Any] | None = None, *,
                jpeg_quality: int | None = None,
                exr_half: bool | None = None, min_scene_version: int | None = None,
-               timeout_ms: int | None = None,
+               timeout_ms: int | None = None, budget: Mapping[str, float] | None = None,
                on_progress: ProgressCallback | None = None) -> tuple[bytes, dict[str, Any]]:
         """Renders one frame; returns (encoded image, stats). Fields left None take the daemon's
         defaults (method direct, preset medium, 512x512, exposure 0, tone aces). `camera` names a
         camera of the scene or is an inline view for this frame only, {"position", "look_at" or
-        "orientation", "fov_deg"}. `on_progress` receives the progress of a bake the frame needs
-        first."""
+        "orientation", "fov_deg"}. With `budget` the daemon plans the frame and the stats carry
+        `plan` (docs/protocol.md, "Budgets"). `on_progress` receives the progress of a bake the
+        frame needs first."""
         body = render_body(scene, method=method, preset=preset, knobs=knobs, width=width, height=height,
                            format=format, exposure=exposure, tone=tone, camera=camera,
                            jpeg_quality=jpeg_quality, exr_half=exr_half,
-                           min_scene_version=min_scene_version, timeout_ms=timeout_ms)
+                           min_scene_version=min_scene_version, timeout_ms=timeout_ms, budget=budget)
         reply = self.request("render", body, on_progress=on_progress)
         return reply.attachment, reply.body
 

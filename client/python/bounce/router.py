@@ -376,14 +376,14 @@ class Router:
                height: int | None = None, format: str = "png", exposure: float | None = None,
                tone: str | None = None, camera: str | None = None, *, jpeg_quality: int | None = None,
                exr_half: bool | None = None, min_scene_version: int | None = None,
-               timeout_ms: int | None = None,
+               timeout_ms: int | None = None, budget: Mapping[str, float] | None = None,
                on_progress: ProgressCallback | None = None) -> tuple[bytes, dict[str, Any]]:
         """As Client.render, on the scene's owner. After a failover the scene's version restarts
         from its reload, so a `min_scene_version` from before may no longer hold."""
         body = render_body(scene, method=method, preset=preset, knobs=knobs, width=width, height=height,
                            format=format, exposure=exposure, tone=tone, camera=camera,
                            jpeg_quality=jpeg_quality, exr_half=exr_half,
-                           min_scene_version=min_scene_version, timeout_ms=timeout_ms)
+                           min_scene_version=min_scene_version, timeout_ms=timeout_ms, budget=budget)
         reply = self._route(scene, lambda key, client: client.request("render", body, on_progress=on_progress))
         return reply.attachment, reply.body
 

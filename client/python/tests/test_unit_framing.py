@@ -202,3 +202,26 @@ class CliExitCodes(unittest.TestCase):
 
 if __name__ == "__main__":
     unittest.main()
+
+
+class Budgets(unittest.TestCase):
+    def test_the_cli_sends_a_budget_as_method_auto(self):
+        seen = []
+
+        def script(conn):
+            conn.greet()
+            request = conn.read()
+            seen.append(request.body)
+            conn.send("error", request.request_id, {"code": "not_found", "message": "no scene", "retryable": False})
+
+        with support.FakeDaemon(script) as fake:
+            cli_main(["--connect", f"127.0.0.1:{fake.port}", "render", "--scene", "s", "--budget-ms", "50",
+                      "--target-error", "0.05", "-o", "x.png"])
+        self.assertEqual(seen[0]["budget"], {"max_ms": 50.0, "max_error": 0.05})
+        self.assertEqual(seen[0]["method"], "auto")
+
+    def test_a_named_method_with_a_budget_is_kept(self):
+        from bounce.client import render_body
+        body = render_body("s", method="vct", budget={"max_error": 0.1})
+        self.assertEqual((body["method"], body["budget"]), ("vct", {"max_error": 0.1}))
+        self.assertEqual(cli_main(["render", "--scene", "s", "--budget-ms", "fast", "-o", "x.png"]), 2)

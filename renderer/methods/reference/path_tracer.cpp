@@ -513,4 +513,36 @@ image::Frame PathTracer::render(const scene::Camera& camera, int width, int heig
     return accumulator.frame();
 }
 
+double noise_per_sample(const Accumulator& accumulator) {
+    const PixelFeatures features = accumulator.features();
+    const image::Frame frame = accumulator.frame();
+    const int width = frame.width, height = frame.height;
+    if (features.variance.empty() || width == 0 || height == 0) return 0.0;
+    std::vector<float> lum(static_cast<std::size_t>(width) * height);
+    for (std::size_t i = 0; i < lum.size(); ++i) {
+        lum[i] = luminance(glm::vec3(frame.rgba[4 * i], frame.rgba[4 * i + 1], frame.rgba[4 * i + 2]));
+    }
+    // Each pixel's variance over its value squared, as relMSE weighs it; the value is the median of
+    // its 3x3 neighbourhood, not its own mean: a pixel that met a rare bright path is bright because
+    // of it, and its own mean would hide the very variance it shows.
+    double sum = 0.0;
+    float window[9];
+    for (int y = 0; y < height; ++y) {
+        for (int x = 0; x < width; ++x) {
+            int n = 0;
+            for (int dy = -1; dy <= 1; ++dy) {
+                for (int dx = -1; dx <= 1; ++dx) {
+                    const int sx = std::clamp(x + dx, 0, width - 1), sy = std::clamp(y + dy, 0, height - 1);
+                    window[n++] = lum[static_cast<std::size_t>(sy) * width + sx];
+                }
+            }
+            std::nth_element(window, window + 4, window + 9);
+            const double value = window[4];
+            const std::size_t i = static_cast<std::size_t>(y) * width + x;
+            sum += features.variance[i] * accumulator.samples() / (value * value + 0.01);
+        }
+    }
+    return sum / static_cast<double>(lum.size());
+}
+
 }  // namespace bounce::methods::reference

@@ -80,6 +80,12 @@ private:
     std::vector<float> feature_sums_;  // per pixel: albedo RGB, normal XYZ, depth, hits, luminance^2
 };
 
+// The mean over pixels of one sample's luminance variance over (luminance^2 + 0.01), the luminance
+// being the median of the pixel's 3x3 neighbourhood, as image::compare weighs errors: a frame of s
+// samples has a relMSE of about this over s (rare bright paths that the accumulated samples never
+// met are missing from it).
+double noise_per_sample(const Accumulator& accumulator);
+
 class PathTracer {
 public:
     // Builds the acceleration structures; the scene must outlive the tracer.

@@ -21,10 +21,13 @@ methods::MethodInfo method_info() {
                    "0: the indirect ray gathers direct light from every surface it crosses, unoccluded, as "
                    "instant-radiosity / RSM methods do (needs bounces = 1)"},
                   {"denoise", 0, 1, true,
-                   "1: an edge-avoiding a-trous filter guided by the first hits' albedo, normal and depth"}};
+                   "1: an edge-avoiding a-trous filter guided by the first hits' albedo, normal and depth"},
+                  {"pixel_jitter", 0, 1, true,
+                   "1: samples spread over each pixel (antialiased); 0: every camera ray through the pixel "
+                   "centre, as the raster methods shade"}};
     auto preset = [](double spp) {
         return methods::KnobValues{{"spp", spp}, {"bounces", 4}, {"seed", 1}, {"ao", 0}, {"ao_lambda", 1},
-                                   {"indirect_visibility", 1}, {"denoise", 0}};
+                                   {"indirect_visibility", 1}, {"denoise", 0}, {"pixel_jitter", 1}};
     };
     info.presets = {{"draft", preset(4)}, {"low", preset(16)}, {"medium", preset(64)}, {"high", preset(256)},
                     {"ultra", preset(1024)}};
@@ -40,6 +43,7 @@ ReferenceRequest request_from_knobs(const methods::KnobValues& knobs) {
     request.settings.ao_lambda = static_cast<float>(knobs.at("ao_lambda"));
     request.settings.indirect_visibility = knobs.at("indirect_visibility") != 0.0;
     request.denoise = knobs.at("denoise") != 0.0;
+    request.settings.pixel_jitter = knobs.at("pixel_jitter") != 0.0;
     check_settings(request.settings);  // InputError: the daemon answers with an error reply
     return request;
 }
@@ -51,6 +55,7 @@ image::Frame ReferenceMethod::render(const CpuFrameContext& frame) {
     tracer.render(accumulator, frame.camera, request.spp, request.settings, frame.cancelled);
     rays_traced_ = tracer.rays_traced();
     spp_ = request.spp;
+    noise_per_sample_ = noise_per_sample(accumulator);
     denoise_ms_ = 0.0;
     if (!request.denoise) return accumulator.frame();
     const auto start = std::chrono::steady_clock::now();
@@ -61,7 +66,7 @@ image::Frame ReferenceMethod::render(const CpuFrameContext& frame) {
 
 std::map<std::string, double> ReferenceMethod::statistics() const {
     return {{"rays_traced", static_cast<double>(rays_traced_)}, {"samples_per_pixel", static_cast<double>(spp_)},
-            {"denoise_ms", denoise_ms_}};
+            {"denoise_ms", denoise_ms_}, {"noise_per_sample", noise_per_sample_}};
 }
 
 }  // namespace bounce::methods::reference

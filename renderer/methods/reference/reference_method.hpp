@@ -30,6 +30,7 @@ private:
     std::uint64_t rays_traced_ = 0;
     int spp_ = 0;
     double denoise_ms_ = 0.0;
+    double noise_per_sample_ = 0.0;  // of the last frame, before any denoising (path_tracer.hpp)
 };
 
 }  // namespace bounce::methods::reference

@@ -1,0 +1,249 @@
+// bounce_bench_planner: whether budgets hold on the bench scenes. Per scene it renders every fixed
+// plan (each GPU method at each preset, the reference at 4 to 256 samples), measures each against
+// the reference, then plans and renders a frame for each target error and each time budget, and
+// compares: a target error E must be met, at no more than 1.5 times the time of the cheapest fixed
+// plan that meets it; a budget of T ms must be kept within 1.2 T, with error no worse than the best
+// fixed plan within T. The fixed plans' frames are recorded as the daemon records frames, so the
+// planner predicts from this scene's measured costs (and from the device's calibration for what it
+// has not measured).
+#include "bench/common.hpp"
+#include "bench/corpus.hpp"
+#include "bench/markdown_blocks.hpp"
+#include "bench/reference_cache.hpp"
+#include "renderer/base/log.hpp"
+#include "renderer/image/metrics.hpp"
+#include "renderer/planning/calibration.hpp"
+#include "renderer/planning/error_model.hpp"
+#include "renderer/planning/planner.hpp"
+#include "renderer/renderer.hpp"
+
+#include <algorithm>
+#include <fstream>
+#include <sstream>
+
+namespace fs = std::filesystem;
+using namespace bounce;
+
+namespace {
+
+struct Options {
+    int size = 128;
+    int reference_spp = 1024;
+    int reference_bounces = 8;
+    fs::path cache = "build/bench-cache";
+    fs::path out = "bench/results";
+    fs::path markdown = "docs/benchmarks.md";
+    std::vector<std::string> scenes;
+    std::vector<double> errors = {0.1, 0.05, 0.02};
+    std::vector<double> budgets_ms = {50, 200, 1000};
+    bool analysis_only = false;  // print each scene's analysis and stop
+};
+
+constexpr std::string_view kBegin = "<!-- planner: bench/planner writes it -->";
+constexpr std::string_view kEnd = "<!-- end of planner -->";
+
+struct Measured {
+    std::string label;
+    double ms = 0.0, rel_mse = 0.0;
+};
+
+struct BudgetRow {
+    std::string scene, budget, plan;
+    double predicted_ms = 0, predicted_error = 0;
+    Measured planned;
+    std::optional<Measured> fixed;  // the comparator
+    bool met = false, holds = false;
+    std::string why;
+};
+
+std::string label(const std::string& method, const std::string& preset, const methods::KnobValues& knobs) {
+    std::string text = method == "reference" ? "reference" : method + " " + preset;
+    for (const auto& [knob, value] : knobs) {
+        if (knob != "pixel_jitter") text += fmt::format(" {}={:g}", knob, value);
+    }
+    return text;
+}
+
+// Renders a plan as the daemon would (a warm frame for GPU methods), records its time in `costs`,
+// and measures it against `truth`.
+Measured render_plan(Renderer& renderer, SceneResources& resources, const scene::Scene& scene, const SceneAnalysis& analysis,
+                     const planning::DeviceCosts& device, planning::SceneMeasurements& costs, const std::string& method,
+                     const std::string& preset, const methods::KnobValues& knobs, int size, const image::Frame& truth) {
+    RenderRequest request = bench::linear_request(method, preset, knobs, size);
+    const FramePlan frame_plan = plan_frame(request);
+    RenderResult result;
+    if (frame_plan.site == FrameSite::cpu) {
+        result = render_on_cpu(scene, request, frame_plan);
+    } else {
+        renderer.render(resources, request);  // builds the structures
+        result = renderer.render(resources, request);
+    }
+    planning::record_frame(costs, &analysis, device, result.stats, size, size);
+    const double error = image::compare(result.frame, truth).rel_mse;
+    log::info("bench", "{}: {:.1f} ms, relMSE {:.4f}", label(method, preset, knobs), result.stats.render_ms, error);
+    return {label(method, preset, knobs), result.stats.render_ms, error};
+}
+
+std::vector<double> numbers(const std::string& text) {
+    std::vector<double> values;
+    std::stringstream in(text);
+    for (std::string item; std::getline(in, item, ',');) values.push_back(std::stod(item));
+    return values;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    bench::Arguments arguments(argc, argv, "bounce_bench_planner", "build/bench/bounce_bench_planner");
+    Options options;
+    while (arguments.next()) {
+        const std::string& flag = arguments.flag();
+        if (flag == "--size") options.size = arguments.number();
+        else if (flag == "--reference-spp") options.reference_spp = arguments.number();
+        else if (flag == "--reference-bounces") options.reference_bounces = arguments.number();
+        else if (flag == "--cache") options.cache = arguments.value();
+        else if (flag == "--out") options.out = arguments.value();
+        else if (flag == "--markdown") options.markdown = arguments.value();
+        else if (flag == "--scene") options.scenes.push_back(arguments.value());
+        else if (flag == "--errors") options.errors = numbers(arguments.value());
+        else if (flag == "--budgets-ms") options.budgets_ms = numbers(arguments.value());
+        else if (flag == "--analysis-only") options.analysis_only = true;
+        else {
+            std::fprintf(stderr,
+                         "usage: bounce_bench_planner [--size N] [--reference-spp N] [--reference-bounces N] [--cache DIR] "
+                         "[--scene NAME]... [--errors E,E] [--budgets-ms T,T] [--out DIR] [--markdown FILE]\n");
+            return 2;
+        }
+    }
+    try {
+        if (options.analysis_only) {
+            for (const bench::BenchScene& bench_scene : bench::corpus_scenes()) {
+                const SceneAnalysis a = analyze_scene(bench_scene.scene);
+                std::string leaks;
+                for (const auto& [preset, walls] : a.thin_walls.presets) {
+                    if (a.thin_walls.leaks(preset)) leaks += " " + preset;
+                }
+                fmt::print("{}: {:.0f} ms, stopped error {}, noise {}, sample ns {}, occluded {:.3f} ({} pairs), leaks:{}\n",
+                           bench_scene.name, a.analysis_ms, fmt::join(a.bounces.stopped_error, " "),
+                           fmt::join(a.bounces.noise_per_sample, " "), fmt::join(a.bounces.sample_ns, " "),
+                           a.visibility.occluded_fraction, a.visibility.pairs, leaks);
+            }
+            return 0;
+        }
+        Renderer renderer(gpu::DeviceChoice::resolve(std::nullopt));
+        const planning::DeviceCosts device = planning::load_or_calibrate(renderer, options.cache);
+        std::vector<BudgetRow> rows;
+        std::string analysis_md =
+            "| scene | analysis ms | stopped error at 0 / 1 / 2 / 4 bounces | reference noise per sample (4 bounces) | "
+            "occluded (weighted) | vct leaks at |\n|---|---|---|---|---|---|\n";
+        for (const bench::BenchScene& bench_scene : bench::corpus_scenes()) {
+            if (!options.scenes.empty() &&
+                std::find(options.scenes.begin(), options.scenes.end(), bench_scene.name) == options.scenes.end()) {
+                continue;
+            }
+            const scene::Scene& scene = bench_scene.scene;
+            const methods::reference::PathTracer tracer(scene);
+            const image::Frame truth = bench::reference_image(
+                bench_scene, tracer, {options.size, options.reference_spp, true, options.cache}, options.reference_bounces);
+            const SceneAnalysis analysis = analyze_scene(scene);
+            const auto& e = analysis.bounces.stopped_error;
+            std::string leaks;
+            for (const auto& [preset, walls] : analysis.thin_walls.presets) {
+                if (analysis.thin_walls.leaks(preset)) leaks += (leaks.empty() ? "" : ", ") + preset;
+            }
+            analysis_md += fmt::format("| {} | {:.0f} | {:.3f} / {:.3f} / {:.3f} / {:.3f} | {:.3f} | {:.2f} | {} |\n",
+                                       bench_scene.name, analysis.analysis_ms, e[0], e[1], e[2], e[4],
+                                       analysis.bounces.noise_per_sample[4], analysis.visibility.occluded_fraction,
+                                       leaks.empty() ? "none" : leaks);
+            auto resources = renderer.upload(scene);
+            planning::SceneMeasurements costs;
+            std::vector<Measured> fixed;
+            for (const std::string& method : methods::MethodRegistry::builtin().names()) {
+                if (method == "reference") {
+                    for (const std::string preset : {"draft", "low", "medium", "high"}) {
+                        fixed.push_back(render_plan(renderer, *resources, scene, analysis, device, costs, method, preset,
+                                                    {{"pixel_jitter", 0}}, options.size, truth));
+                        fixed.back().label = "reference " + preset;
+                    }
+                    continue;
+                }
+                for (const std::string& preset : methods::preset_names()) {
+                    fixed.push_back(render_plan(renderer, *resources, scene, analysis, device, costs, method, preset, {},
+                                                options.size, truth));
+                }
+            }
+            const planning::PlanningInputs inputs{analysis, device, &costs, options.size, options.size, std::nullopt};
+            const auto run = [&](const planning::Budget& budget, const std::string& text) {
+                const planning::Plan plan = planning::plan(inputs, budget);
+                BudgetRow row;
+                row.scene = bench_scene.name;
+                row.budget = text;
+                row.plan = label(plan.chosen.method, plan.chosen.preset, plan.chosen.knobs);
+                row.predicted_ms = plan.chosen.predicted_ms;
+                row.predicted_error = plan.chosen.predicted_error;
+                row.why = plan.why;
+                row.planned = render_plan(renderer, *resources, scene, analysis, device, costs, plan.chosen.method,
+                                          plan.chosen.preset, plan.chosen.knobs, options.size, truth);
+                return row;
+            };
+            for (const double error : options.errors) {
+                BudgetRow row = run({std::nullopt, error}, fmt::format("relMSE ≤ {:g}", error));
+                row.met = row.planned.rel_mse <= error;
+                for (const Measured& m : fixed) {
+                    if (m.rel_mse <= error && (!row.fixed || m.ms < row.fixed->ms)) row.fixed = m;
+                }
+                row.holds = row.met && (!row.fixed || row.planned.ms <= 1.5 * row.fixed->ms);
+                rows.push_back(row);
+            }
+            for (const double budget : options.budgets_ms) {
+                BudgetRow row = run({budget, std::nullopt}, fmt::format("≤ {:g} ms", budget));
+                row.met = row.planned.ms <= 1.2 * budget;
+                for (const Measured& m : fixed) {
+                    if (m.ms <= budget && (!row.fixed || m.rel_mse < row.fixed->rel_mse)) row.fixed = m;
+                }
+                row.holds = row.met && (!row.fixed || row.planned.rel_mse <= row.fixed->rel_mse);
+                rows.push_back(row);
+            }
+        }
+        fs::create_directories(options.out);
+        std::ofstream csv(options.out / "planner.csv");
+        csv << "scene,budget,plan,predicted_ms,predicted_rel_mse,measured_ms,measured_rel_mse,met,fixed_plan,fixed_ms,"
+               "fixed_rel_mse,holds\n";
+        std::string table = "| scene | budget | plan | predicted ms / relMSE | measured ms / relMSE | met | comparator: fixed plan, ms / relMSE | holds |\n"
+                            "|---|---|---|---|---|---|---|---|\n";
+        int holding = 0;
+        for (const BudgetRow& r : rows) {
+            csv << fmt::format("{},\"{}\",\"{}\",{:.2f},{:.5f},{:.2f},{:.5f},{},\"{}\",{:.2f},{:.5f},{}\n", r.scene, r.budget,
+                               r.plan, r.predicted_ms, r.predicted_error, r.planned.ms, r.planned.rel_mse, r.met,
+                               r.fixed ? r.fixed->label : "", r.fixed ? r.fixed->ms : 0.0, r.fixed ? r.fixed->rel_mse : 0.0,
+                               r.holds);
+            table += fmt::format("| {} | {} | {} | {:.0f} / {:.3f} | {:.0f} / {:.3f} | {} | {} | {} |\n", r.scene, r.budget,
+                                 r.plan, r.predicted_ms, r.predicted_error, r.planned.ms, r.planned.rel_mse,
+                                 r.met ? "yes" : "**no**",
+                                 r.fixed ? fmt::format("{}, {:.0f} / {:.3f}", r.fixed->label, r.fixed->ms, r.fixed->rel_mse)
+                                         : "none meets it",
+                                 r.holds ? "yes" : "**no**");
+            holding += r.holds ? 1 : 0;
+        }
+        std::ostringstream md;
+        md << kBegin << "\n\n## Budgets on the bench corpus (bench/planner)\n\n"
+           << "Written by `" << arguments.command() << "` on " << bench::today() << ".\n\n"
+           << "- Machine: " << bench::machine_description() << "\n- GPU: " << renderer.gpu_info().summary() << "\n"
+           << fmt::format("- Frames {0}x{0}, against the reference at {1} spp and {2} bounces through pixel centres; "
+                          "device costs calibrated in {3:.0f} ms (or read from the cache).\n",
+                          options.size, options.reference_spp, options.reference_bounces, device.calibration_ms)
+           << "- A target error holds when it is met at no more than 1.5x the time of the cheapest fixed plan "
+              "(a method at a preset, or the reference at 4 to 256 spp) that meets it; a time budget T holds when "
+              "the frame takes at most 1.2 T with error no worse than the best fixed plan within T.\n"
+           << "- The planner plans after the fixed plans' frames were recorded, as a daemon records its frames.\n\n"
+           << fmt::format("{} of {} budgets hold.\n\n", holding, rows.size()) << table
+           << "\nWhat the planner's error model reads from the scene analysis:\n\n" << analysis_md << "\n" << kEnd << "\n";
+        bench::splice_block(options.markdown, kBegin, kEnd, md.str());
+        log::info("bench", "{} of {} budgets hold; wrote {} and {}", holding, rows.size(), (options.out / "planner.csv").string(),
+                  options.markdown.string());
+        return 0;
+    } catch (const std::exception& error) {
+        std::fprintf(stderr, "planner: %s\n", error.what());
+        return 1;
+    }
+}

@@ -1,0 +1,162 @@
+#include "renderer/planning/costs.hpp"
+
+#include "renderer/base/error.hpp"
+#include "renderer/base/hash.hpp"
+#include "renderer/base/log.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <vector>
+
+namespace bounce::planning {
+namespace {
+
+using nlohmann::json;
+
+double median(std::vector<double> values) {
+    std::sort(values.begin(), values.end());
+    const std::size_t n = values.size();
+    return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+}  // namespace
+
+CostLine CostLine::through(double pixels_a, double ms_a, double pixels_b, double ms_b) {
+    CostLine line;
+    if (pixels_b != pixels_a) line.per_megapixel_ms = std::max(0.0, (ms_b - ms_a) / ((pixels_b - pixels_a) * 1e-6));
+    // The fixed part from the larger frame, so that the line passes through it when the slope was clamped.
+    const bool b_larger = pixels_b >= pixels_a;
+    line.fixed_ms = std::max(0.0, (b_larger ? ms_b : ms_a) - line.per_megapixel_ms * (b_larger ? pixels_b : pixels_a) * 1e-6);
+    return line;
+}
+
+void DeviceCosts::set(const std::string& method, const std::string& preset, CostLine line) {
+    lines_[{method, preset}] = line;
+}
+
+std::optional<CostLine> DeviceCosts::line(const std::string& method, const std::string& preset) const {
+    const auto it = lines_.find({method, preset});
+    if (it == lines_.end()) return std::nullopt;
+    return it->second;
+}
+
+json DeviceCosts::to_json() const {
+    json lines = json::array();
+    for (const auto& [key, line] : lines_) {
+        lines.push_back({{"method", key.first}, {"preset", key.second}, {"fixed_ms", line.fixed_ms},
+                         {"per_megapixel_ms", line.per_megapixel_ms}});
+    }
+    return {{"version", kVersion}, {"renderer", renderer_}, {"calibration_ms", calibration_ms}, {"lines", lines}};
+}
+
+DeviceCosts DeviceCosts::from_json(const json& document) {
+    try {
+        if (document.at("version").get<int>() != kVersion) {
+            throw Error(fmt::format("cost model version {} is not {}", document.at("version").get<int>(), kVersion));
+        }
+        DeviceCosts costs(document.at("renderer").get<std::string>());
+        costs.calibration_ms = document.value("calibration_ms", 0.0);
+        for (const json& line : document.at("lines")) {
+            const CostLine cost{line.at("fixed_ms").get<double>(), line.at("per_megapixel_ms").get<double>()};
+            if (!(cost.fixed_ms >= 0.0) || !(cost.per_megapixel_ms >= 0.0)) {
+                throw Error("a cost line is negative or not a number");
+            }
+            costs.set(line.at("method").get<std::string>(), line.at("preset").get<std::string>(), cost);
+        }
+        return costs;
+    } catch (const json::exception& error) {
+        throw Error(fmt::format("cost model: {}", error.what()));
+    }
+}
+
+std::filesystem::path DeviceCosts::cache_path(const std::filesystem::path& cache_dir, const std::string& renderer) {
+    Hasher hash;
+    hash.add_string(renderer);
+    return cache_dir / "cost-model" / fmt::format("{:016x}-v{}.json", hash.value(), kVersion);
+}
+
+std::optional<DeviceCosts> DeviceCosts::load(const std::filesystem::path& file, const std::string& renderer) {
+    std::ifstream in(file);
+    if (!in) return std::nullopt;
+    try {
+        DeviceCosts costs = from_json(json::parse(in));
+        if (costs.renderer() != renderer) {
+            log::info("planner", "cost model {} is for '{}', not '{}': calibrating anew", file.string(), costs.renderer(), renderer);
+            return std::nullopt;
+        }
+        return costs;
+    } catch (const std::exception& error) {
+        log::warn("planner", "cost model {} is unreadable ({}): calibrating anew", file.string(), error.what());
+        return std::nullopt;
+    }
+}
+
+void DeviceCosts::save(const std::filesystem::path& file) const {
+    std::filesystem::create_directories(file.parent_path());
+    const std::filesystem::path temporary = file.string() + ".tmp";
+    {
+        std::ofstream out(temporary);
+        out << to_json().dump(2) << '\n';
+        if (!out) throw Error(fmt::format("cannot write the cost model to {}", temporary.string()));
+    }
+    std::filesystem::rename(temporary, file);
+}
+
+void SceneMeasurements::record(const std::string& method, const std::string& preset, int bounces, double measured_ms,
+                               double predicted_ms) {
+    if (!(predicted_ms > 0.0) || !(measured_ms >= 0.0)) return;
+    const std::lock_guard lock(mutex_);
+    auto& kept = ratios_[{method, preset, bounces}];
+    kept.push_back(measured_ms / predicted_ms);
+    if (kept.size() > kKept) kept.pop_front();
+}
+
+std::optional<double> SceneMeasurements::ratio(const std::string& method, const std::string& preset, int bounces,
+                                               bool* exact) const {
+    const std::lock_guard lock(mutex_);
+    if (exact) *exact = false;
+    if (const auto it = ratios_.find({method, preset, bounces}); it != ratios_.end() && !it->second.empty()) {
+        if (exact) *exact = true;
+        return median({it->second.begin(), it->second.end()});
+    }
+    for (const bool same_preset : {true, false}) {
+        std::vector<double> others;
+        for (const auto& [key, kept] : ratios_) {
+            if (std::get<0>(key) == method && (!same_preset || std::get<1>(key) == preset) && !kept.empty()) {
+                others.push_back(median({kept.begin(), kept.end()}));
+            }
+        }
+        if (!others.empty()) return median(others);
+    }
+    return std::nullopt;
+}
+
+std::optional<double> SceneMeasurements::scene_ratio() const {
+    const std::lock_guard lock(mutex_);
+    std::vector<double> all;
+    for (const auto& [key, kept] : ratios_) {
+        if (!kept.empty()) all.push_back(median({kept.begin(), kept.end()}));
+    }
+    if (all.empty()) return std::nullopt;
+    return median(all);
+}
+
+void SceneMeasurements::record_noise(int bounces, double noise_ratio) {
+    if (!(noise_ratio >= 0.0) || !std::isfinite(noise_ratio)) return;
+    const std::lock_guard lock(mutex_);
+    double& kept = noise_[bounces];
+    kept = std::max(kept, noise_ratio);
+}
+
+std::optional<double> SceneMeasurements::noise_ratio(int bounces) const {
+    const std::lock_guard lock(mutex_);
+    const auto above = noise_.lower_bound(bounces);
+    if (above != noise_.end() && above->first == bounces) return above->second;
+    if (above == noise_.begin()) return above == noise_.end() ? std::nullopt : std::optional(above->second);
+    const auto below = std::prev(above);
+    if (above == noise_.end() || bounces - below->first < above->first - bounces) return below->second;
+    return above->second;
+}
+
+}  // namespace bounce::planning

@@ -1,0 +1,91 @@
+// What frames cost on this device, for the planner (planner.hpp): per GPU method and preset, a line
+// of milliseconds against pixels, measured once on the built-in Cornell box (calibration.hpp) and
+// kept in the cache folder under the renderer's name; and per scene, how its measured frames
+// compare with that line, since a scene's size and light change what each method costs.
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include <deque>
+#include <filesystem>
+#include <map>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <tuple>
+#include <utility>
+#include <algorithm>
+
+namespace bounce::planning {
+
+struct CostLine {
+    double fixed_ms = 0.0;
+    double per_megapixel_ms = 0.0;
+    double at(double pixels) const { return fixed_ms + per_megapixel_ms * pixels * 1e-6; }
+    // The line through two measured frames, neither part below zero.
+    static CostLine through(double pixels_a, double ms_a, double pixels_b, double ms_b);
+};
+
+class DeviceCosts {
+public:
+    // Bumped whenever methods change what a preset costs: cached models of older versions are dropped.
+    static constexpr int kVersion = 2;
+
+    DeviceCosts() = default;
+    explicit DeviceCosts(std::string renderer) : renderer_(std::move(renderer)) {}
+
+    const std::string& renderer() const { return renderer_; }
+    double calibration_ms = 0.0;  // how long the calibration took
+
+    void set(const std::string& method, const std::string& preset, CostLine line);
+    std::optional<CostLine> line(const std::string& method, const std::string& preset) const;
+    bool empty() const { return lines_.empty(); }
+
+    nlohmann::json to_json() const;
+    // Throws Error naming what is wrong with the document.
+    static DeviceCosts from_json(const nlohmann::json& document);
+
+    // The file a model is cached in under `cache_dir`, named by the renderer string's hash.
+    static std::filesystem::path cache_path(const std::filesystem::path& cache_dir, const std::string& renderer);
+    // nullopt (and a log line) when the file is absent, unreadable, of another version or renderer.
+    static std::optional<DeviceCosts> load(const std::filesystem::path& file, const std::string& renderer);
+    // Writes a temporary file and renames it over `file`, so a reader never sees half of it.
+    void save(const std::filesystem::path& file) const;
+
+private:
+    std::string renderer_;
+    std::map<std::pair<std::string, std::string>, CostLine> lines_;
+};
+
+// What frames of one scene measured: their times, as ratios to what the device's lines predicted,
+// and the reference's noise. Thread-safe: GPU frames are recorded on the render thread, CPU frames
+// on the CPU pool.
+class SceneMeasurements {
+public:
+    // `bounces`: the frame's `bounces` knob, or -1 for methods without one.
+    void record(const std::string& method, const std::string& preset, int bounces, double measured_ms, double predicted_ms);
+    // The median of the last frames at this preset and bounce count; else at this preset; else of
+    // the method's other presets; nullopt when no frame of the method was measured on the scene.
+    // `exact`, when given, says whether frames at this preset and bounce count were measured.
+    std::optional<double> ratio(const std::string& method, const std::string& preset, int bounces = -1,
+                                bool* exact = nullptr) const;
+    // The median over every method measured here: how much heavier the scene is than the
+    // calibration scene, for methods not yet measured on it. nullopt when nothing was.
+    std::optional<double> scene_ratio() const;
+
+    // A reference frame's noise per sample (methods::reference::noise_per_sample) at a bounce count,
+    // as a multiple of what the analysis measured there: over a whole frame's samples it meets rare
+    // bright paths that the analysis' few samples miss.
+    void record_noise(int bounces, double noise_ratio);
+    // The largest ratio recorded at the nearest bounce count (the higher of two as near); nullopt when none.
+    std::optional<double> noise_ratio(int bounces) const;
+
+    static constexpr std::size_t kKept = 5;  // frames kept per preset: a median of them ignores one slow frame
+
+private:
+    mutable std::mutex mutex_;
+    std::map<std::tuple<std::string, std::string, int>, std::deque<double>> ratios_;
+    std::map<int, double> noise_;
+};
+
+}  // namespace bounce::planning

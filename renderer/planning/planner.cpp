@@ -1,0 +1,206 @@
+#include "renderer/planning/planner.hpp"
+
+#include "renderer/base/error.hpp"
+#include "renderer/methods/registry.hpp"
+#include "renderer/planning/error_model.hpp"
+
+#include <algorithm>
+#include <limits>
+
+namespace bounce::planning {
+namespace {
+
+// The reference's plans: sample counts and bounce counts it is offered at.
+// Steps of about 1.5, so that a plan meets a target error with at most that much time to spare.
+constexpr int kReferenceSpp[] = {1,  2,  3,  4,   6,   8,   12,  16,  24,  32,   48,   64,   96,  128,
+                                 192, 256, 384, 512, 768, 1024, 1536, 2048, 3072, 4096};
+constexpr int kReferenceBounces[] = {0, 1, 2, 3, 4, 6, 8, 12};
+// cssm's bounce counts (its `bounces` knob).
+constexpr int kCssmBounces[] = {1, 2, 3, 4, 6, 8};
+
+std::string describe(const Candidate& candidate) {
+    std::string text = candidate.method == "reference" ? "reference" : candidate.method + " " + candidate.preset;
+    for (const auto& [knob, value] : candidate.knobs) {
+        if (knob == "pixel_jitter") continue;
+        text += fmt::format(" {}={:g}", knob, value);
+    }
+    return text;
+}
+
+std::optional<int> bounces_knob(const methods::KnobValues& knobs) {
+    const auto it = knobs.find("bounces");
+    if (it == knobs.end()) return std::nullopt;
+    return static_cast<int>(it->second);
+}
+
+bool faster(const Candidate& a, const Candidate& b) {
+    return a.predicted_ms != b.predicted_ms ? a.predicted_ms < b.predicted_ms : a.predicted_error < b.predicted_error;
+}
+bool more_accurate(const Candidate& a, const Candidate& b) {
+    return a.predicted_error != b.predicted_error ? a.predicted_error < b.predicted_error : a.predicted_ms < b.predicted_ms;
+}
+
+}  // namespace
+
+Plan choose(const std::vector<Candidate>& candidates, const Budget& budget) {
+    if (candidates.empty()) throw InputError("no plan to choose from");
+    if (!budget.max_ms && !budget.max_error) throw InputError("a budget needs max_ms or max_error");
+    const auto within_time = [&](const Candidate& c) { return !budget.max_ms || c.predicted_ms <= *budget.max_ms; };
+    const auto within_error = [&](const Candidate& c) { return !budget.max_error || c.predicted_error <= *budget.max_error; };
+    const Candidate* best = nullptr;
+    for (const Candidate& c : candidates) {
+        if (within_time(c) && within_error(c) && (!best || (budget.max_error ? faster(c, *best) : more_accurate(c, *best)))) best = &c;
+    }
+    Plan plan;
+    plan.considered = static_cast<int>(candidates.size());
+    const std::string error_text = budget.max_error ? fmt::format("relMSE {:g}", *budget.max_error) : "";
+    const std::string time_text = budget.max_ms ? fmt::format("{:g} ms", *budget.max_ms) : "";
+    if (best) {
+        plan.meets_budget = true;
+        plan.chosen = *best;
+        plan.why = budget.max_error
+                       ? fmt::format("the fastest of {} plans predicted within {}{}", plan.considered, error_text,
+                                     budget.max_ms ? " and " + time_text : "")
+                       : fmt::format("the most accurate of {} plans predicted within {}", plan.considered, time_text);
+    } else if (budget.max_ms && std::any_of(candidates.begin(), candidates.end(), within_time)) {
+        for (const Candidate& c : candidates) {
+            if (within_time(c) && (!best || more_accurate(c, *best))) best = &c;
+        }
+        plan.chosen = *best;
+        plan.why = fmt::format("no plan is predicted within both {} and {}: the most accurate within {}", error_text,
+                               time_text, time_text);
+    } else if (budget.max_ms) {
+        plan.chosen = *std::min_element(candidates.begin(), candidates.end(), faster);
+        plan.why = fmt::format("no plan is predicted within {}: the fastest", time_text);
+    } else {
+        plan.chosen = *std::min_element(candidates.begin(), candidates.end(), more_accurate);
+        plan.why = fmt::format("no plan is predicted within {}: the most accurate", error_text);
+    }
+    plan.why += fmt::format(", {}: {:.1f} ms ({}), relMSE {:.3f} ({})", describe(plan.chosen), plan.chosen.predicted_ms,
+                            plan.chosen.cost_basis, plan.chosen.predicted_error, plan.chosen.error_basis);
+    return plan;
+}
+
+std::optional<double> baseline_ms(const SceneAnalysis* analysis, const DeviceCosts& device, const std::string& method,
+                                  const std::string& preset, const methods::KnobValues& knobs, int width, int height) {
+    const double pixels = static_cast<double>(width) * height;
+    if (method == "reference") {
+        if (!analysis || analysis->bounces.sample_ns.empty()) return std::nullopt;
+        const auto& ns = analysis->bounces.sample_ns;
+        const int bounces = std::clamp(modelled_bounces(method, knobs), 0, static_cast<int>(ns.size()) - 1);
+        const double spp = knobs.count("spp") ? knobs.at("spp") : 1.0;
+        return analysis->bounces.tracer_build_ms + ns[static_cast<std::size_t>(bounces)] * 1e-6 * pixels * spp;
+    }
+    const auto line = device.line(method, preset);
+    if (!line) return std::nullopt;
+    return line->at(pixels);
+}
+
+double predicted_ms(const PlanningInputs& inputs, const std::string& method, const std::string& preset,
+                    const methods::KnobValues& knobs, std::string* basis) {
+    const auto base = baseline_ms(&inputs.analysis, inputs.device, method, preset, knobs, inputs.width, inputs.height);
+    if (!base) return std::numeric_limits<double>::infinity();
+    std::optional<double> ratio, scene_ratio;
+    bool exact = false;
+    if (inputs.scene) {
+        ratio = inputs.scene->ratio(method, preset, bounces_knob(knobs).value_or(-1), &exact);
+        if (!ratio) scene_ratio = inputs.scene->scene_ratio();
+    }
+    // The device's lines are of the presets' own bounce counts (one for cssm). More bounces than a
+    // preset's own, not yet measured on the scene, are priced as repeating the first: an upper
+    // bound, since a bounce repeats the gather and shares the rest (bench: at most 4x for 8).
+    double bounce_factor = 1.0;
+    if (method != "reference" && !exact) {
+        const auto& presets = methods::MethodRegistry::builtin().find(method).presets;
+        const auto own = presets.find(preset);
+        const auto requested = bounces_knob(knobs);
+        if (requested && own != presets.end() && own->second.count("bounces")) {
+            bounce_factor = std::max(1.0, *requested / std::max(1.0, own->second.at("bounces")));
+        }
+    }
+    const std::string source = method == "reference" ? "the analysis' times" : "the device's calibration";
+    if (basis) {
+        *basis = ratio         ? fmt::format("{} x {:.2f} measured on this scene", source, *ratio)
+                 : scene_ratio ? fmt::format("{} x {:.2f}, this scene's ratio over other methods", source, *scene_ratio)
+                               : source;
+        if (bounce_factor > 1.0) *basis += fmt::format(", x {:g} for bounces not yet measured", bounce_factor);
+    }
+    return *base * ratio.value_or(scene_ratio.value_or(1.0)) * bounce_factor;
+}
+
+std::vector<Candidate> candidates(const PlanningInputs& inputs, std::vector<std::string>* ruled_out) {
+    const auto& registry = methods::MethodRegistry::builtin();
+    std::vector<Candidate> all;
+    const auto add = [&](const std::string& method, const std::string& preset, methods::KnobValues knobs) {
+        Candidate candidate{method, preset, std::move(knobs), 0.0, 0.0, {}, {}};
+        ErrorPrediction error = predict_error(inputs.analysis, method, preset, candidate.knobs, inputs.scene);
+        if (error.ruled_out) {
+            if (ruled_out) ruled_out->push_back(fmt::format("{} {}: {}", method, preset, *error.ruled_out));
+            return;
+        }
+        candidate.predicted_error = error.rel_mse;
+        candidate.error_basis = std::move(error.basis);
+        candidate.predicted_ms = predicted_ms(inputs, method, preset, candidate.knobs, &candidate.cost_basis);
+        if (std::isfinite(candidate.predicted_ms)) all.push_back(std::move(candidate));
+    };
+    for (const std::string& method : registry.names()) {
+        if (inputs.method && *inputs.method != method) continue;
+        if (method == "reference") {
+            for (const int bounces : kReferenceBounces) {
+                for (const int spp : kReferenceSpp) {
+                    add(method, "medium", {{"spp", spp}, {"bounces", bounces}, {"pixel_jitter", 0}});
+                }
+            }
+            continue;
+        }
+        for (const std::string& preset : methods::preset_names()) {
+            if (method == "cssm") {
+                for (const int bounces : kCssmBounces) add(method, preset, {{"bounces", bounces}});
+            } else {
+                add(method, preset, {});
+            }
+        }
+    }
+    return all;
+}
+
+Plan plan(const PlanningInputs& inputs, const Budget& budget) {
+    std::vector<std::string> ruled_out;
+    const std::vector<Candidate> all = candidates(inputs, &ruled_out);
+    if (all.empty()) {
+        throw InputError(fmt::format("no plan can be predicted for {}: {}", inputs.method.value_or("any method"),
+                                     ruled_out.empty() ? "no cost is known" : fmt::format("{}", fmt::join(ruled_out, "; "))));
+    }
+    Plan chosen = choose(all, budget);
+    chosen.ruled_out = std::move(ruled_out);
+    return chosen;
+}
+
+void record_frame(SceneMeasurements& measurements, const SceneAnalysis* analysis, const DeviceCosts& device,
+                  const FrameStats& stats, int width, int height) {
+    if (const auto baseline = baseline_ms(analysis, device, stats.method, stats.preset, stats.knobs, width, height)) {
+        measurements.record(stats.method, stats.preset, bounces_knob(stats.knobs).value_or(-1), stats.render_ms, *baseline);
+    }
+    const auto noise = stats.method_statistics.find("noise_per_sample");
+    const auto spp = stats.knobs.find("spp");
+    if (noise != stats.method_statistics.end() && spp != stats.knobs.end() && spp->second >= 4 && analysis) {
+        const int bounces = modelled_bounces(stats.method, stats.knobs);
+        const auto& analysed = analysis->bounces.noise_per_sample;
+        const std::size_t at = static_cast<std::size_t>(std::clamp(bounces, 0, static_cast<int>(analysed.size()) - 1));
+        if (!analysed.empty() && analysed[at] > 0.0) measurements.record_noise(bounces, noise->second / analysed[at]);
+    }
+}
+
+nlohmann::json plan_json(const Plan& plan) {
+    return {{"method", plan.chosen.method},
+            {"preset", plan.chosen.preset},
+            {"knobs", plan.chosen.knobs},
+            {"predicted_ms", plan.chosen.predicted_ms},
+            {"predicted_error", plan.chosen.predicted_error},
+            {"meets_budget", plan.meets_budget},
+            {"considered", plan.considered},
+            {"ruled_out", plan.ruled_out},
+            {"why", plan.why}};
+}
+
+}  // namespace bounce::planning

@@ -1,0 +1,85 @@
+// The planner behind `budget` and method `auto`: from the device's costs (costs.hpp), the scene's
+// measured frames and its analysis (error_model.hpp), it lists every plan it can predict, a method
+// with a preset and knobs, and chooses one for a budget:
+//
+//   max_error E: the fastest plan predicted at or under E;
+//   max_ms T:    the most accurate plan predicted within T;
+//   both:        the fastest meeting both, else the most accurate within T.
+//
+// When no plan meets the budget it says so and takes the nearest: the most accurate (for E) or
+// the fastest (for T). Predicted times are of a frame whose structures are built (a warm frame).
+#pragma once
+
+#include "renderer/methods/knobs.hpp"
+#include "renderer/planning/costs.hpp"
+#include "renderer/renderer.hpp"
+#include "renderer/scene_analysis.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace bounce::planning {
+
+struct Budget {
+    std::optional<double> max_ms;
+    std::optional<double> max_error;  // relMSE against the reference
+};
+
+struct Candidate {
+    std::string method;
+    std::string preset;
+    methods::KnobValues knobs;  // over the preset's
+    double predicted_ms = 0.0;
+    double predicted_error = 0.0;
+    std::string cost_basis, error_basis;
+};
+
+struct Plan {
+    Candidate chosen;
+    bool meets_budget = false;
+    std::string why;
+    int considered = 0;           // plans predicted
+    std::vector<std::string> ruled_out;  // "method preset: reason", one per rule
+};
+
+// Chooses among predicted plans (a pure function: the planner's unit tests call it on tables).
+// Throws InputError when `candidates` is empty or the budget names neither limit.
+Plan choose(const std::vector<Candidate>& candidates, const Budget& budget);
+
+struct PlanningInputs {
+    const SceneAnalysis& analysis;
+    const DeviceCosts& device;
+    const SceneMeasurements* scene = nullptr;  // measured frames of this scene, when any
+    int width = 0, height = 0;
+    std::optional<std::string> method;  // plan within this method only
+};
+
+// Every plan the planner predicts for a frame, with those the analysis rules out left out (and
+// named in `ruled_out`).
+std::vector<Candidate> candidates(const PlanningInputs& inputs, std::vector<std::string>* ruled_out = nullptr);
+
+// candidates() then choose().
+Plan plan(const PlanningInputs& inputs, const Budget& budget);
+
+// The device line for a preset times the scene's measured ratio (the method's, else the scene's
+// over every method, else 1); for the reference, the analysis' time to build the tracer and per
+// sample times the samples.
+double predicted_ms(const PlanningInputs& inputs, const std::string& method, const std::string& preset,
+                    const methods::KnobValues& knobs, std::string* basis = nullptr);
+
+// The cost line a frame is measured against when recorded in SceneMeasurements (its ratio's denominator):
+// the device line, or the analysis' time per sample for the reference. nullopt when neither applies.
+std::optional<double> baseline_ms(const SceneAnalysis* analysis, const DeviceCosts& device, const std::string& method,
+                                  const std::string& preset, const methods::KnobValues& knobs, int width, int height);
+
+// Records a rendered frame in the scene's measurements: its time against baseline_ms(), and for
+// reference frames of at least 4 samples, their noise per sample.
+void record_frame(SceneMeasurements& measurements, const SceneAnalysis* analysis, const DeviceCosts& device,
+                  const FrameStats& stats, int width, int height);
+
+nlohmann::json plan_json(const Plan& plan);
+
+}  // namespace bounce::planning

@@ -1,0 +1,94 @@
+// Budgets through the daemon: a render with `budget` (and method `auto`) comes back with its plan,
+// its frame is the plan's, later plans use the frames measured meanwhile, and every malformed
+// budget is refused naming its field.
+//
+// The test writes the device's cost model into the daemon's cache folder, under the renderer the
+// daemon announces, before the first frame: the daemon reads it instead of calibrating (half a
+// minute on llvmpipe), and the made-up lines decide what is cheapest.
+#include "daemon_support.hpp"
+#include "renderer/planning/costs.hpp"
+
+#include <unistd.h>
+
+namespace bounce::test {
+namespace {
+
+struct BudgetDaemon {
+    std::filesystem::path cache = std::filesystem::temp_directory_path() / ("bounce-budget-" + std::to_string(::getpid()));
+    DaemonProcess daemon{{"--cache-dir", cache.string()}};
+    Client client{daemon.endpoint()};
+
+    BudgetDaemon() {
+        planning::DeviceCosts costs(client.hello()["renderer"].get<std::string>());
+        for (const char* preset : {"draft", "low", "medium", "high", "ultra"}) {
+            costs.set("direct", preset, {1.0, 0.0});
+            costs.set("vct", preset, {50.0, 0.0});
+            costs.set("isr", preset, {80.0, 0.0});
+            costs.set("cssm", preset, {100.0, 0.0});
+        }
+        costs.save(planning::DeviceCosts::cache_path(cache, costs.renderer()));
+    }
+    ~BudgetDaemon() { std::filesystem::remove_all(cache); }
+
+    protocol::Message render(json body) {
+        body["scene"] = "cornell";
+        body["width"] = 48;
+        body["height"] = 48;
+        body["format"] = "exr";
+        return client.request(MessageType::render, body);
+    }
+};
+
+TEST(Budget, AnAutoRenderCarriesItsPlanAndKeepsThePredictedTime) {
+    BudgetDaemon d;
+    const auto reply = d.render({{"method", "auto"}, {"budget", {{"max_ms", 60.0}}}});
+    const json& plan = reply.body["plan"];
+    ASSERT_TRUE(plan.is_object()) << reply.body.dump();
+    EXPECT_TRUE(plan["meets_budget"].get<bool>()) << plan.dump();
+    EXPECT_LE(plan["predicted_ms"].get<double>(), 60.0) << plan.dump();
+    EXPECT_GT(plan["considered"].get<int>(), 20);
+    EXPECT_FALSE(plan["why"].get<std::string>().empty());
+    // The frame is the plan's.
+    EXPECT_EQ(reply.body["method"], plan["method"]);
+    EXPECT_EQ(reply.body["preset"], plan["preset"]);
+    for (const auto& [knob, value] : plan["knobs"].items()) EXPECT_EQ(reply.body["knobs"][knob], value) << knob;
+    EXPECT_EQ(image::decode_image(reply.attachment).width, 48);
+}
+
+TEST(Budget, AMethodWithABudgetPlansWithinItAndLearnsFromItsFrames) {
+    BudgetDaemon d;
+    const auto first = d.render({{"method", "vct"}, {"budget", {{"max_error", 0.5}}}});
+    EXPECT_EQ(first.body["plan"]["method"], "vct");
+    EXPECT_EQ(first.body["plan"]["why"].get<std::string>().find("measured on this scene"), std::string::npos);
+    // Two more frames: their median, not a first frame that built the octree, is the scene's cost.
+    d.render({{"method", "vct"}, {"budget", {{"max_error", 0.5}}}});
+    const auto third = d.render({{"method", "vct"}, {"budget", {{"max_error", 0.5}}}});
+    EXPECT_NE(third.body["plan"]["why"].get<std::string>().find("measured on this scene"), std::string::npos)
+        << third.body["plan"].dump();
+}
+
+TEST(Budget, MalformedBudgetsAreRefusedNamingTheField) {
+    BudgetDaemon d;
+    const auto refused = [&](json body, const std::string& field) {
+        expect_error([&] { d.render(body); }, ErrorCode::bad_request, field);
+    };
+    refused({{"method", "auto"}}, "budget");
+    refused({{"method", "auto"}, {"budget", json::object()}}, "budget");
+    refused({{"method", "auto"}, {"budget", 5}}, "budget");
+    refused({{"method", "auto"}, {"budget", {{"max_ms", -1}}}}, "budget.max_ms");
+    refused({{"method", "auto"}, {"budget", {{"max_ms", "fast"}}}}, "budget.max_ms");
+    refused({{"method", "auto"}, {"budget", {{"max_error", 0}}}}, "budget.max_error");
+    refused({{"method", "auto"}, {"budget", {{"max_ms", 10}, {"speed", 1}}}}, "budget.speed");
+    refused({{"method", "auto"}, {"budget", {{"max_ms", 10}}}, {"preset", "high"}}, "preset");
+    refused({{"method", "vct"}, {"budget", {{"max_ms", 10}}}, {"knobs", {{"resolution", 64}}}}, "knobs");
+    refused({{"method", "nope"}, {"budget", {{"max_ms", 10}}}}, "method");
+    expect_error([&] { d.client.request(MessageType::bake, {{"scene", "cornell"}, {"method", "auto"}, {"budget", {{"max_ms", 10}}}}); },
+                 ErrorCode::bad_request, "budget");
+    expect_error([&] { d.client.request(MessageType::stream_start, {{"scene", "cornell"}, {"budget", {{"max_ms", 10}}}}); },
+                 ErrorCode::bad_request, "budget");
+    // And the daemon still serves.
+    EXPECT_EQ(d.render({{"method", "direct"}}).body["method"], "direct");
+}
+
+}  // namespace
+}  // namespace bounce::test

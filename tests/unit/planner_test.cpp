@@ -1,0 +1,246 @@
+// The planner on tables: for a target error it picks the cheapest plan predicted to meet it, for a
+// time budget never one predicted over it (checked on random tables against every candidate), and
+// it says so when nothing fits. The error model's arithmetic, the cost lines, the cache file and the
+// scene's measured ratios.
+#include "renderer/base/error.hpp"
+#include "renderer/planning/costs.hpp"
+#include "renderer/planning/error_model.hpp"
+#include "renderer/planning/planner.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+namespace bounce::planning {
+namespace {
+
+Candidate plan_of(std::string method, double ms, double error) {
+    return {std::move(method), "medium", {}, ms, error, "table", "table"};
+}
+
+std::vector<Candidate> random_table(std::mt19937& random) {
+    std::uniform_real_distribution<double> log_ms(0.0, 4.0), log_error(-3.0, 0.0);
+    std::vector<Candidate> table(1 + random() % 40);
+    for (std::size_t i = 0; i < table.size(); ++i) {
+        table[i] = plan_of("plan" + std::to_string(i), std::pow(10.0, log_ms(random)), std::pow(10.0, log_error(random)));
+    }
+    return table;
+}
+
+TEST(Planner, ForATargetErrorItPicksTheCheapestPlanPredictedToMeetIt) {
+    std::mt19937 random(7);
+    int met = 0, unmet = 0;
+    for (int trial = 0; trial < 2000; ++trial) {
+        const std::vector<Candidate> table = random_table(random);
+        const double target = std::pow(10.0, std::uniform_real_distribution<double>(-3.0, 0.0)(random));
+        const Plan plan = choose(table, {std::nullopt, target});
+        bool any = false;
+        for (const Candidate& c : table) {
+            if (c.predicted_error > target) continue;
+            any = true;
+            EXPECT_GE(c.predicted_ms, plan.chosen.predicted_ms) << c.method << " is cheaper and meets " << target;
+        }
+        EXPECT_EQ(plan.meets_budget, any);
+        if (any) {
+            ++met;
+            EXPECT_LE(plan.chosen.predicted_error, target);
+        } else {
+            ++unmet;
+            // Nothing meets it: the most accurate, and the reply says so.
+            for (const Candidate& c : table) EXPECT_GE(c.predicted_error, plan.chosen.predicted_error);
+            EXPECT_NE(plan.why.find("no plan is predicted within"), std::string::npos) << plan.why;
+        }
+    }
+    EXPECT_GT(met, 100);  // both branches were exercised
+    EXPECT_GT(unmet, 100);
+}
+
+TEST(Planner, ForATimeBudgetItNeverPicksAPlanPredictedOverIt) {
+    std::mt19937 random(11);
+    int met = 0, unmet = 0;
+    for (int trial = 0; trial < 2000; ++trial) {
+        const std::vector<Candidate> table = random_table(random);
+        const double budget = std::pow(10.0, std::uniform_real_distribution<double>(0.0, 4.0)(random));
+        const Plan plan = choose(table, {budget, std::nullopt});
+        bool any = false;
+        for (const Candidate& c : table) {
+            if (c.predicted_ms > budget) continue;
+            any = true;
+            EXPECT_GE(c.predicted_error, plan.chosen.predicted_error) << c.method << " is more accurate within " << budget;
+        }
+        EXPECT_EQ(plan.meets_budget, any);
+        if (any) {
+            ++met;
+            EXPECT_LE(plan.chosen.predicted_ms, budget);
+        } else {
+            ++unmet;
+            for (const Candidate& c : table) EXPECT_GE(c.predicted_ms, plan.chosen.predicted_ms);  // the fastest
+        }
+    }
+    EXPECT_GT(met, 100);
+    EXPECT_GT(unmet, 100);
+}
+
+TEST(Planner, WithBothLimitsTheTimeBudgetIsKept) {
+    const std::vector<Candidate> table = {plan_of("fast_rough", 10, 0.2), plan_of("mid", 40, 0.08),
+                                          plan_of("slow_fine", 400, 0.01)};
+    EXPECT_EQ(choose(table, {100.0, 0.1}).chosen.method, "mid");  // the fastest meeting both
+    const Plan tight = choose(table, {100.0, 0.02});                // none meets both: the best within 100 ms
+    EXPECT_EQ(tight.chosen.method, "mid");
+    EXPECT_FALSE(tight.meets_budget);
+    EXPECT_EQ(choose(table, {5.0, 0.02}).chosen.method, "fast_rough");  // nothing within 5 ms: the fastest
+}
+
+TEST(Planner, AnEmptyTableOrABudgetWithoutLimitsIsRefused) {
+    EXPECT_THROW(choose({}, {10.0, std::nullopt}), InputError);
+    EXPECT_THROW(choose({plan_of("a", 1, 1)}, {}), InputError);
+}
+
+// An analysis made up for the arithmetic: stopping at k bounces loses 0.1 / 2^k, and one sample of
+// the reference has relMSE 0.5 at every bounce count.
+SceneAnalysis made_up_analysis() {
+    SceneAnalysis analysis;
+    for (int k = 0; k <= 12; ++k) {
+        analysis.bounces.stopped_error.push_back(k == 12 ? 0.0 : 0.1 / std::pow(2.0, k));
+        analysis.bounces.noise_per_sample.push_back(0.5);
+        analysis.bounces.sample_ns.push_back(1000.0 * (k + 1));
+    }
+    analysis.bounces.tracer_build_ms = 2.0;
+    for (const char* preset : {"draft", "low", "medium", "high", "ultra"}) analysis.thin_walls.presets[preset] = {0.1, 0.0};
+    return analysis;
+}
+
+TEST(ErrorModel, TheReferenceLacksItsMissingBouncesPlusNoiseOverItsSamples) {
+    const SceneAnalysis analysis = made_up_analysis();
+    const ErrorPrediction at_64 = predict_error(analysis, "reference", "medium", {{"spp", 64}, {"bounces", 3}});
+    EXPECT_DOUBLE_EQ(at_64.rel_mse, 0.1 / 8.0 + 0.5 / 64.0);
+    // Frames that measured three times the analysis' noise at 4 bounces raise it at 3 (the nearest).
+    SceneMeasurements measured;
+    measured.record_noise(4, 3.0);
+    EXPECT_DOUBLE_EQ(predict_error(analysis, "reference", "medium", {{"spp", 64}, {"bounces", 3}}, &measured).rel_mse,
+                     0.1 / 8.0 + 3.0 * 0.5 / 64.0);
+}
+
+TEST(ErrorModel, AGpuMethodAddsItsBenchPriorToTheBouncesItLacks) {
+    const SceneAnalysis analysis = made_up_analysis();
+    const double prior = *own_error_prior("cssm", "low");
+    EXPECT_DOUBLE_EQ(predict_error(analysis, "cssm", "low", {{"bounces", 2}}).rel_mse, 0.1 / 4.0 + prior);
+    EXPECT_DOUBLE_EQ(predict_error(analysis, "vct", "high", {}).rel_mse, 0.1 / 2.0 + *own_error_prior("vct", "high"));
+    EXPECT_DOUBLE_EQ(predict_error(analysis, "direct", "ultra", {}).rel_mse, 0.1 + *own_error_prior("direct", "ultra"));
+}
+
+TEST(ErrorModel, LeakingVctAndOccludedIsrAreRuledOutWithTheirReason) {
+    SceneAnalysis analysis = made_up_analysis();
+    analysis.thin_walls.presets["draft"].leaking_area = 0.2;
+    analysis.visibility.pairs = 1000;
+    analysis.visibility.occluded_fraction = 0.8;
+    EXPECT_TRUE(predict_error(analysis, "vct", "draft", {}).ruled_out.has_value());
+    EXPECT_FALSE(predict_error(analysis, "vct", "low", {}).ruled_out.has_value());
+    EXPECT_TRUE(predict_error(analysis, "isr", "medium", {}).ruled_out.has_value());
+
+    DeviceCosts device("test");
+    for (const char* method : {"direct", "vct", "isr", "cssm"}) {
+        for (const char* preset : {"draft", "low", "medium", "high", "ultra"}) device.set(method, preset, {1.0, 0.0});
+    }
+    std::vector<std::string> ruled_out;
+    const auto all = candidates({analysis, device, nullptr, 64, 64, std::nullopt}, &ruled_out);
+    for (const Candidate& c : all) {
+        EXPECT_FALSE(c.method == "isr" || (c.method == "vct" && c.preset == "draft")) << c.method << " " << c.preset;
+    }
+    EXPECT_EQ(ruled_out.size(), 6u);  // vct draft and isr's five presets
+    EXPECT_NE(ruled_out.front().find("thinner than vct draft"), std::string::npos) << ruled_out.front();
+}
+
+TEST(Costs, ALineThroughTwoFramesAndItsClamps) {
+    const CostLine line = CostLine::through(1e6, 12.0, 4e6, 30.0);
+    EXPECT_DOUBLE_EQ(line.per_megapixel_ms, 6.0);
+    EXPECT_DOUBLE_EQ(line.fixed_ms, 6.0);
+    EXPECT_DOUBLE_EQ(line.at(2e6), 18.0);
+    // A larger frame measured faster (noise): no negative slope; the line keeps the larger frame's time.
+    const CostLine noisy = CostLine::through(1e6, 12.0, 4e6, 10.0);
+    EXPECT_DOUBLE_EQ(noisy.per_megapixel_ms, 0.0);
+    EXPECT_DOUBLE_EQ(noisy.fixed_ms, 10.0);
+}
+
+TEST(Costs, BouncesAreMeasuredApartAndPricedAsRepeatsUntilThen) {
+    SceneMeasurements measured;
+    measured.record("cssm", "low", 1, 20.0, 10.0);
+    measured.record("cssm", "low", 8, 60.0, 15.0);
+    EXPECT_DOUBLE_EQ(*measured.ratio("cssm", "low", 8), 4.0);
+    EXPECT_DOUBLE_EQ(*measured.ratio("cssm", "low", 1), 2.0);
+    bool exact = true;
+    EXPECT_DOUBLE_EQ(*measured.ratio("cssm", "low", 4, &exact), 3.0);  // not measured: the preset's median
+    EXPECT_FALSE(exact);
+    EXPECT_DOUBLE_EQ(*measured.ratio("cssm", "high", 4), 3.0);  // nor the preset: the method's
+    EXPECT_FALSE(measured.ratio("vct", "low", -1).has_value());
+
+    const SceneAnalysis analysis = made_up_analysis();
+    DeviceCosts device("test");
+    device.set("cssm", "draft", {10.0, 0.0});
+    SceneMeasurements scene;
+    const PlanningInputs inputs{analysis, device, &scene, 64, 64, std::nullopt};
+    EXPECT_DOUBLE_EQ(predicted_ms(inputs, "cssm", "draft", {{"bounces", 1}}), 10.0);
+    EXPECT_DOUBLE_EQ(predicted_ms(inputs, "cssm", "draft", {{"bounces", 4}}), 40.0);  // four repeats of the first
+    scene.record("cssm", "draft", 4, 15.0, 10.0);  // measured: 1.5 times the one-bounce line
+    EXPECT_DOUBLE_EQ(predicted_ms(inputs, "cssm", "draft", {{"bounces", 4}}), 15.0);
+}
+
+TEST(Costs, TheCacheFileRoundTripsAndAnotherDevicesOrAGarbledOneIsIgnored) {
+    const auto dir = std::filesystem::temp_directory_path() / ("bounce-costs-" + std::to_string(::getpid()));
+    DeviceCosts costs("NVIDIA H100/PCIe/SSE2");
+    costs.set("vct", "medium", {3.5, 120.0});
+    const auto file = DeviceCosts::cache_path(dir, costs.renderer());
+    costs.save(file);
+    const auto loaded = DeviceCosts::load(file, "NVIDIA H100/PCIe/SSE2");
+    ASSERT_TRUE(loaded);
+    EXPECT_DOUBLE_EQ(loaded->line("vct", "medium")->per_megapixel_ms, 120.0);
+    EXPECT_FALSE(DeviceCosts::load(file, "llvmpipe"));  // another renderer's
+    EXPECT_NE(DeviceCosts::cache_path(dir, "llvmpipe"), file);
+    std::ofstream(file) << "{\"version\": 1, \"renderer\": \"NVIDIA H100/PCIe/SSE2\", \"lines\": [{\"method\": 3}]}";
+    EXPECT_FALSE(DeviceCosts::load(file, "NVIDIA H100/PCIe/SSE2"));
+    std::ofstream(file) << "not json";
+    EXPECT_FALSE(DeviceCosts::load(file, "NVIDIA H100/PCIe/SSE2"));
+    std::filesystem::remove_all(dir);
+}
+
+TEST(Costs, MeasuredFramesScaleTheDeviceLineAndOneSlowFrameDoesNot) {
+    const SceneAnalysis analysis = made_up_analysis();
+    DeviceCosts device("test");
+    device.set("vct", "medium", {10.0, 0.0});
+    device.set("vct", "high", {20.0, 0.0});
+    device.set("cssm", "low", {5.0, 0.0});
+    SceneMeasurements measured;
+    const PlanningInputs inputs{analysis, device, &measured, 64, 64, std::nullopt};
+    EXPECT_DOUBLE_EQ(predicted_ms(inputs, "vct", "medium", {}), 10.0);  // nothing measured: the device's line
+    for (const double ms : {30.0, 30.0, 500.0}) measured.record("vct", "medium", -1, ms, 10.0);  // one frame built structures
+    EXPECT_DOUBLE_EQ(predicted_ms(inputs, "vct", "medium", {}), 30.0);
+    EXPECT_DOUBLE_EQ(predicted_ms(inputs, "vct", "high", {}), 60.0);   // the method's ratio
+    EXPECT_DOUBLE_EQ(predicted_ms(inputs, "cssm", "low", {}), 15.0);   // the scene's ratio
+    // The reference: building the tracer plus each sample's time.
+    EXPECT_DOUBLE_EQ(predicted_ms({analysis, device, nullptr, 100, 100, std::nullopt}, "reference", "medium",
+                                  {{"spp", 8}, {"bounces", 1}}),
+                     2.0 + 2000.0 * 1e-6 * 100 * 100 * 8);
+}
+
+TEST(Costs, AReferenceFrameRecordsItsNoiseAgainstTheAnalysis) {
+    const SceneAnalysis analysis = made_up_analysis();
+    SceneMeasurements measured;
+    FrameStats stats;
+    stats.method = "reference";
+    stats.preset = "medium";
+    stats.knobs = {{"spp", 16}, {"bounces", 4}};
+    stats.method_statistics = {{"noise_per_sample", 2.0}};
+    stats.render_ms = 50.0;
+    record_frame(measured, &analysis, DeviceCosts("test"), stats, 32, 32);
+    EXPECT_DOUBLE_EQ(*measured.noise_ratio(4), 4.0);  // 2.0 against the analysis' 0.5
+    EXPECT_TRUE(measured.ratio("reference", "medium").has_value());
+    stats.knobs["spp"] = 2;  // too few samples to say
+    SceneMeasurements few;
+    record_frame(few, &analysis, DeviceCosts("test"), stats, 32, 32);
+    EXPECT_FALSE(few.noise_ratio(4).has_value());
+}
+
+}  // namespace
+}  // namespace bounce::planning
