@@ -29,7 +29,7 @@ struct CostLine {
 class DeviceCosts {
 public:
     // Bumped whenever methods change what a preset costs: cached models of older versions are dropped.
-    static constexpr int kVersion = 2;
+    static constexpr int kVersion = 3;
 
     DeviceCosts() = default;
     explicit DeviceCosts(std::string renderer) : renderer_(std::move(renderer)) {}
