@@ -136,7 +136,8 @@ std::optional<double> SceneMeasurements::scene_ratio() const {
     const std::lock_guard lock(mutex_);
     std::vector<double> all;
     for (const auto& [key, kept] : ratios_) {
-        if (!kept.empty()) all.push_back(median({kept.begin(), kept.end()}));
+        // The reference runs on CPU threads: its ratio says nothing of the GPU's.
+        if (!kept.empty() && std::get<0>(key) != "reference") all.push_back(median({kept.begin(), kept.end()}));
     }
     if (all.empty()) return std::nullopt;
     return median(all);

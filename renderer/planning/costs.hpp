@@ -69,8 +69,8 @@ public:
     // `exact`, when given, says whether frames at this preset and bounce count were measured.
     std::optional<double> ratio(const std::string& method, const std::string& preset, int bounces = -1,
                                 bool* exact = nullptr) const;
-    // The median over every method measured here: how much heavier the scene is than the
-    // calibration scene, for methods not yet measured on it. nullopt when nothing was.
+    // The median over every GPU method measured here: how much heavier the scene is than the
+    // calibration scene, for GPU methods not yet measured on it. nullopt when none was.
     std::optional<double> scene_ratio() const;
 
     // A reference frame's noise per sample (methods::reference::noise_per_sample) at a bounce count,

@@ -104,7 +104,7 @@ double predicted_ms(const PlanningInputs& inputs, const std::string& method, con
     bool exact = false;
     if (inputs.scene) {
         ratio = inputs.scene->ratio(method, preset, bounces_knob(knobs).value_or(-1), &exact);
-        if (!ratio) scene_ratio = inputs.scene->scene_ratio();
+        if (!ratio && method != "reference") scene_ratio = inputs.scene->scene_ratio();
     }
     // The device's lines are of the presets' own bounce counts (one for cssm). More bounces than a
     // preset's own, not yet measured on the scene, are priced as repeating the first: an upper

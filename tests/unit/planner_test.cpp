@@ -218,6 +218,9 @@ TEST(Costs, MeasuredFramesScaleTheDeviceLineAndOneSlowFrameDoesNot) {
     EXPECT_DOUBLE_EQ(predicted_ms(inputs, "vct", "medium", {}), 30.0);
     EXPECT_DOUBLE_EQ(predicted_ms(inputs, "vct", "high", {}), 60.0);   // the method's ratio
     EXPECT_DOUBLE_EQ(predicted_ms(inputs, "cssm", "low", {}), 15.0);   // the scene's ratio
+    // The GPU's ratios say nothing of the CPU's: the reference keeps the analysis' times.
+    EXPECT_DOUBLE_EQ(predicted_ms(inputs, "reference", "medium", {{"spp", 1}, {"bounces", 0}}),
+                     2.0 + 1000.0 * 1e-6 * 64 * 64);
     // The reference: building the tracer plus each sample's time.
     EXPECT_DOUBLE_EQ(predicted_ms({analysis, device, nullptr, 100, 100, std::nullopt}, "reference", "medium",
                                   {{"spp", 8}, {"bounces", 1}}),
