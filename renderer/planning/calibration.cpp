@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <limits>
 
 namespace bounce::planning {
 
@@ -17,7 +18,9 @@ DeviceCosts calibrate(Renderer& renderer, const CalibrationSettings& settings,
     const auto& registry = methods::MethodRegistry::builtin();
     std::vector<std::string> gpu_methods;
     for (const std::string& name : registry.names()) {
-        if (registry.find(name).device == methods::MethodDevice::gpu) gpu_methods.push_back(name);
+        const bool wanted = settings.methods.empty() ||
+                            std::find(settings.methods.begin(), settings.methods.end(), name) != settings.methods.end();
+        if (wanted && registry.find(name).device == methods::MethodDevice::gpu) gpu_methods.push_back(name);
     }
     const auto& presets = methods::preset_names();
     const double steps = static_cast<double>(gpu_methods.size() * presets.size());

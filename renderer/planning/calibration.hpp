@@ -8,6 +8,7 @@
 #include "renderer/renderer.hpp"
 
 #include <functional>
+#include <string>
 #include <vector>
 
 namespace bounce::planning {
@@ -16,6 +17,7 @@ struct CalibrationSettings {
     int small_size = 32;  // the two frame sizes, in pixels per side
     int large_size = 64;
     int timed_frames = 1;  // per size, after one untimed frame; the fastest counts
+    std::vector<std::string> methods;  // the GPU methods to measure; empty: every one
 };
 
 // `progress` (fraction done, what runs) may be empty.

@@ -7,10 +7,15 @@
 // reference alone tests its noise model.
 #include "gpu_fixture.hpp"
 #include "renderer/image/metrics.hpp"
+#include "renderer/planning/calibration.hpp"
 #include "renderer/planning/planner.hpp"
 #include "renderer/scene/builtin.hpp"
 
 #include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include <unistd.h>
 
 namespace bounce::test {
 namespace {
@@ -88,6 +93,31 @@ TEST(Budgets, ATargetErrorIsMetByTheReferencesSamplesChosenForIt) {
         // so the error at half the samples is about twice; a factor of 4 leaves room for the noise).
         EXPECT_GT(m.rel_mse, target / 8.0) << m.plan.why;
     }
+}
+
+// Calibration measures a line per preset (two methods here, at small sizes, to keep the test short)
+// and caches it under the renderer's name: the second call reads the file instead of measuring.
+TEST(Budgets, CalibrationMeasuresEveryPresetAndIsCachedForTheDevice) {
+    const auto dir = std::filesystem::temp_directory_path() / ("bounce-calibration-" + std::to_string(::getpid()));
+    planning::CalibrationSettings settings;
+    settings.small_size = 8;
+    settings.large_size = 16;
+    settings.methods = {"direct", "vct"};
+    const planning::DeviceCosts measured = planning::load_or_calibrate(shared_renderer(), dir, settings);
+    EXPECT_EQ(measured.renderer(), shared_renderer().gpu_info().renderer);
+    for (const char* method : {"direct", "vct"}) {
+        for (const char* preset : {"draft", "low", "medium", "high", "ultra"}) {
+            const auto line = measured.line(method, preset);
+            ASSERT_TRUE(line) << method << " " << preset;
+            EXPECT_GT(line->at(16 * 16), 0.0) << method << " " << preset;  // a frame takes time
+        }
+    }
+    EXPECT_FALSE(measured.line("cssm", "medium"));  // not asked for
+    settings.methods = {"direct"};                  // would measure anew: the cache must answer instead
+    const planning::DeviceCosts cached = planning::load_or_calibrate(shared_renderer(), dir, settings);
+    EXPECT_DOUBLE_EQ(cached.calibration_ms, measured.calibration_ms);
+    EXPECT_DOUBLE_EQ(cached.line("vct", "high")->fixed_ms, measured.line("vct", "high")->fixed_ms);
+    std::filesystem::remove_all(dir);
 }
 
 }  // namespace
