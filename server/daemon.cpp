@@ -1,5 +1,8 @@
 #include "server/daemon.hpp"
 
+#include <boost/asio/bind_executor.hpp>
+#include <boost/asio/dispatch.hpp>
+
 #include "renderer/base/bytes.hpp"
 #include "renderer/base/error.hpp"
 #include "renderer/base/log.hpp"
@@ -137,7 +140,8 @@ bool Daemon::authenticated(Session* session) {
 }
 
 void Daemon::accept() {
-    acceptor_.async_accept(asio::make_strand(io_), [this](boost::system::error_code error, tcp::socket socket) {
+    acceptor_.async_accept(asio::make_strand(io_), asio::bind_executor(accept_strand_, [this](boost::system::error_code error,
+                                                                                              tcp::socket socket) {
         if (error) {
             if (error != asio::error::operation_aborted) log::warn("daemon", "accept failed: {}", error.message());
             if (acceptor_.is_open()) accept();
@@ -145,7 +149,7 @@ void Daemon::accept() {
         }
         admit(make_tcp_transport(std::move(socket)));
         accept();
-    });
+    }));
 }
 
 void Daemon::admit(std::unique_ptr<Transport> transport) {
@@ -196,8 +200,10 @@ void Daemon::begin_shutdown() {
     ready_ = false;
     streams_.stop_all();
     log::info("daemon", "shutting down: {} requests in flight", in_flight_.load());
-    boost::system::error_code ignored;
-    acceptor_.close(ignored);
+    asio::dispatch(accept_strand_, [this] {
+        boost::system::error_code ignored;
+        acceptor_.close(ignored);
+    });
     drain_deadline_ = std::chrono::steady_clock::now() + config_.drain_timeout;
     auto poll = std::make_shared<std::function<void()>>();
     *poll = [this, poll] {

@@ -127,6 +127,9 @@ private:
     boost::asio::thread_pool precompute_pool_{1};
     std::atomic<int> cpu_jobs_{0};
     boost::asio::ip::tcp::acceptor acceptor_;
+    // Every use of the acceptor after run() starts: its accept handler and its close at shutdown
+    // run on several network threads, and an acceptor is not safe to use from two at once.
+    boost::asio::strand<boost::asio::io_context::executor_type> accept_strand_{boost::asio::make_strand(io_)};
     boost::asio::signal_set signals_;
     boost::asio::steady_timer drain_timer_;
     std::atomic<bool> shutting_down_{false};
