@@ -92,6 +92,9 @@ struct RenderOrder {
     // holds what the reply's `plan` says.
     std::optional<planning::Budget> budget;
     std::optional<nlohmann::json> planned;
+    // GPU frames the planner asks for beside a reference plan, to measure their error on this scene
+    // (planning::probes): rendered on the render thread while the reference traces, never sent.
+    std::vector<RenderRequest> probes;
 };
 struct BakeOrder {
     RenderOrder frame;

@@ -1,5 +1,6 @@
 #include "server/request_handlers.hpp"
 
+#include "renderer/base/hash.hpp"
 #include "renderer/base/log.hpp"
 #include "renderer/planning/calibration.hpp"
 #include "renderer/image/codec.hpp"
@@ -15,6 +16,18 @@ using protocol::MessageType;
 using Clock = std::chrono::steady_clock;
 
 // The view a render asks for, as a one-off: the scene's own cameras are untouched.
+// Frames of one view: the scene's state, the camera and the size (FrameComparisons compares them).
+std::uint64_t view_key(std::uint64_t scene_version, const RenderRequest& frame) {
+    Hasher hash;
+    hash.add(scene_version).add(frame.width).add(frame.height).add(frame.camera.has_value());
+    if (const auto& camera = frame.camera) {
+        hash.add(camera->position.x).add(camera->position.y).add(camera->position.z);
+        hash.add(camera->orientation.x).add(camera->orientation.y).add(camera->orientation.z).add(camera->orientation.w);
+        hash.add(camera->vertical_fov).add(camera->z_near).add(camera->z_far);
+    }
+    return hash.value();
+}
+
 std::optional<scene::Camera> view_camera(const scene::Scene& scene, const RenderOrder& order) {
     if (!order.view) return std::nullopt;
     try {
@@ -133,6 +146,7 @@ void RequestHandlers::execute(const std::shared_ptr<Request>& request, Renderer&
                     static_assert(std::is_same_v<T, RenderOrder>);
                     if (order.plan.site == FrameSite::cpu) {
                         render_on_cpu(request, order, renderer, registry);
+                        render_probes(order, renderer, registry);
                     } else {
                         render_on_gpu(request, order, renderer, registry);
                     }
@@ -161,6 +175,8 @@ void RequestHandlers::render_on_gpu(const std::shared_ptr<Request>& request, con
         planning::record_frame(*entry.resources->measurements, entry.resources->analysis_if_made(), *device, result->stats,
                                frame.width, frame.height);
     }
+    entry.comparisons->add(view_key(entry.version, frame), result, entry.resources->analysis_if_made(),
+                           *entry.resources->measurements);
     daemon_.metrics().set_resident_bytes(order.scene, result->stats.resident_bytes);
     daemon_.metrics().set_gpu_memory(renderer.memory_budget().bytes, renderer.resident_bytes());
     deliver(request, order, std::move(result), entry.version, clock);
@@ -183,11 +199,13 @@ void RequestHandlers::render_on_cpu(const std::shared_ptr<Request>& request, con
     // What recording the frame for the planner needs, copied: the CPU pool must not read the render
     // thread's state.
     std::shared_ptr<planning::SceneMeasurements> measurements = entry.resources->measurements;
+    std::shared_ptr<planning::FrameComparisons> comparisons = entry.comparisons;
+    const std::uint64_t view = view_key(entry.version, frame);
     std::optional<SceneAnalysis> analysis;
     if (const SceneAnalysis* made = entry.resources->analysis_if_made()) analysis = *made;
     std::optional<planning::DeviceCosts> device;
     if (const planning::DeviceCosts* known = known_device_costs(renderer)) device = *known;
-    boost::asio::post(daemon_.cpu_pool(), [this, request, order, frame, snapshot, version, slot, measurements,
+    boost::asio::post(daemon_.cpu_pool(), [this, request, order, frame, snapshot, version, slot, measurements, comparisons, view,
                                            analysis = std::move(analysis), device = std::move(device)] {
         const log::RequestScope scope(request->log_id);
         try {
@@ -200,6 +218,7 @@ void RequestHandlers::render_on_cpu(const std::shared_ptr<Request>& request, con
                 planning::record_frame(*measurements, analysis ? &*analysis : nullptr, *device, result->stats, frame.width,
                                        frame.height);
             }
+            comparisons->add(view, result, analysis ? &*analysis : nullptr, *measurements);
             deliver(request, order, std::move(result), version, clock);
         } catch (...) {
             request->fail(std::current_exception());
@@ -340,6 +359,36 @@ void RequestHandlers::plan_budgeted(RenderOrder& order, Renderer& renderer, Scen
     frame.knobs = plan.chosen.knobs;
     order.plan = plan_frame(frame);
     order.planned = planning::plan_json(plan);
+    for (const planning::Candidate& probe : plan.probes) {
+        RenderRequest probe_frame = frame;
+        probe_frame.method = probe.method;
+        probe_frame.preset = probe.preset;
+        probe_frame.knobs = probe.knobs;
+        probe_frame.make_display_image = false;
+        order.probes.push_back(std::move(probe_frame));
+    }
+}
+
+void RequestHandlers::render_probes(const RenderOrder& order, Renderer& renderer, SceneRegistry& registry) {
+    if (order.probes.empty()) return;
+    SceneEntry& entry = registry.get(order.scene);
+    const planning::DeviceCosts* device = known_device_costs(renderer);
+    for (RenderRequest probe : order.probes) {
+        try {
+            if (auto camera = view_camera(*entry.scene, order)) probe.camera = std::move(camera);
+            if (renderer.pending_work(*entry.resources, probe)) continue;
+            auto result = std::make_shared<const RenderResult>(renderer.render(*entry.resources, probe));
+            if (device) {
+                planning::record_frame(*entry.resources->measurements, entry.resources->analysis_if_made(), *device,
+                                       result->stats, probe.width, probe.height);
+            }
+            entry.comparisons->add(view_key(entry.version, probe), result, entry.resources->analysis_if_made(),
+                                   *entry.resources->measurements);
+        } catch (const std::exception& error) {
+            // A probe only teaches the planner: its failure is logged, and the request it rode on stands.
+            log::warn("planner", "probe {} {} failed: {}", probe.method, probe.preset, error.what());
+        }
+    }
 }
 
 const planning::DeviceCosts& RequestHandlers::device_costs(Renderer& renderer) {

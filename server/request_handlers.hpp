@@ -63,6 +63,9 @@ private:
 
     // A render with a budget becomes a render of the plan the planner chooses for it.
     void plan_budgeted(RenderOrder& order, Renderer& renderer, SceneRegistry& registry);
+    // Renders the order's probes whose structures are built (a probe never waits for a bake) and
+    // compares each with the reference frame of its view when there is one.
+    void render_probes(const RenderOrder& order, Renderer& renderer, SceneRegistry& registry);
     // The device's cost model: read from the cache folder, else calibrated (render thread; once).
     const planning::DeviceCosts& device_costs(Renderer& renderer);
     // The same if the cache had one or a plan needed it; nullptr otherwise (frames are then not

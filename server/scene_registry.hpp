@@ -2,6 +2,7 @@
 // runs there, in arrival order, so a render always sees one consistent scene state.
 #pragma once
 
+#include "renderer/planning/comparisons.hpp"
 #include "renderer/renderer.hpp"
 #include "renderer/scene/scene.hpp"
 
@@ -18,6 +19,9 @@ struct SceneEntry {
     std::unique_ptr<SceneResources> resources;
     std::uint64_t version = 0;  // increases with every mutation
     std::string source;         // "builtin", a path under the scene root, or "upload"
+    // Its GPU and reference frames of one view, compared for the planner's error model. Shared: CPU
+    // frames add to it from the CPU pool.
+    std::shared_ptr<planning::FrameComparisons> comparisons = std::make_shared<planning::FrameComparisons>();
 };
 
 class SceneRegistry {

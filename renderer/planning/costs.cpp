@@ -160,4 +160,50 @@ std::optional<double> SceneMeasurements::noise_ratio(int bounces) const {
     return above->second;
 }
 
+void SceneMeasurements::record_own_error(const std::string& method, const std::string& preset, int bounces, double rel_mse) {
+    if (!(rel_mse >= 0.0) || !std::isfinite(rel_mse)) return;
+    const std::lock_guard lock(mutex_);
+    auto& kept = own_errors_[{method, preset, bounces}];
+    kept.push_back(rel_mse);
+    if (kept.size() > kKept) kept.pop_front();
+}
+
+// The largest, not the median: a target error is a promise, and views differ in what a method gets wrong.
+std::optional<SceneMeasurements::OwnError> SceneMeasurements::own_error(const std::string& method, const std::string& preset,
+                                                                       int bounces) const {
+    const std::lock_guard lock(mutex_);
+    if (const auto it = own_errors_.find({method, preset, bounces}); it != own_errors_.end() && !it->second.empty()) {
+        return OwnError{*std::max_element(it->second.begin(), it->second.end()), static_cast<int>(it->second.size()), true};
+    }
+    std::optional<OwnError> found;
+    for (const auto& [key, kept] : own_errors_) {
+        if (std::get<0>(key) != method || std::get<1>(key) != preset || kept.empty()) continue;
+        if (!found) found = OwnError{0.0, 0, false};
+        found->rel_mse = std::max(found->rel_mse, *std::max_element(kept.begin(), kept.end()));
+        found->frames += static_cast<int>(kept.size());
+    }
+    return found;
+}
+
+std::map<std::string, double> SceneMeasurements::own_errors(const std::string& method) const {
+    const std::lock_guard lock(mutex_);
+    std::map<std::string, double> largest;
+    for (const auto& [key, kept] : own_errors_) {
+        if (std::get<0>(key) != method || kept.empty()) continue;
+        double& value = largest[std::get<1>(key)];
+        value = std::max(value, *std::max_element(kept.begin(), kept.end()));
+    }
+    return largest;
+}
+
+void SceneMeasurements::record_compared(const std::string& method, const std::string& preset) {
+    const std::lock_guard lock(mutex_);
+    compared_.insert({method, preset});
+}
+
+bool SceneMeasurements::compared(const std::string& method, const std::string& preset) const {
+    const std::lock_guard lock(mutex_);
+    return compared_.count({method, preset}) > 0;
+}
+
 }  // namespace bounce::planning

@@ -11,6 +11,7 @@
 #include <map>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <string>
 #include <tuple>
 #include <utility>
@@ -80,12 +81,32 @@ public:
     // The largest ratio recorded at the nearest bounce count (the higher of two as near); nullopt when none.
     std::optional<double> noise_ratio(int bounces) const;
 
+    // A GPU frame's own error on this scene: its relMSE against a reference frame of the same view,
+    // less the reference's noise and the bounces one has and the other lacks (comparisons.hpp).
+    void record_own_error(const std::string& method, const std::string& preset, int bounces, double rel_mse);
+    struct OwnError {
+        double rel_mse = 0.0;
+        int frames = 0;      // comparisons it is the largest of
+        bool exact = false;  // measured at this bounce count (else at the preset's other counts)
+    };
+    // The largest of the last comparisons at this preset and bounce count, else at this preset's
+    // other bounce counts (the own error is net of bounces); nullopt when the preset has none.
+    std::optional<OwnError> own_error(const std::string& method, const std::string& preset, int bounces) const;
+    // Every preset of `method` with an own error measured here, with its largest.
+    std::map<std::string, double> own_errors(const std::string& method) const;
+    // Whether a frame of the preset was compared with a reference frame here, whether or not that
+    // told its own error (the planner probes a preset once per scene).
+    void record_compared(const std::string& method, const std::string& preset);
+    bool compared(const std::string& method, const std::string& preset) const;
+
     static constexpr std::size_t kKept = 5;  // frames kept per preset: a median of them ignores one slow frame
 
 private:
     mutable std::mutex mutex_;
     std::map<std::tuple<std::string, std::string, int>, std::deque<double>> ratios_;
     std::map<int, double> noise_;
+    std::map<std::tuple<std::string, std::string, int>, std::deque<double>> own_errors_;
+    std::set<std::pair<std::string, std::string>> compared_;
 };
 
 }  // namespace bounce::planning

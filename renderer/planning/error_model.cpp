@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <map>
+#include <utility>
+#include <vector>
 
 namespace bounce::planning {
 namespace {
@@ -29,6 +31,35 @@ const std::map<std::pair<std::string, std::string>, double> kOwnError = {
 double at_bounces(const std::vector<double>& values, int bounces) {
     if (values.empty()) return 0.0;
     return values[static_cast<std::size_t>(std::clamp(bounces, 0, static_cast<int>(values.size()) - 1))];
+}
+
+double median(std::vector<double> values) {
+    std::sort(values.begin(), values.end());
+    const std::size_t n = values.size();
+    return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+// A GPU method's own error at a preset on this scene, and where it comes from: measured here against
+// the scene's reference frames; else the bench's prior scaled as the method's measured presets
+// compare with theirs (a scene where cssm does well at one preset does well at the others); else
+// the prior.
+std::pair<double, std::string> own_error(const std::string& method, const std::string& preset, int bounces,
+                                         const SceneMeasurements* measured) {
+    const double prior = own_error_prior(method, preset).value_or(0.0);
+    if (!measured) return {prior, "on the bench scenes"};
+    if (const auto own = measured->own_error(method, preset, bounces)) {
+        return {own->rel_mse, fmt::format("as {} comparison{} with this scene's reference frames measured{}", own->frames,
+                                          own->frames == 1 ? "" : "s", own->exact ? "" : " at other bounce counts")};
+    }
+    std::vector<double> ratios;
+    for (const auto& [other, value] : measured->own_errors(method)) {
+        const double other_prior = own_error_prior(method, other).value_or(0.0);
+        if (other_prior > 0.0) ratios.push_back(value / other_prior);
+    }
+    if (ratios.empty() || prior <= 0.0) return {prior, "on the bench scenes"};
+    const double ratio = median(std::move(ratios));
+    return {prior * ratio, fmt::format("({:.3f} on the bench scenes x {:.2f}, as this scene's other {} presets measured)",
+                                       prior, ratio, method)};
 }
 
 }  // namespace
@@ -64,10 +95,10 @@ ErrorPrediction predict_error(const SceneAnalysis& analysis, const std::string& 
                                                      noise, spp);
         return prediction;
     }
-    const double own = own_error_prior(method, preset).value_or(0.0);
+    const auto [own, own_basis] = own_error(method, preset, bounces, measured);
     prediction.rel_mse = stopped + own;
-    prediction.basis = fmt::format("{} bounce{} lack {:.3f}; {} {} adds {:.3f} on the bench scenes", bounces,
-                                   bounces == 1 ? "" : "s", stopped, method, preset, own);
+    prediction.basis = fmt::format("{} bounce{} lack {:.3f}; {} {} adds {:.3f} {}", bounces, bounces == 1 ? "" : "s",
+                                   stopped, method, preset, own, own_basis);
     if (method == "vct" && analysis.thin_walls.leaks(preset)) {
         prediction.ruled_out = fmt::format("{:.0f}% of the surface is a lit wall thinner than vct {}'s {:.3f} m voxels",
                                            100.0 * analysis.thin_walls.presets.at(preset).leaking_area, preset,

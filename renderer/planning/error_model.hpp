@@ -5,8 +5,10 @@
 //   - bounces: a method that models k bounces lacks what the analysis' frame with k bounces lacks
 //     against its frame with all of them (BounceEnergy::stopped_error[k]);
 //   - the method's own approximations at a preset: the relMSE against a reference with as many
-//     bounces, measured on the bench scenes (bench/quality, `rel_mse_same_bounces`); a prior, since
-//     no reference of the scene exists when a frame is planned;
+//     bounces. Measured on this scene where its frames met a reference frame of the same view
+//     (comparisons.hpp); until then a prior, the largest the bench measured on its scenes
+//     (bench/quality, `rel_mse_same_bounces`), scaled by how the method's measured presets compare
+//     with their priors;
 //   - the reference's noise: the per-sample variance over the samples, the larger of the analysis'
 //     and what the scene's reference frames measured (SceneMeasurements::noise);
 //   - ruled out: vct where walls are thinner than its voxels (light leaks through them), isr where

@@ -173,7 +173,34 @@ Plan plan(const PlanningInputs& inputs, const Budget& budget) {
     }
     Plan chosen = choose(all, budget);
     chosen.ruled_out = std::move(ruled_out);
+    chosen.probes = probes(all, chosen.chosen, inputs.scene);
     return chosen;
+}
+
+std::vector<Candidate> probes(const std::vector<Candidate>& all, const Candidate& chosen, const SceneMeasurements* scene) {
+    if (chosen.method != "reference") return {};
+    const double share_ms = kProbeShare * chosen.predicted_ms;
+    // Per preset, the most accurate plan that fits the share alone (for cssm, the most bounces): a
+    // comparison tells a frame's own error only where the bounces it lacks do not drown it.
+    std::vector<const Candidate*> cheapest;
+    for (const Candidate& c : all) {
+        if (c.method == "reference" || c.predicted_ms > share_ms) continue;
+        if (scene && scene->compared(c.method, c.preset)) continue;  // probed, or compared otherwise
+        const auto same = std::find_if(cheapest.begin(), cheapest.end(), [&](const Candidate* other) {
+            return other->method == c.method && other->preset == c.preset;
+        });
+        if (same == cheapest.end()) cheapest.push_back(&c);
+        else if (more_accurate(c, **same)) *same = &c;
+    }
+    std::sort(cheapest.begin(), cheapest.end(), [](const Candidate* a, const Candidate* b) { return faster(*a, *b); });
+    std::vector<Candidate> chosen_probes;
+    double total_ms = 0.0;
+    for (const Candidate* c : cheapest) {
+        if (total_ms + c->predicted_ms > share_ms) break;
+        total_ms += c->predicted_ms;
+        chosen_probes.push_back(*c);
+    }
+    return chosen_probes;
 }
 
 void record_frame(SceneMeasurements& measurements, const SceneAnalysis* analysis, const DeviceCosts& device,
@@ -192,6 +219,8 @@ void record_frame(SceneMeasurements& measurements, const SceneAnalysis* analysis
 }
 
 nlohmann::json plan_json(const Plan& plan) {
+    std::vector<std::string> probe_labels;
+    for (const Candidate& probe : plan.probes) probe_labels.push_back(describe(probe));
     return {{"method", plan.chosen.method},
             {"preset", plan.chosen.preset},
             {"knobs", plan.chosen.knobs},
@@ -200,6 +229,7 @@ nlohmann::json plan_json(const Plan& plan) {
             {"meets_budget", plan.meets_budget},
             {"considered", plan.considered},
             {"ruled_out", plan.ruled_out},
+            {"probes", probe_labels},
             {"why", plan.why}};
 }
 

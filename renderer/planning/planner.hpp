@@ -43,7 +43,18 @@ struct Plan {
     std::string why;
     int considered = 0;           // plans predicted
     std::vector<std::string> ruled_out;  // "method preset: reason", one per rule
+    // GPU plans to render beside a reference plan, at the same view, to measure their own error on
+    // this scene (comparisons.hpp): see probes().
+    std::vector<Candidate> probes;
 };
+
+// Of the plans not chosen, GPU presets not yet compared with a reference frame of this scene, one plan
+// per preset (its most accurate that fits alone), cheapest first, while their predicted times add
+// to at most kProbeShare of a chosen reference plan's: the GPU is idle while the reference traces on CPU
+// threads, and what they measure lets later budgets take a GPU plan where the bench's priors
+// ruled it out. None when the chosen plan is not the reference.
+inline constexpr double kProbeShare = 0.25;
+std::vector<Candidate> probes(const std::vector<Candidate>& all, const Candidate& chosen, const SceneMeasurements* scene);
 
 // Chooses among predicted plans (a pure function: the planner's unit tests call it on tables).
 // Throws InputError when `candidates` is empty or the budget names neither limit.

@@ -1,6 +1,7 @@
 // Budgets through the daemon: a render with `budget` (and method `auto`) comes back with its plan,
-// its frame is the plan's, later plans use the frames measured meanwhile, and every malformed
-// budget is refused naming its field.
+// its frame is the plan's, later plans use the frames measured meanwhile (their times, and their
+// errors against the scene's reference frames of the same view), and every malformed budget is
+// refused naming its field.
 //
 // The test writes the device's cost model into the daemon's cache folder, under the renderer the
 // daemon announces, before the first frame: the daemon reads it instead of calibrating (half a
@@ -65,6 +66,45 @@ TEST(Budget, AMethodWithABudgetPlansWithinItAndLearnsFromItsFrames) {
     const auto third = d.render({{"method", "vct"}, {"budget", {{"max_error", 0.5}}}});
     EXPECT_NE(third.body["plan"]["why"].get<std::string>().find("measured on this scene"), std::string::npos)
         << third.body["plan"].dump();
+}
+
+// Frames of one view teach the planner a GPU method's error on the scene: a cssm frame and a
+// reference frame of the same view, from any client, are compared when the second arrives.
+TEST(Budget, AGpuFrameAndAReferenceFrameOfOneViewTeachThePlannerItsErrorOnTheScene) {
+    BudgetDaemon d;
+    const auto before = d.render({{"method", "cssm"}, {"budget", {{"max_error", 0.9}}}});
+    const std::string learned = "with this scene's reference frames measured";
+    EXPECT_EQ(before.body["plan"]["why"].get<std::string>().find(learned), std::string::npos) << before.body["plan"].dump();
+    // Eight bounces, so that the light it lacks does not drown its own error.
+    d.render({{"method", "cssm"}, {"preset", "low"}, {"knobs", {{"bounces", 8}}}});
+    // Enough samples that its noise is under half of the relMSE: its noise per sample here is about
+    // 2.1, 0.002 at 1024 samples, against cssm low's relMSE of about 0.011 at 48x48.
+    d.render({{"method", "reference"}, {"knobs", {{"spp", 1024}, {"bounces", 8}, {"pixel_jitter", 0}}}});
+    const auto after = d.render({{"method", "cssm"}, {"budget", {{"max_error", 0.9}}}});
+    const std::string why = after.body["plan"]["why"].get<std::string>();
+    EXPECT_TRUE(why.find(learned) != std::string::npos || why.find("as this scene's other cssm presets measured") != std::string::npos)
+        << why;
+}
+
+// Beside a reference plan the daemon renders GPU probes on the idle GPU while the reference traces
+// (those whose structures are built: direct has none) and compares them with it; the next plan
+// probes others.
+TEST(Budget, AReferencePlanProbesGpuPresetsOncePerScene) {
+    BudgetDaemon d;
+    const auto first = d.render({{"method", "auto"}, {"budget", {{"max_error", 0.03}}}});
+    const json& plan = first.body["plan"];
+    ASSERT_EQ(plan["method"], "reference") << plan.dump();
+    std::vector<std::string> direct_probes;
+    for (const auto& probe : plan["probes"]) {
+        if (probe.get<std::string>().rfind("direct ", 0) == 0) direct_probes.push_back(probe.get<std::string>());
+    }
+    ASSERT_FALSE(direct_probes.empty()) << plan.dump();  // 1 ms each: they fit beside it
+    const auto second = d.render({{"method", "auto"}, {"budget", {{"max_error", 0.03}}}});
+    ASSERT_EQ(second.body["plan"]["method"], "reference");
+    for (const auto& again : second.body["plan"]["probes"]) {
+        EXPECT_EQ(std::find(direct_probes.begin(), direct_probes.end(), again.get<std::string>()), direct_probes.end())
+            << again << " was probed beside the first reference frame";
+    }
 }
 
 TEST(Budget, MalformedBudgetsAreRefusedNamingTheField) {

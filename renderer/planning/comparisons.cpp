@@ -1,0 +1,110 @@
+#include "renderer/planning/comparisons.hpp"
+
+#include "renderer/base/log.hpp"
+#include "renderer/image/metrics.hpp"
+#include "renderer/methods/registry.hpp"
+#include "renderer/planning/error_model.hpp"
+
+#include <algorithm>
+#include <vector>
+
+namespace bounce::planning {
+namespace {
+
+double knob(const FrameStats& stats, const std::string& name, double otherwise) {
+    const auto it = stats.knobs.find(name);
+    return it == stats.knobs.end() ? otherwise : it->second;
+}
+
+double stopped_at(const SceneAnalysis* analysis, int bounces) {
+    if (!analysis || analysis->bounces.stopped_error.empty()) return 0.0;
+    const auto& stopped = analysis->bounces.stopped_error;
+    return stopped[static_cast<std::size_t>(std::clamp(bounces, 0, static_cast<int>(stopped.size()) - 1))];
+}
+
+}  // namespace
+
+bool FrameComparisons::usable_reference(const FrameStats& stats) {
+    return stats.method == "reference" && knob(stats, "spp", 0.0) >= kMinReferenceSpp && knob(stats, "denoise", 0.0) == 0.0 &&
+           knob(stats, "indirect_visibility", 1.0) != 0.0 && knob(stats, "ao", 0.0) == 0.0 &&
+           stats.method_statistics.count("noise_per_sample") > 0;
+}
+
+bool FrameComparisons::usable_gpu_frame(const FrameStats& stats) {
+    if (stats.method == "reference" || !own_error_prior(stats.method, stats.preset)) return false;
+    const auto& presets = methods::MethodRegistry::builtin().find(stats.method).presets;
+    const auto preset = presets.find(stats.preset);
+    if (preset == presets.end()) return false;
+    for (const auto& [name, value] : stats.knobs) {
+        if (name == "bounces") continue;  // the error model separates bounces from the rest
+        const auto own = preset->second.find(name);
+        if (own == preset->second.end() || own->second != value) return false;
+    }
+    return true;
+}
+
+std::optional<Comparison> FrameComparisons::compare(const RenderResult& gpu_frame, const RenderResult& reference,
+                                                    const SceneAnalysis* analysis, SceneMeasurements& measurements) {
+    if (gpu_frame.frame.width != reference.frame.width || gpu_frame.frame.height != reference.frame.height) return std::nullopt;
+    Comparison c;
+    c.method = gpu_frame.stats.method;
+    c.preset = gpu_frame.stats.preset;
+    c.bounces = modelled_bounces(c.method, gpu_frame.stats.knobs);
+    c.rel_mse = image::compare(gpu_frame.frame, reference.frame).rel_mse;
+    measurements.record_compared(c.method, c.preset);
+    c.reference_noise =
+        reference.stats.method_statistics.at("noise_per_sample") / std::max(1.0, knob(reference.stats, "spp", 1.0));
+    // A reference with fewer bounces than the frame counts the frame's extra light as error: left
+    // in, which overstates the own error (the safe side for a promise).
+    const int reference_bounces = modelled_bounces("reference", reference.stats.knobs);
+    if (reference_bounces > c.bounces) {
+        c.bounce_gap = std::max(0.0, stopped_at(analysis, c.bounces) - stopped_at(analysis, reference_bounces));
+    }
+    // The own part must be at least half of what was measured: a frame whose error is mostly the
+    // reference's noise or the bounces it lacks says little of its own, and what it says would be
+    // carried to other bounce counts.
+    if (!(c.rel_mse >= 0.0) || c.reference_noise + c.bounce_gap > 0.5 * c.rel_mse) return std::nullopt;
+    c.own_error = std::max(0.0, c.rel_mse - c.reference_noise - c.bounce_gap);
+    measurements.record_own_error(c.method, c.preset, c.bounces, c.own_error);
+    return c;
+}
+
+std::vector<Comparison> FrameComparisons::add(std::uint64_t view, std::shared_ptr<const RenderResult> frame,
+                                              const SceneAnalysis* analysis, SceneMeasurements& measurements) {
+    const FrameStats& stats = frame->stats;
+    const bool is_reference = usable_reference(stats);
+    if (!is_reference && !usable_gpu_frame(stats)) return {};
+    std::shared_ptr<const RenderResult> reference;
+    std::vector<std::shared_ptr<const RenderResult>> to_compare;
+    {
+        const std::lock_guard lock(mutex_);
+        if (view_ != view) {
+            view_ = view;
+            reference_.reset();
+            gpu_frames_.clear();
+        }
+        if (is_reference) {
+            // The one with the most samples: the least noise to subtract.
+            if (reference_ && knob(reference_->stats, "spp", 0.0) >= knob(stats, "spp", 0.0)) return {};
+            reference_ = frame;
+            for (const auto& [key, kept] : gpu_frames_) to_compare.push_back(kept);
+        } else {
+            const std::tuple key{stats.method, stats.preset, modelled_bounces(stats.method, stats.knobs)};
+            if (gpu_frames_.size() >= kMaxFrames && !gpu_frames_.count(key)) gpu_frames_.erase(gpu_frames_.begin());
+            gpu_frames_[key] = frame;
+            if (reference_) to_compare.push_back(frame);
+        }
+        reference = reference_;
+    }
+    std::vector<Comparison> made;
+    for (const auto& gpu_frame : to_compare) {
+        if (auto c = compare(*gpu_frame, *reference, analysis, measurements)) {
+            log::info("planner", "{} {} at {} bounces against this view's reference: relMSE {:.4f}, own error {:.4f}", c->method,
+                      c->preset, c->bounces, c->rel_mse, c->own_error);
+            made.push_back(std::move(*c));
+        }
+    }
+    return made;
+}
+
+}  // namespace bounce::planning

@@ -1,0 +1,67 @@
+// A scene's frames of one view, compared: a GPU frame and a reference frame of the same scene state,
+// camera and size measure the GPU method's own error on this scene, which the error model then uses
+// in place of the bench's prior (error_model.hpp). Frames come from wherever the scene renders them:
+// a stream's still frame and reference rungs, a client's renders, the planner's own reference plans.
+//
+// own error = relMSE(GPU frame, reference frame) - the reference's noise (its measured noise per
+// sample over its samples) - the light of the bounces the reference has and the GPU frame lacks
+// (stopped_error[k] - stopped_error[b] from the analysis). Left out: comparisons where those two
+// are over half of the relMSE (the own part would be mostly noise or missing light), references
+// that are denoised, without indirect visibility, with ambient occlusion or under 16 samples, and
+// GPU frames whose knobs are not their preset's (other than `bounces`).
+#pragma once
+
+#include "renderer/planning/costs.hpp"
+#include "renderer/renderer.hpp"
+#include "renderer/scene_analysis.hpp"
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <tuple>
+#include <vector>
+
+namespace bounce::planning {
+
+// What one comparison measured (for logs and tests).
+struct Comparison {
+    std::string method, preset;
+    int bounces = 0;
+    double rel_mse = 0.0;         // against the reference frame
+    double reference_noise = 0.0;  // its expected share of rel_mse
+    double bounce_gap = 0.0;       // the light of bounces the reference has and the frame lacks
+    double own_error = 0.0;        // what was recorded
+};
+
+class FrameComparisons {
+public:
+    static constexpr std::size_t kMaxFrames = 8;  // GPU frames kept for the latest view
+    static constexpr int kMinReferenceSpp = 16;
+
+    // Adds a frame of the view `view` (a key of the scene's state, the camera and the size: frames
+    // are compared only with frames of the same key) and records, in `measurements`, the own error
+    // of every GPU frame that now has a reference frame to be compared with. A new view drops the
+    // frames of the old one. Thread-safe: GPU frames come from the render thread, reference frames
+    // from the CPU pool. Returns the comparisons made.
+    std::vector<Comparison> add(std::uint64_t view, std::shared_ptr<const RenderResult> frame, const SceneAnalysis* analysis,
+                                SceneMeasurements& measurements);
+
+    // Whether a frame's stats make it a reference to compare with, or a GPU frame to compare.
+    static bool usable_reference(const FrameStats& stats);
+    static bool usable_gpu_frame(const FrameStats& stats);
+
+    // One comparison, made and recorded (add() calls it; public for tests).
+    static std::optional<Comparison> compare(const RenderResult& gpu_frame, const RenderResult& reference,
+                                             const SceneAnalysis* analysis, SceneMeasurements& measurements);
+
+private:
+    std::mutex mutex_;
+    std::optional<std::uint64_t> view_;
+    std::shared_ptr<const RenderResult> reference_;
+    std::map<std::tuple<std::string, std::string, int>, std::shared_ptr<const RenderResult>> gpu_frames_;
+};
+
+}  // namespace bounce::planning

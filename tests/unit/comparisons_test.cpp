@@ -1,0 +1,211 @@
+// How the planner learns a GPU method's error on a scene: frames of one view compared with a
+// reference frame of it (planning::FrameComparisons), the own error that leaves once the
+// reference's noise and the bounces between them are taken out (exact arithmetic on constant
+// frames), which frames may be compared, how the error model uses what was measured, and which
+// probes the planner renders beside a reference plan.
+#include "renderer/methods/registry.hpp"
+#include "renderer/planning/comparisons.hpp"
+#include "renderer/planning/error_model.hpp"
+#include "renderer/planning/planner.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace bounce::planning {
+namespace {
+
+// Stopping at k bounces loses 0.1 / 2^k (as in planner_test.cpp).
+SceneAnalysis made_up_analysis() {
+    SceneAnalysis analysis;
+    for (int k = 0; k <= 12; ++k) {
+        analysis.bounces.stopped_error.push_back(k == 12 ? 0.0 : 0.1 / std::pow(2.0, k));
+        analysis.bounces.noise_per_sample.push_back(0.5);
+        analysis.bounces.sample_ns.push_back(1000.0);
+    }
+    return analysis;
+}
+
+// A constant 8x8 frame of `value` made by `method` at `preset` with `overrides`, the knobs resolved
+// as the renderer resolves them.
+std::shared_ptr<const RenderResult> frame(const std::string& method, const std::string& preset, methods::KnobValues overrides,
+                                          float value, double noise_per_sample = 0.0) {
+    auto result = std::make_shared<RenderResult>();
+    result->frame.width = result->frame.height = 8;
+    result->frame.rgba.assign(8 * 8 * 4, value);
+    for (std::size_t i = 3; i < result->frame.rgba.size(); i += 4) result->frame.rgba[i] = 1.0f;
+    result->stats.method = method;
+    result->stats.preset = preset;
+    result->stats.knobs = methods::MethodRegistry::builtin().resolve(method, preset, overrides);
+    if (method == "reference") result->stats.method_statistics["noise_per_sample"] = noise_per_sample;
+    return result;
+}
+
+std::shared_ptr<const RenderResult> reference(double spp, double noise_per_sample, methods::KnobValues more = {}) {
+    more["spp"] = spp;
+    more["bounces"] = 4;
+    more["pixel_jitter"] = 0;
+    return frame("reference", "medium", more, 1.0f, noise_per_sample);
+}
+
+TEST(OwnError, TheLargestOfTheLastComparisonsAtABounceCountElseAtThePresetsOthers) {
+    SceneMeasurements measured;
+    measured.record_own_error("cssm", "low", 2, 0.03);
+    measured.record_own_error("cssm", "low", 2, 0.05);
+    measured.record_own_error("cssm", "low", 4, 0.02);
+    measured.record_own_error("cssm", "low", 4, std::nan(""));  // ignored
+    measured.record_own_error("cssm", "low", 4, -1.0);          // ignored
+    const auto at_2 = measured.own_error("cssm", "low", 2);
+    ASSERT_TRUE(at_2);
+    EXPECT_DOUBLE_EQ(at_2->rel_mse, 0.05);
+    EXPECT_EQ(at_2->frames, 2);
+    EXPECT_TRUE(at_2->exact);
+    const auto at_4 = measured.own_error("cssm", "low", 4);
+    EXPECT_DOUBLE_EQ(at_4->rel_mse, 0.02);
+    EXPECT_EQ(at_4->frames, 1);
+    const auto at_3 = measured.own_error("cssm", "low", 3);  // not measured: the preset's largest
+    EXPECT_DOUBLE_EQ(at_3->rel_mse, 0.05);
+    EXPECT_EQ(at_3->frames, 3);
+    EXPECT_FALSE(at_3->exact);
+    EXPECT_FALSE(measured.own_error("cssm", "high", 2));
+    EXPECT_EQ(measured.own_errors("cssm"), (std::map<std::string, double>{{"low", 0.05}}));
+    // Only the last kKept are kept.
+    for (std::size_t i = 0; i < SceneMeasurements::kKept; ++i) measured.record_own_error("cssm", "low", 2, 0.01);
+    EXPECT_DOUBLE_EQ(measured.own_error("cssm", "low", 2)->rel_mse, 0.01);
+}
+
+TEST(OwnError, TheErrorModelUsesWhatTheSceneMeasuredAndScalesThePresetsItDidNot) {
+    const SceneAnalysis analysis = made_up_analysis();
+    SceneMeasurements measured;
+    const double prior_low = *own_error_prior("cssm", "low"), prior_medium = *own_error_prior("cssm", "medium");
+    measured.record_own_error("cssm", "low", 2, 0.25 * prior_low);
+    const ErrorPrediction low = predict_error(analysis, "cssm", "low", {{"bounces", 2}}, &measured);
+    EXPECT_DOUBLE_EQ(low.rel_mse, 0.1 / 4.0 + 0.25 * prior_low);
+    EXPECT_NE(low.basis.find("1 comparison with this scene's reference frames"), std::string::npos) << low.basis;
+    // Net of bounces: the same own error at another count.
+    EXPECT_DOUBLE_EQ(predict_error(analysis, "cssm", "low", {{"bounces", 6}}, &measured).rel_mse,
+                     0.1 / 64.0 + 0.25 * prior_low);
+    // Another preset of the method: its prior times what the measured preset got of its own.
+    const ErrorPrediction medium = predict_error(analysis, "cssm", "medium", {{"bounces", 2}}, &measured);
+    EXPECT_NEAR(medium.rel_mse, 0.1 / 4.0 + 0.25 * prior_medium, 1e-12);
+    EXPECT_NE(medium.basis.find("as this scene's other cssm presets measured"), std::string::npos) << medium.basis;
+    // Another method keeps its prior.
+    EXPECT_DOUBLE_EQ(predict_error(analysis, "vct", "low", {}, &measured).rel_mse, 0.1 / 2.0 + *own_error_prior("vct", "low"));
+}
+
+TEST(FrameComparisons, TheOwnErrorIsTheRelMseLessTheReferencesNoiseAndTheBouncesItLacks) {
+    const SceneAnalysis analysis = made_up_analysis();
+    SceneMeasurements measured;
+    FrameComparisons comparisons;
+    // 2.0 against 1.0 everywhere: relMSE (2 - 1)^2 / (1 + 0.01).
+    EXPECT_TRUE(comparisons.add(7, frame("cssm", "low", {{"bounces", 2}}, 2.0f), &analysis, measured).empty());
+    const auto made = comparisons.add(7, reference(64, 0.64), &analysis, measured);
+    ASSERT_EQ(made.size(), 1u);
+    const double rel_mse = 1.0 / 1.01, noise = 0.64 / 64.0, gap = 0.1 / 4.0 - 0.1 / 16.0;
+    EXPECT_NEAR(made[0].rel_mse, rel_mse, 1e-6);
+    EXPECT_DOUBLE_EQ(made[0].reference_noise, noise);
+    EXPECT_DOUBLE_EQ(made[0].bounce_gap, gap);
+    EXPECT_NEAR(measured.own_error("cssm", "low", 2)->rel_mse, rel_mse - noise - gap, 1e-6);
+    // A frame whose error is mostly the bounces it lacks says little of its own: not recorded.
+    // (1.25 against 1.0: relMSE 0.062, of which 0.05 - 0.00625 is the light of bounces 1 to 4.)
+    EXPECT_TRUE(comparisons.add(7, frame("vct", "high", {}, 1.25f), &analysis, measured).empty());
+    EXPECT_FALSE(measured.own_error("vct", "high", 1));
+    EXPECT_TRUE(measured.compared("vct", "high"));  // but it was compared: not probed again
+    // A frame with more bounces than the reference keeps the light the reference lacks as error.
+    const auto more = comparisons.add(7, frame("cssm", "low", {{"bounces", 6}}, 2.0f), &analysis, measured);
+    ASSERT_EQ(more.size(), 1u);
+    EXPECT_EQ(more[0].bounce_gap, 0.0);
+    EXPECT_NEAR(more[0].own_error, rel_mse - noise, 1e-6);
+}
+
+TEST(FrameComparisons, OnlyFramesOfOneViewAreCompared) {
+    const SceneAnalysis analysis = made_up_analysis();
+    SceneMeasurements measured;
+    FrameComparisons comparisons;
+    comparisons.add(1, frame("vct", "low", {}, 2.0f), &analysis, measured);
+    EXPECT_TRUE(comparisons.add(2, reference(64, 0.1), &analysis, measured).empty());  // another view: dropped view 1
+    EXPECT_TRUE(comparisons.add(1, reference(256, 0.1), &analysis, measured).empty());  // view 1 again: nothing kept
+    EXPECT_FALSE(measured.own_error("vct", "low", 1));
+    EXPECT_EQ(comparisons.add(1, frame("vct", "low", {}, 2.0f), &analysis, measured).size(), 1u);
+    EXPECT_TRUE(measured.own_error("vct", "low", 1));
+    // A frame of another size is no comparison either.
+    auto small = std::make_shared<RenderResult>(*frame("vct", "high", {}, 2.0f));
+    small->frame.width = small->frame.height = 4;
+    small->frame.rgba.resize(4 * 4 * 4);
+    EXPECT_TRUE(comparisons.add(1, small, &analysis, measured).empty());
+}
+
+TEST(FrameComparisons, AReferenceWithMoreSamplesComparesAgainAndOneWithFewerIsIgnored) {
+    const SceneAnalysis analysis = made_up_analysis();
+    SceneMeasurements measured;
+    FrameComparisons comparisons;
+    comparisons.add(1, frame("isr", "medium", {}, 2.0f), &analysis, measured);
+    EXPECT_EQ(comparisons.add(1, reference(64, 0.1), &analysis, measured).size(), 1u);
+    EXPECT_TRUE(comparisons.add(1, reference(32, 0.1), &analysis, measured).empty());
+    EXPECT_EQ(comparisons.add(1, reference(256, 0.1), &analysis, measured).size(), 1u);
+    EXPECT_EQ(measured.own_error("isr", "medium", 1)->frames, 2);
+}
+
+TEST(FrameComparisons, NoisyDenoisedOrUnlikeFramesAreNotCompared) {
+    const SceneAnalysis analysis = made_up_analysis();
+    // The reference's noise over half of the relMSE: the own part would be mostly noise.
+    {
+        SceneMeasurements measured;
+        FrameComparisons comparisons;
+        comparisons.add(1, frame("direct", "high", {}, 1.1f), &analysis, measured);  // relMSE 0.0099
+        EXPECT_TRUE(comparisons.add(1, reference(16, 16 * 0.006), &analysis, measured).empty());
+        EXPECT_FALSE(measured.own_error("direct", "high", 0));
+    }
+    EXPECT_TRUE(FrameComparisons::usable_reference(reference(64, 0.1)->stats));
+    EXPECT_FALSE(FrameComparisons::usable_reference(reference(8, 0.1)->stats));
+    EXPECT_FALSE(FrameComparisons::usable_reference(reference(64, 0.1, {{"denoise", 1}})->stats));
+    EXPECT_FALSE(FrameComparisons::usable_reference(reference(64, 0.1, {{"ao", 1}})->stats));
+    EXPECT_FALSE(FrameComparisons::usable_reference(reference(64, 0.1, {{"indirect_visibility", 0}})->stats));
+    auto without_noise = std::make_shared<RenderResult>(*reference(64, 0.1));
+    without_noise->stats.method_statistics.clear();
+    EXPECT_FALSE(FrameComparisons::usable_reference(without_noise->stats));
+    // A GPU frame is its preset's, whatever its bounces; another knob makes it another method.
+    EXPECT_TRUE(FrameComparisons::usable_gpu_frame(frame("cssm", "high", {{"bounces", 5}}, 1.0f)->stats));
+    EXPECT_TRUE(FrameComparisons::usable_gpu_frame(frame("vct", "draft", {}, 1.0f)->stats));
+    const auto& vct_knobs = methods::MethodRegistry::builtin().find("vct").presets.at("draft");
+    const std::string changed = vct_knobs.begin()->first == "bounces" ? std::next(vct_knobs.begin())->first
+                                                                       : vct_knobs.begin()->first;
+    auto tuned = std::make_shared<RenderResult>(*frame("vct", "draft", {}, 1.0f));
+    tuned->stats.knobs[changed] += 1.0;
+    EXPECT_FALSE(FrameComparisons::usable_gpu_frame(tuned->stats)) << changed;
+    EXPECT_FALSE(FrameComparisons::usable_gpu_frame(reference(64, 0.1)->stats));
+}
+
+Candidate candidate(std::string method, std::string preset, methods::KnobValues knobs, double ms, double error = 0.1) {
+    return {std::move(method), std::move(preset), std::move(knobs), ms, error, "table", "table"};
+}
+
+TEST(Probes, BesideAReferencePlanUnmeasuredPresetsCheapestFirstWithinAQuarterOfItsTime) {
+    const Candidate chosen = candidate("reference", "medium", {{"spp", 64}}, 100.0);
+    const std::vector<Candidate> all = {
+        chosen,
+        candidate("cssm", "low", {{"bounces", 1}}, 5.0, 0.1),
+        candidate("cssm", "low", {{"bounces", 2}}, 8.0, 0.05),  // the preset's most accurate that fits alone
+        candidate("cssm", "low", {{"bounces", 8}}, 30.0, 0.01),  // over the 25 ms share by itself
+        candidate("vct", "draft", {}, 10.0),
+        candidate("isr", "medium", {}, 20.0),
+        candidate("direct", "high", {}, 150.0),
+        candidate("reference", "medium", {{"spp", 4}}, 7.0),
+    };
+    const auto first = probes(all, chosen, nullptr);
+    ASSERT_EQ(first.size(), 2u);  // 8 + 10 ms; isr's 20 more would pass 25
+    EXPECT_EQ(first[0].method, "cssm");
+    EXPECT_EQ(first[0].knobs.at("bounces"), 2.0);
+    EXPECT_EQ(first[1].method, "vct");
+    // cssm low compared with a reference frame once: no longer probed.
+    SceneMeasurements measured;
+    measured.record_compared("cssm", "low");
+    const auto second = probes(all, chosen, &measured);
+    ASSERT_EQ(second.size(), 1u);
+    EXPECT_EQ(second[0].method, "vct");
+    // A GPU plan chosen: no probes (no reference frame to compare with).
+    EXPECT_TRUE(probes(all, all[3], nullptr).empty());
+}
+
+}  // namespace
+}  // namespace bounce::planning
