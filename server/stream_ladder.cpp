@@ -35,12 +35,16 @@ std::vector<Rung> build_ladder(const StreamOrder& order) {
 
     Rung interactive{"interactive", order.view};
     RenderRequest& quick = interactive.frame.request;
-    quick.preset = "draft";
     quick.width = std::max(1, static_cast<int>(std::lround(order.view.request.width * order.interactive_scale)));
     quick.height = std::max(1, static_cast<int>(std::lround(order.view.request.height * order.interactive_scale)));
-    if (quick.method == "reference") quick.knobs["denoise"] = 1;  // one sample's noise is no preview
     interactive.frame.jpeg_quality = order.interactive_quality;
-    replan(interactive.frame, "method");
+    // With a budget, the interactive and still rungs are planned for it, each at its own size, when
+    // they render (RequestHandlers::plan_budgeted); without, the quick rung is the draft preset.
+    if (!order.view.budget) {
+        quick.preset = "draft";
+        if (quick.method == "reference") quick.knobs["denoise"] = 1;  // one sample's noise is no preview
+        replan(interactive.frame, "method");
+    }
     ladder.push_back(std::move(interactive));
 
     Rung still{"still", order.view};
@@ -55,6 +59,7 @@ std::vector<Rung> build_ladder(const StreamOrder& order) {
     samples.push_back(order.reference_spp);
     for (std::size_t i = 0; i < samples.size(); ++i) {
         Rung reference{"reference", order.view};
+        reference.frame.budget.reset();  // the ladder's top converges whatever the budget
         RenderRequest& request = reference.frame.request;
         request.method = "reference";
         request.preset = "medium";
@@ -69,7 +74,7 @@ std::vector<Rung> build_ladder(const StreamOrder& order) {
 
 StreamOrder parse_stream(const json& fields, std::uint64_t max_pixels) {
     if (!fields.is_object()) throw FieldError("stream", "a stream's fields must be a JSON object");
-    for (const char* refused : {"min_scene_version", "timeout_ms", "budget"}) {
+    for (const char* refused : {"min_scene_version", "timeout_ms"}) {
         if (fields.contains(refused)) {
             throw FieldError(refused, fmt::format("field '{}' is a render's, not a stream's (yet)", refused));
         }

@@ -38,7 +38,9 @@ StreamOrder parse_stream(const nlohmann::json& fields, std::uint64_t max_pixels)
 
 // The rungs of a stream's ladder, from its fields (parse_stream calls it):
 //   0 `interactive`: the method at preset draft, at interactive_scale of the size and quality;
+//     with a budget, the plan for it at that size;
 //   1 `still`: the stream's method, preset and knobs at full size (left out when it is rung 0);
+//     with a budget, the plan for it at full size;
 //   2… `reference`: the path tracer at 16, 64, … samples, ×4 a rung up to reference_spp, each but
 //      the last denoised; none without `refine`.
 std::vector<Rung> build_ladder(const StreamOrder& order);

@@ -1,7 +1,7 @@
 // Budgets through the daemon: a render with `budget` (and method `auto`) comes back with its plan,
 // its frame is the plan's, later plans use the frames measured meanwhile (their times, and their
-// errors against the scene's reference frames of the same view), and every malformed budget is
-// refused naming its field.
+// errors against the scene's reference frames of the same view), streams plan their first rungs
+// for their budget, and every malformed budget is refused naming its field.
 //
 // The test writes the device's cost model into the daemon's cache folder, under the renderer the
 // daemon announces, before the first frame: the daemon reads it instead of calibrating (half a
@@ -107,6 +107,37 @@ TEST(Budget, AReferencePlanProbesGpuPresetsOncePerScene) {
     }
 }
 
+// A stream with a budget: its interactive and still rungs are each planned for it at their own
+// size, and carry their plans; the reference rungs above them converge as in any stream.
+TEST(Budget, AStreamPlansItsInteractiveAndStillRungsForItsBudget) {
+    BudgetDaemon d;
+    const json fields = {{"scene", "cornell"}, {"width", 48},      {"height", 48},          {"method", "auto"},
+                         {"format", "png"},    {"reference_spp", 16}, {"budget", {{"max_ms", 60.0}}}};
+    d.client.send_raw(frame_bytes(MessageType::stream_start, 5, fields));
+    const auto ok = reply_to(d.client, 5);
+    ASSERT_EQ(ok.type, static_cast<std::uint16_t>(MessageType::ok)) << ok.body.dump();
+    ASSERT_EQ(ok.body["rungs"], 3);  // interactive, still, reference at 16 samples
+    for (int rung = 0; rung < 3; ++rung) {
+        protocol::Message frame;
+        do frame = d.client.read();
+        while (frame.request_id != 5);
+        ASSERT_EQ(frame.type, static_cast<std::uint16_t>(MessageType::frame)) << frame.body.dump();
+        EXPECT_EQ(frame.body["stream"]["rung"], rung);
+        EXPECT_EQ(frame.body["width"], rung == 0 ? 24 : 48);
+        if (rung == 2) {
+            EXPECT_EQ(frame.body["method"], "reference");
+            EXPECT_FALSE(frame.body.contains("plan")) << frame.body.dump();
+            continue;
+        }
+        const json& plan = frame.body["plan"];
+        ASSERT_TRUE(plan.is_object()) << frame.body.dump();
+        EXPECT_TRUE(plan["meets_budget"].get<bool>()) << plan.dump();
+        EXPECT_LE(plan["predicted_ms"].get<double>(), 60.0);
+        EXPECT_EQ(frame.body["method"], plan["method"]);
+        EXPECT_EQ(frame.body["preset"], plan["preset"]);
+    }
+}
+
 TEST(Budget, MalformedBudgetsAreRefusedNamingTheField) {
     BudgetDaemon d;
     const auto refused = [&](json body, const std::string& field) {
@@ -124,8 +155,11 @@ TEST(Budget, MalformedBudgetsAreRefusedNamingTheField) {
     refused({{"method", "nope"}, {"budget", {{"max_ms", 10}}}}, "method");
     expect_error([&] { d.client.request(MessageType::bake, {{"scene", "cornell"}, {"method", "auto"}, {"budget", {{"max_ms", 10}}}}); },
                  ErrorCode::bad_request, "budget");
-    expect_error([&] { d.client.request(MessageType::stream_start, {{"scene", "cornell"}, {"budget", {{"max_ms", 10}}}}); },
+    expect_error([&] { d.client.request(MessageType::stream_start, {{"scene", "cornell"}, {"method", "auto"}}); },
                  ErrorCode::bad_request, "budget");
+    expect_error([&] {
+        d.client.request(MessageType::stream_start, {{"scene", "cornell"}, {"budget", {{"max_ms", 10}}}, {"preset", "low"}});
+    }, ErrorCode::bad_request, "preset");
     // And the daemon still serves.
     EXPECT_EQ(d.render({{"method", "direct"}}).body["method"], "direct");
 }

@@ -29,7 +29,8 @@ COMMANDS = """commands:
           [--budget-ms T] [--target-error E] -o OUT.(png|jpg|exr)|-   (a budget plans method auto)
   bake    --scene S [--method cssm] [--preset P] [--set KNOB=VALUE ...]   (progress on stderr)
   watch   --scene S [--method M] [--preset P] [--size WxH] [--format jpeg|png|webp]
-          [--frames N] [--until-final] -o DIR   (a stream's frames; one JSON line each)
+          [--budget-ms T] [--target-error E] [--frames N] [--until-final] -o DIR
+          (a stream's frames, one JSON line each; a budget plans its first two rungs)
   load    PATH --name S          (PATH under the daemon's --scene-root)
   upload  FILE.glb --name S      (sends the file)
   move    --scene S --object O [--translate X,Y,Z] [--rotate-deg RX,RY,RZ] [--scale K]
@@ -110,15 +111,19 @@ class _Parser:
             self.option(parser, "--exposure", metavar="E")
             self.option(parser, "--tone", choices=("none", "reinhard", "aces"))
 
+        def budget_options(parser):
+            self.option(parser, "--budget-ms", metavar="T")
+            self.option(parser, "--target-error", metavar="E")
+
         render = command("render", "render one frame to a file")
         frame_options(render)
         self.option(render, "--camera", metavar="NAME")
-        self.option(render, "--budget-ms", metavar="T")
-        self.option(render, "--target-error", metavar="E")
+        budget_options(render)
         self.option(render, "-o", dest="out", required=True, metavar="OUT.(png|jpg|exr)|-")
         frame_options(command("bake", "build a method's precomputed structures"))
         watch = command("watch", "stream a view: each frame to DIR, one JSON line per frame")
         frame_options(watch)
+        budget_options(watch)
         self.option(watch, "--format", choices=("jpeg", "jpg", "png", "webp"), default="jpeg")
         self.option(watch, "--frames", metavar="N")
         watch.add_argument("--until-final", action="store_true")
@@ -193,6 +198,18 @@ def _knobs(pairs: list[str]) -> dict[str, float]:
     return knobs
 
 
+def _add_budget(fields: dict[str, Any], args: argparse.Namespace) -> None:
+    """--budget-ms and --target-error as the request's `budget` (the daemon then plans the method
+    too, unless --method names one)."""
+    budget = {}
+    if args.budget_ms is not None:
+        budget["max_ms"] = _number(args.budget_ms, "--budget-ms")
+    if args.target_error is not None:
+        budget["max_error"] = _number(args.target_error, "--target-error")
+    if budget:
+        fields["budget"] = budget
+
+
 def _frame_fields(args: argparse.Namespace) -> dict[str, Any]:
     width, height = _size(args.size) if args.size else (None, None)
     return {"method": args.method, "preset": args.preset, "knobs": _knobs(args.knobs) or None,
@@ -259,13 +276,7 @@ def _prepare(args: argparse.Namespace) -> Action:
     if command == "render":
         fmt = _format_of(args.out)
         fields = _frame_fields(args)
-        budget = {}
-        if args.budget_ms is not None:
-            budget["max_ms"] = _number(args.budget_ms, "--budget-ms")
-        if args.target_error is not None:
-            budget["max_error"] = _number(args.target_error, "--target-error")
-        if budget:
-            fields["budget"] = budget
+        _add_budget(fields, args)
 
         def render(target, routed):
             image, stats = target.render(args.scene, format=fmt, camera=args.camera, **fields)
@@ -332,6 +343,7 @@ def _prepare_watch(args: argparse.Namespace) -> Action:
     it, then stops the stream after --frames frames or the first final one (else it runs until
     interrupted)."""
     fields = _frame_fields(args)
+    _add_budget(fields, args)
     fmt = "jpeg" if args.format == "jpg" else args.format
     extension = "jpg" if fmt == "jpeg" else fmt
     frames = None if args.frames is None else _count(args.frames, "--frames")

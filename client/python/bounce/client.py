@@ -583,14 +583,16 @@ class Client:
                      height: int | None = None, format: str | None = None, exposure: float | None = None,
                      tone: str | None = None, camera: str | Mapping[str, Any] | None = None,
                      jpeg_quality: int | None = None, refine: bool | None = None, reference_spp: int | None = None,
-                     interactive_scale: float | None = None, interactive_quality: int | None = None) -> int:
+                     interactive_scale: float | None = None, interactive_quality: int | None = None,
+                     budget: Mapping[str, float] | None = None) -> int:
         """Starts a stream: a view the daemon renders again whenever the scene or the view changes,
         and refines while neither does (docs/protocol.md, "stream.start, stream.update,
         stream.stop"). Takes render's fields, `format` "jpeg" (the daemon's default), "png" or
-        "webp", and the ladder's. Returns the stream's id; next_frame() reads its frames."""
+        "webp", and the ladder's. With `budget` the interactive and still frames are planned for
+        it. Returns the stream's id; next_frame() reads its frames."""
         body = render_body(scene, method=method, preset=preset, knobs=knobs, width=width, height=height,
                            format=format, exposure=exposure, tone=tone, camera=camera,
-                           jpeg_quality=jpeg_quality)
+                           jpeg_quality=jpeg_quality, budget=budget)
         body.update(stream_fields(refine=refine, reference_spp=reference_spp,
                                   interactive_scale=interactive_scale, interactive_quality=interactive_quality))
         reply = self.request("stream.start", body)

@@ -4,6 +4,7 @@ import contextlib
 import io
 import struct
 import time
+import tempfile
 import unittest
 
 import support
@@ -219,6 +220,21 @@ class Budgets(unittest.TestCase):
                       "--target-error", "0.05", "-o", "x.png"])
         self.assertEqual(seen[0]["budget"], {"max_ms": 50.0, "max_error": 0.05})
         self.assertEqual(seen[0]["method"], "auto")
+
+    def test_watch_starts_a_stream_with_its_budget(self):
+        seen = []
+
+        def script(conn):
+            conn.greet()
+            request = conn.read()
+            seen.append((request.type, request.body))
+            conn.send("error", request.request_id, {"code": "not_found", "message": "no scene", "retryable": False})
+
+        with support.FakeDaemon(script) as fake, tempfile.TemporaryDirectory() as out:
+            cli_main(["--connect", f"127.0.0.1:{fake.port}", "watch", "--scene", "s", "--target-error", "0.05",
+                      "--frames", "1", "-o", out])
+        self.assertEqual(seen[0][1]["budget"], {"max_error": 0.05})
+        self.assertEqual(seen[0][1]["method"], "auto")
 
     def test_a_named_method_with_a_budget_is_kept(self):
         from bounce.client import render_body
