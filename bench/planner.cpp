@@ -19,6 +19,7 @@
 #include "renderer/planning/comparisons.hpp"
 #include "renderer/planning/error_model.hpp"
 #include "renderer/planning/planner.hpp"
+#include "renderer/planning/resolution.hpp"
 #include "renderer/renderer.hpp"
 
 #include <algorithm>
@@ -76,8 +77,9 @@ std::string label(const std::string& method, const std::string& preset, const me
 Measured render_plan(Renderer& renderer, SceneResources& resources, const scene::Scene& scene, const SceneAnalysis& analysis,
                      const planning::DeviceCosts& device, planning::SceneMeasurements& costs, const std::string& method,
                      const std::string& preset, const methods::KnobValues& knobs, int size, const image::Frame& truth,
-                     planning::FrameComparisons* comparisons = nullptr) {
+                     planning::FrameComparisons* comparisons = nullptr, double scale = 1.0) {
     RenderRequest request = bench::linear_request(method, preset, knobs, size);
+    std::tie(request.width, request.height) = planning::scaled_size(size, size, scale);
     const FramePlan frame_plan = plan_frame(request);
     RenderResult result;
     if (frame_plan.site == FrameSite::cpu) {
@@ -86,11 +88,15 @@ Measured render_plan(Renderer& renderer, SceneResources& resources, const scene:
         renderer.render(resources, request);  // builds the structures
         result = renderer.render(resources, request);
     }
-    planning::record_frame(costs, &analysis, device, result.stats, size, size);
+    planning::record_frame(costs, &analysis, device, result.stats, request.width, request.height);
+    if (scale != 1.0) result = planning::upsampled(result, size, size, request);
     const double error = image::compare(result.frame, truth).rel_mse;
-    log::info("bench", "{}: {:.1f} ms, relMSE {:.4f}", label(method, preset, knobs), result.stats.render_ms, error);
-    Measured measured{label(method, preset, knobs), result.stats.render_ms, error};
-    if (comparisons) comparisons->add(1, std::make_shared<const RenderResult>(std::move(result)), &analysis, costs);
+    const std::string name = label(method, preset, knobs) + (scale != 1.0 ? fmt::format(" at 1/{:g} size", 1.0 / scale) : "");
+    log::info("bench", "{}: {:.1f} ms, relMSE {:.4f}", name, result.stats.render_ms, error);
+    Measured measured{name, result.stats.render_ms, error};
+    if (comparisons && scale == 1.0) {
+        comparisons->add(1, std::make_shared<const RenderResult>(std::move(result)), &analysis, costs);
+    }
     return measured;
 }
 
@@ -183,7 +189,10 @@ int main(int argc, char** argv) {
                                                 options.size, truth));
                 }
             }
-            const planning::PlanningInputs inputs{analysis, device, &costs, options.size, options.size, std::nullopt};
+            const planning::PlanningInputs inputs{
+                analysis, device, &costs, options.size, options.size, std::nullopt,
+                planning::measure_resample_errors(renderer, *resources, bench::linear_request("direct", "draft", {}, options.size),
+                                                  {"direct", "vct", "isr", "cssm"})};
             planning::FrameComparisons comparisons;
             int pass = 1;
             const auto run = [&](const planning::Budget& budget, const std::string& text) {
@@ -192,12 +201,14 @@ int main(int argc, char** argv) {
                 row.pass = pass;
                 row.scene = bench_scene.name;
                 row.budget = text;
-                row.plan = label(plan.chosen.method, plan.chosen.preset, plan.chosen.knobs);
+                row.plan = label(plan.chosen.method, plan.chosen.preset, plan.chosen.knobs) +
+                           (plan.chosen.scale != 1.0 ? fmt::format(" at 1/{:g} size", 1.0 / plan.chosen.scale) : "");
                 row.predicted_ms = plan.chosen.predicted_ms;
                 row.predicted_error = plan.chosen.predicted_error;
                 row.why = plan.why;
                 row.planned = render_plan(renderer, *resources, scene, analysis, device, costs, plan.chosen.method,
-                                          plan.chosen.preset, plan.chosen.knobs, options.size, truth, &comparisons);
+                                          plan.chosen.preset, plan.chosen.knobs, options.size, truth, &comparisons,
+                                          plan.chosen.scale);
                 for (const planning::Candidate& probe : plan.probes) {
                     render_plan(renderer, *resources, scene, analysis, device, costs, probe.method, probe.preset, probe.knobs,
                                 options.size, truth, &comparisons);

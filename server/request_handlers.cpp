@@ -3,6 +3,7 @@
 #include "renderer/base/hash.hpp"
 #include "renderer/base/log.hpp"
 #include "renderer/planning/calibration.hpp"
+#include "renderer/planning/resolution.hpp"
 #include "renderer/image/codec.hpp"
 #include "server/daemon.hpp"
 #include "server/scene_requests.hpp"
@@ -170,13 +171,18 @@ void RequestHandlers::render_on_gpu(const std::shared_ptr<Request>& request, con
     if (auto camera = view_camera(*entry.scene, order)) frame.camera = std::move(camera);
     if (wait_for_pending_work(request, order.scene, entry, frame, renderer)) return;
     auto result = std::make_shared<const RenderResult>(renderer.render(*entry.resources, frame, request->cancelled.get()));
-    clock.rendered = Clock::now();
     if (const planning::DeviceCosts* device = known_device_costs(renderer)) {
         planning::record_frame(*entry.resources->measurements, entry.resources->analysis_if_made(), *device, result->stats,
                                frame.width, frame.height);
     }
-    entry.comparisons->add(view_key(entry.version, frame), result, entry.resources->analysis_if_made(),
-                           *entry.resources->measurements);
+    if (order.output_size) {
+        result = std::make_shared<const RenderResult>(
+            planning::upsampled(*result, order.output_size->first, order.output_size->second, frame));
+    } else {
+        entry.comparisons->add(view_key(entry.version, frame), result, entry.resources->analysis_if_made(),
+                               *entry.resources->measurements);
+    }
+    clock.rendered = Clock::now();
     daemon_.metrics().set_resident_bytes(order.scene, result->stats.resident_bytes);
     daemon_.metrics().set_gpu_memory(renderer.memory_budget().bytes, renderer.resident_bytes());
     deliver(request, order, std::move(result), entry.version, clock);
@@ -213,12 +219,17 @@ void RequestHandlers::render_on_cpu(const std::shared_ptr<Request>& request, con
             FrameClock clock{request->received, Clock::now(), {}, {}};
             auto result = std::make_shared<const RenderResult>(
                 bounce::render_on_cpu(*snapshot, frame, order.plan, request->cancelled.get()));
-            clock.rendered = Clock::now();
             if (device) {
                 planning::record_frame(*measurements, analysis ? &*analysis : nullptr, *device, result->stats, frame.width,
                                        frame.height);
             }
-            comparisons->add(view, result, analysis ? &*analysis : nullptr, *measurements);
+            if (order.output_size) {
+                result = std::make_shared<const RenderResult>(
+                    planning::upsampled(*result, order.output_size->first, order.output_size->second, frame));
+            } else {
+                comparisons->add(view, result, analysis ? &*analysis : nullptr, *measurements);
+            }
+            clock.rendered = Clock::now();
             deliver(request, order, std::move(result), version, clock);
         } catch (...) {
             request->fail(std::current_exception());
@@ -351,12 +362,16 @@ void RequestHandlers::plan_budgeted(RenderOrder& order, Renderer& renderer, Scen
     const planning::DeviceCosts& device = device_costs(renderer);
     RenderRequest& frame = order.request;
     const std::optional<std::string> method = frame.method == "auto" ? std::nullopt : std::optional(frame.method);
-    const planning::Plan plan = planning::plan(
-        {entry.resources->analysis(), device, entry.resources->measurements.get(), frame.width, frame.height, method},
-        *order.budget);
+    const planning::Plan plan = planning::plan({entry.resources->analysis(), device, entry.resources->measurements.get(),
+                                                frame.width, frame.height, method, resample_errors(order, renderer, entry)},
+                                               *order.budget);
     frame.method = plan.chosen.method;
     frame.preset = plan.chosen.preset;
     frame.knobs = plan.chosen.knobs;
+    if (plan.chosen.scale != 1.0) {
+        order.output_size = {frame.width, frame.height};
+        std::tie(frame.width, frame.height) = planning::scaled_size(frame.width, frame.height, plan.chosen.scale);
+    }
     order.plan = plan_frame(frame);
     order.planned = planning::plan_json(plan);
     for (const planning::Candidate& probe : plan.probes) {
@@ -366,6 +381,37 @@ void RequestHandlers::plan_budgeted(RenderOrder& order, Renderer& renderer, Scen
         probe_frame.knobs = probe.knobs;
         probe_frame.make_display_image = false;
         order.probes.push_back(std::move(probe_frame));
+    }
+}
+
+// Measured once per scene and frame size, on the first budgeted view at that size: each GPU
+// method whose draft structures are built (a measurement never waits for a bake) renders three
+// draft frames, milliseconds on a GPU. A method without a measurement is planned at full size only.
+planning::ResampleErrors RequestHandlers::resample_errors(const RenderOrder& order, Renderer& renderer, SceneEntry& entry) {
+    RenderRequest view = order.request;
+    if (auto camera = view_camera(*entry.scene, order)) view.camera = std::move(camera);
+    Hasher key;
+    key.add(view.width).add(view.height);
+    if (entry.resampling && entry.resampling->key == key.value()) return entry.resampling->errors;
+    std::vector<std::string> ready;
+    std::size_t gpu_methods = 0;
+    for (const std::string& method : methods::MethodRegistry::builtin().names()) {
+        if (methods::MethodRegistry::builtin().find(method).device != methods::MethodDevice::gpu) continue;
+        ++gpu_methods;
+        RenderRequest draft = view;
+        draft.method = method;
+        draft.preset = "draft";
+        draft.knobs.clear();
+        if (!renderer.pending_work(*entry.resources, draft)) ready.push_back(method);
+    }
+    try {
+        planning::ResampleErrors errors = planning::measure_resample_errors(renderer, *entry.resources, view, ready);
+        // Kept only once every GPU method is in it: until then, measured again as more are built.
+        if (ready.size() == gpu_methods) entry.resampling = SceneEntry::Resampling{key.value(), errors};
+        return errors;
+    } catch (const std::exception& error) {
+        log::warn("planner", "no smaller frames planned: measuring what upsampling loses failed: {}", error.what());
+        return {};
     }
 }
 

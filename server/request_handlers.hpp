@@ -12,6 +12,7 @@
 // no input reaches terminate().
 #pragma once
 
+#include "renderer/planning/resolution.hpp"
 #include "server/frame_json.hpp"
 #include "server/request.hpp"
 #include "server/shared_work.hpp"
@@ -66,6 +67,8 @@ private:
     // Renders the order's probes whose structures are built (a probe never waits for a bake) and
     // compares each with the reference frame of its view when there is one.
     void render_probes(const RenderOrder& order, Renderer& renderer, SceneRegistry& registry);
+    // The error upsampling adds at each scale for the order's view (planning/resolution.hpp).
+    planning::ResampleErrors resample_errors(const RenderOrder& order, Renderer& renderer, SceneEntry& entry);
     // The device's cost model: read from the cache folder, else calibrated (render thread; once).
     const planning::DeviceCosts& device_costs(Renderer& renderer);
     // The same if the cache had one or a plan needed it; nullptr otherwise (frames are then not

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -22,6 +23,12 @@ struct SceneEntry {
     // Its GPU and reference frames of one view, compared for the planner's error model. Shared: CPU
     // frames add to it from the CPU pool.
     std::shared_ptr<planning::FrameComparisons> comparisons = std::make_shared<planning::FrameComparisons>();
+    // What upsampling loses per GPU method and scale (planning/resolution.hpp), for one frame size.
+    struct Resampling {
+        std::uint64_t key = 0;  // the frame size's
+        std::map<std::string, std::map<double, double>> errors;
+    };
+    std::optional<Resampling> resampling;
 };
 
 class SceneRegistry {

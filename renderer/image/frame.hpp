@@ -26,4 +26,8 @@ struct Frame {
     std::size_t non_finite_count() const;
 };
 
+// `frame`'s linear radiance resampled to width x height, bilinear between pixel centres (edges
+// clamped); no display image. Throws InputError for an empty frame or size.
+Frame resample_linear(const Frame& frame, int width, int height);
+
 }  // namespace bounce::image

@@ -3,6 +3,7 @@
 #include "renderer/base/error.hpp"
 #include "renderer/methods/registry.hpp"
 #include "renderer/planning/error_model.hpp"
+#include "renderer/planning/resolution.hpp"
 
 #include <algorithm>
 #include <limits>
@@ -24,6 +25,7 @@ std::string describe(const Candidate& candidate) {
         if (knob == "pixel_jitter") continue;
         text += fmt::format(" {}={:g}", knob, value);
     }
+    if (candidate.scale != 1.0) text += fmt::format(" at 1/{:g} size, upsampled", 1.0 / candidate.scale);
     return text;
 }
 
@@ -131,17 +133,23 @@ double predicted_ms(const PlanningInputs& inputs, const std::string& method, con
 std::vector<Candidate> candidates(const PlanningInputs& inputs, std::vector<std::string>* ruled_out) {
     const auto& registry = methods::MethodRegistry::builtin();
     std::vector<Candidate> all;
-    const auto add = [&](const std::string& method, const std::string& preset, methods::KnobValues knobs) {
-        Candidate candidate{method, preset, std::move(knobs), 0.0, 0.0, {}, {}};
-        ErrorPrediction error = predict_error(inputs.analysis, method, preset, candidate.knobs, inputs.scene);
+    const auto add = [&](const std::string& method, const std::string& preset, const methods::KnobValues& knobs) {
+        const ErrorPrediction error = predict_error(inputs.analysis, method, preset, knobs, inputs.scene);
         if (error.ruled_out) {
             if (ruled_out) ruled_out->push_back(fmt::format("{} {}: {}", method, preset, *error.ruled_out));
             return;
         }
-        candidate.predicted_error = error.rel_mse;
-        candidate.error_basis = std::move(error.basis);
-        candidate.predicted_ms = predicted_ms(inputs, method, preset, candidate.knobs, &candidate.cost_basis);
-        if (std::isfinite(candidate.predicted_ms)) all.push_back(std::move(candidate));
+        std::map<double, double> scales;
+        if (const auto it = inputs.resample_errors.find(method); it != inputs.resample_errors.end()) scales = it->second;
+        scales[1.0] = 0.0;
+        for (const auto& [scale, resample_error] : scales) {
+            Candidate candidate{method, preset, knobs, 0.0, error.rel_mse + resample_error, {}, error.basis, scale};
+            PlanningInputs scaled = inputs;
+            std::tie(scaled.width, scaled.height) = scaled_size(inputs.width, inputs.height, scale);
+            if (scale != 1.0) candidate.error_basis += fmt::format("; upsampling adds {:.3f} (this scene's {} draft frames)", resample_error, method);
+            candidate.predicted_ms = predicted_ms(scaled, method, preset, knobs, &candidate.cost_basis);
+            if (std::isfinite(candidate.predicted_ms)) all.push_back(std::move(candidate));
+        }
     };
     for (const std::string& method : registry.names()) {
         if (inputs.method && *inputs.method != method) continue;
@@ -178,13 +186,14 @@ Plan plan(const PlanningInputs& inputs, const Budget& budget) {
 }
 
 std::vector<Candidate> probes(const std::vector<Candidate>& all, const Candidate& chosen, const SceneMeasurements* scene) {
-    if (chosen.method != "reference") return {};
+    // Only full-size frames are compared: an upsampled one's error is not its method's.
+    if (chosen.method != "reference" || chosen.scale != 1.0) return {};
     const double share_ms = kProbeShare * chosen.predicted_ms;
     // Per preset, the most accurate plan that fits the share alone (for cssm, the most bounces): a
     // comparison tells a frame's own error only where the bounces it lacks do not drown it.
     std::vector<const Candidate*> cheapest;
     for (const Candidate& c : all) {
-        if (c.method == "reference" || c.predicted_ms > share_ms) continue;
+        if (c.method == "reference" || c.scale != 1.0 || c.predicted_ms > share_ms) continue;
         if (scene && scene->compared(c.method, c.preset)) continue;  // probed, or compared otherwise
         const auto same = std::find_if(cheapest.begin(), cheapest.end(), [&](const Candidate* other) {
             return other->method == c.method && other->preset == c.preset;
@@ -224,6 +233,7 @@ nlohmann::json plan_json(const Plan& plan) {
     return {{"method", plan.chosen.method},
             {"preset", plan.chosen.preset},
             {"knobs", plan.chosen.knobs},
+            {"scale", plan.chosen.scale},
             {"predicted_ms", plan.chosen.predicted_ms},
             {"predicted_error", plan.chosen.predicted_error},
             {"meets_budget", plan.meets_budget},

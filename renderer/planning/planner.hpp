@@ -17,6 +17,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -35,6 +36,7 @@ struct Candidate {
     double predicted_ms = 0.0;
     double predicted_error = 0.0;
     std::string cost_basis, error_basis;
+    double scale = 1.0;  // rendered at this fraction of the size and upsampled (resolution.hpp)
 };
 
 struct Plan {
@@ -66,10 +68,13 @@ struct PlanningInputs {
     const SceneMeasurements* scene = nullptr;  // measured frames of this scene, when any
     int width = 0, height = 0;
     std::optional<std::string> method;  // plan within this method only
+    // Per GPU method, scales below 1 to offer and the error upsampling adds at each
+    // (measure_resample_errors); a method without: its plans at full size only.
+    std::map<std::string, std::map<double, double>> resample_errors = {};
 };
 
-// Every plan the planner predicts for a frame, with those the analysis rules out left out (and
-// named in `ruled_out`).
+// Every plan the planner predicts for a frame, at full size and at each scale of its method's
+// `resample_errors`, with those the analysis rules out left out (and named in `ruled_out`).
 std::vector<Candidate> candidates(const PlanningInputs& inputs, std::vector<std::string>* ruled_out = nullptr);
 
 // candidates() then choose().

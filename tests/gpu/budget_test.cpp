@@ -9,6 +9,7 @@
 #include "renderer/image/metrics.hpp"
 #include "renderer/planning/calibration.hpp"
 #include "renderer/planning/planner.hpp"
+#include "renderer/planning/resolution.hpp"
 #include "renderer/scene/builtin.hpp"
 
 #include <gtest/gtest.h>
@@ -93,6 +94,54 @@ TEST(Budgets, ATargetErrorIsMetByTheReferencesSamplesChosenForIt) {
         // so the error at half the samples is about twice; a factor of 4 leaves room for the noise).
         EXPECT_GT(m.rel_mse, target / 8.0) << m.plan.why;
     }
+}
+
+// What upsampling loses, measured on a method's draft frames, is what it loses at the method's
+// other presets (within the scatter between presets: measured under 10% on this box).
+TEST(Budgets, UpsamplingLosesWhatTheMethodsDraftFramesSay) {
+    const scene::Scene scene = scene::make_cornell_box();
+    auto resources = shared_renderer().upload(scene);
+    constexpr int kLarge = 64;
+    const std::vector<std::string> gpu_methods = {"direct", "vct", "isr", "cssm"};
+    const auto errors = planning::measure_resample_errors(shared_renderer(), *resources,
+                                                          method_request("direct", "draft", kLarge, {}), gpu_methods);
+    for (const std::string& method : gpu_methods) {
+        ASSERT_EQ(errors.at(method).size(), 2u) << method;  // 1/2 and 1/4: 32 and 16 pixels a side
+        EXPECT_GT(errors.at(method).at(0.25), errors.at(method).at(0.5)) << method;
+        const RenderRequest full = method_request(method, "high", kLarge, {});
+        const image::Frame at_full = shared_renderer().render(*resources, full).frame;
+        for (const auto& [scale, predicted] : errors.at(method)) {
+            RenderRequest small = full;
+            std::tie(small.width, small.height) = planning::scaled_size(kLarge, kLarge, scale);
+            const RenderResult up = planning::upsampled(shared_renderer().render(*resources, small), kLarge, kLarge, small);
+            const double lost = image::compare(up.frame, at_full).rel_mse;
+            EXPECT_NEAR(lost, predicted, 0.1 * predicted) << method << " high at 1/" << 1.0 / scale;
+        }
+    }
+}
+
+// A plan at half size, the only one within the time, keeps its predicted error against the
+// reference: upsampling's loss adds to the method's own and the bounces it lacks.
+TEST(Budgets, APlanAtHalfSizeKeepsItsPredictedError) {
+    const scene::Scene scene = scene::make_cornell_box();
+    const SceneAnalysis analysis = analyze_scene(scene);
+    auto resources = shared_renderer().upload(scene);
+    planning::DeviceCosts device("made up");
+    for (const char* preset : {"draft", "low", "medium", "high", "ultra"}) device.set("cssm", preset, {0.0, 1e5});
+    const planning::PlanningInputs inputs{
+        analysis, device, nullptr, kSize, kSize, "cssm",
+        planning::measure_resample_errors(shared_renderer(), *resources, method_request("cssm", "draft", kSize, {}), {"cssm"})};
+    // 48x48 costs 230 ms; 24x24 58 ms.
+    const planning::Plan plan = planning::plan(inputs, {100.0, std::nullopt});
+    ASSERT_TRUE(plan.meets_budget) << plan.why;
+    ASSERT_EQ(plan.chosen.scale, 0.5) << plan.why;
+    EXPECT_NE(plan.why.find("at 1/2 size, upsampled"), std::string::npos) << plan.why;
+    RenderRequest small = method_request("cssm", plan.chosen.preset, kSize, plan.chosen.knobs);
+    std::tie(small.width, small.height) = planning::scaled_size(kSize, kSize, 0.5);
+    const RenderResult up = planning::upsampled(shared_renderer().render(*resources, small), kSize, kSize, small);
+    const double measured = image::compare(up.frame, truth()).rel_mse;
+    std::printf("%s: measured %.4f\n", plan.why.c_str(), measured);
+    EXPECT_LE(measured, plan.chosen.predicted_error) << plan.why;
 }
 
 // Calibration measures a line per preset (two methods here, at small sizes, to keep the test short)

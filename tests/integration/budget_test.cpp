@@ -19,13 +19,18 @@ struct BudgetDaemon {
     DaemonProcess daemon{{"--cache-dir", cache.string()}};
     Client client{daemon.endpoint()};
 
-    BudgetDaemon() {
+    // `per_pixel`: frames cost in proportion to their pixels (direct 23 ms at 48x48), so that a
+    // smaller frame is cheaper; else every frame of a method costs the same.
+    explicit BudgetDaemon(bool per_pixel = false) {
         planning::DeviceCosts costs(client.hello()["renderer"].get<std::string>());
+        const auto line = [&](double ms) {
+            return per_pixel ? planning::CostLine{0.0, ms * 1e4} : planning::CostLine{ms, 0.0};
+        };
         for (const char* preset : {"draft", "low", "medium", "high", "ultra"}) {
-            costs.set("direct", preset, {1.0, 0.0});
-            costs.set("vct", preset, {50.0, 0.0});
-            costs.set("isr", preset, {80.0, 0.0});
-            costs.set("cssm", preset, {100.0, 0.0});
+            costs.set("direct", preset, line(1.0));
+            costs.set("vct", preset, line(50.0));
+            costs.set("isr", preset, line(80.0));
+            costs.set("cssm", preset, line(100.0));
         }
         costs.save(planning::DeviceCosts::cache_path(cache, costs.renderer()));
     }
@@ -136,6 +141,26 @@ TEST(Budget, AStreamPlansItsInteractiveAndStillRungsForItsBudget) {
         EXPECT_EQ(frame.body["method"], plan["method"]);
         EXPECT_EQ(frame.body["preset"], plan["preset"]);
     }
+}
+
+// Where only a smaller frame fits the time, the planner renders it and the daemon upsamples it: the
+// reply is a frame of the size asked for, and its plan says at which scale it was rendered.
+TEST(Budget, AFrameRenderedSmallerIsUpsampledToTheSizeAskedFor) {
+    BudgetDaemon d(true);
+    const auto reply = d.render({{"method", "direct"}, {"budget", {{"max_ms", 10.0}}}});  // 23 ms at 48x48, 6 at 24x24
+    const json& plan = reply.body["plan"];
+    ASSERT_TRUE(plan["meets_budget"].get<bool>()) << plan.dump();
+    EXPECT_EQ(plan["scale"], 0.5) << plan.dump();
+    EXPECT_NE(plan["why"].get<std::string>().find("upsampling adds"), std::string::npos) << plan.dump();
+    EXPECT_EQ(reply.body["width"], 48);
+    const auto frame = image::decode_image(reply.attachment);
+    EXPECT_EQ(frame.width, 48);
+    EXPECT_EQ(frame.height, 48);
+    // And where the full size fits, it is rendered at full size. The scene's measured frames scale
+    // the made-up 23 ms (by over 100 on llvmpipe, whose first ultra frame builds large shadow maps):
+    // a budget far above it.
+    const json full = d.render({{"method", "direct"}, {"budget", {{"max_ms", 1e6}}}}).body["plan"];
+    EXPECT_EQ(full["scale"], 1.0) << full.dump();
 }
 
 TEST(Budget, MalformedBudgetsAreRefusedNamingTheField) {

@@ -1,15 +1,18 @@
 // How the planner learns a GPU method's error on a scene: frames of one view compared with a
 // reference frame of it (planning::FrameComparisons), the own error that leaves once the
 // reference's noise and the bounces between them are taken out (exact arithmetic on constant
-// frames), which frames may be compared, how the error model uses what was measured, and which
-// probes the planner renders beside a reference plan.
+// frames), which frames may be compared, how the error model uses what was measured, which probes
+// the planner renders beside a reference plan, and plans rendered smaller and upsampled.
 #include "renderer/methods/registry.hpp"
 #include "renderer/planning/comparisons.hpp"
 #include "renderer/planning/error_model.hpp"
 #include "renderer/planning/planner.hpp"
+#include "renderer/planning/resolution.hpp"
+#include "renderer/base/error.hpp"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace bounce::planning {
@@ -205,6 +208,59 @@ TEST(Probes, BesideAReferencePlanUnmeasuredPresetsCheapestFirstWithinAQuarterOfI
     EXPECT_EQ(second[0].method, "vct");
     // A GPU plan chosen: no probes (no reference frame to compare with).
     EXPECT_TRUE(probes(all, all[3], nullptr).empty());
+}
+
+TEST(Resolution, BilinearUpsamplingBetweenPixelCentres) {
+    image::Frame ramp;
+    ramp.width = 2;
+    ramp.height = 1;
+    ramp.rgba = {0, 0, 0, 1, 1, 2, 4, 1};
+    const image::Frame up = image::resample_linear(ramp, 4, 2);
+    // Target centres at -0.25, 0.25, 0.75 and 1.25 source pixels: clamped at the edges.
+    const float expected[] = {0.0f, 0.25f, 0.75f, 1.0f};
+    for (int y = 0; y < 2; ++y) {
+        for (int x = 0; x < 4; ++x) {
+            EXPECT_FLOAT_EQ(up.at(x, y).r, expected[x]) << x << "," << y;
+            EXPECT_FLOAT_EQ(up.at(x, y).b, 4.0f * expected[x]);
+            EXPECT_FLOAT_EQ(up.at(x, y).a, 1.0f);
+        }
+    }
+    EXPECT_TRUE(up.display_rgba8.empty());
+    EXPECT_THROW(image::resample_linear(ramp, 0, 4), InputError);
+    EXPECT_THROW(image::resample_linear(image::Frame{}, 4, 4), InputError);
+    EXPECT_EQ(scaled_size(64, 48, 0.5), (std::pair{32, 24}));
+    EXPECT_EQ(scaled_size(3, 3, 0.25), (std::pair{1, 1}));
+}
+
+TEST(Resolution, AHalfSizePlanIsTakenWhereOnlyItFitsAndPaysWhatUpsamplingLoses) {
+    const SceneAnalysis analysis = made_up_analysis();
+    DeviceCosts device("test");
+    for (const char* method : {"direct", "vct"}) {
+        for (const char* preset : {"draft", "low", "medium", "high", "ultra"}) device.set(method, preset, {0.0, 1e4});
+    }
+    // direct: 41 ms at 64x64, 10 ms at 32x32; vct has no measured loss, so full size only.
+    PlanningInputs inputs{analysis, device, nullptr, 64, 64, std::nullopt, {{"direct", {{0.5, 0.1}}}}};
+    const auto all = candidates(inputs);
+    EXPECT_EQ(std::count_if(all.begin(), all.end(), [](const Candidate& c) { return c.scale == 0.5; }), 5);
+    for (const Candidate& c : all) EXPECT_TRUE(c.scale == 1.0 || c.method == "direct") << c.method;
+    PlanningInputs direct_only = inputs;  // the reference's made-up times would fit too
+    direct_only.method = "direct";
+    const Plan plan = planning::plan(direct_only, {20.0, std::nullopt});
+    ASSERT_TRUE(plan.meets_budget) << plan.why;
+    EXPECT_EQ(plan.chosen.scale, 0.5);
+    EXPECT_NEAR(plan.chosen.predicted_ms, 1e4 * 32 * 32 * 1e-6, 1e-9);
+    EXPECT_DOUBLE_EQ(plan.chosen.predicted_error,
+                     predict_error(analysis, "direct", plan.chosen.preset, {}).rel_mse + 0.1);
+    EXPECT_NE(plan.why.find("at 1/2 size, upsampled"), std::string::npos) << plan.why;
+    EXPECT_EQ(plan_json(plan)["scale"], 0.5);
+    // With time for the full size, the full size: it loses nothing to upsampling.
+    EXPECT_EQ(planning::plan(direct_only, {100.0, std::nullopt}).chosen.scale, 1.0);
+    // A smaller frame is never a probe: its error is not its method's.
+    Candidate scaled_reference = candidate("reference", "medium", {{"spp", 64}}, 100.0);
+    scaled_reference.scale = 0.5;
+    EXPECT_TRUE(probes(all, scaled_reference, nullptr).empty());
+    const Candidate reference = candidate("reference", "medium", {{"spp", 64}}, 1000.0);
+    for (const Candidate& probe : probes(all, reference, nullptr)) EXPECT_EQ(probe.scale, 1.0);
 }
 
 }  // namespace

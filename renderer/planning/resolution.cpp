@@ -1,0 +1,44 @@
+#include "renderer/planning/resolution.hpp"
+
+#include "renderer/image/metrics.hpp"
+#include "renderer/image/tone.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace bounce::planning {
+
+std::pair<int, int> scaled_size(int width, int height, double scale) {
+    return {std::max(1, static_cast<int>(std::lround(width * scale))), std::max(1, static_cast<int>(std::lround(height * scale)))};
+}
+
+ResampleErrors measure_resample_errors(Renderer& renderer, SceneResources& resources, const RenderRequest& view,
+                                       const std::vector<std::string>& methods) {
+    ResampleErrors errors;
+    for (const std::string& method : methods) {
+        RenderRequest draft = view;
+        draft.method = method;
+        draft.preset = "draft";
+        draft.knobs.clear();
+        draft.make_display_image = false;
+        const image::Frame full = renderer.render(resources, draft).frame;
+        for (const double scale : kFrameScales) {
+            RenderRequest small = draft;
+            std::tie(small.width, small.height) = scaled_size(view.width, view.height, scale);
+            if (std::min(small.width, small.height) < kMinScaledSide) continue;
+            const image::Frame up = image::resample_linear(renderer.render(resources, small).frame, view.width, view.height);
+            errors[method][scale] = image::compare(up, full).rel_mse;
+        }
+    }
+    return errors;
+}
+
+RenderResult upsampled(const RenderResult& rendered, int width, int height, const RenderRequest& request) {
+    RenderResult result;
+    result.stats = rendered.stats;
+    result.frame = image::resample_linear(rendered.frame, width, height);
+    if (request.make_display_image) image::make_display_image(result.frame, request.display);
+    return result;
+}
+
+}  // namespace bounce::planning
