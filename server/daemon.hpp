@@ -56,6 +56,7 @@ struct DaemonConfig {
     std::size_t max_ops_connections = 16;  // ops HTTP connections at once
     std::chrono::milliseconds ops_timeout{10000};  // to read an ops request and write its answer
     int network_threads = 2;
+    int calibration_size = 64;  // the cost model's larger frame, pixels a side (--calibration-size)
 };
 
 class Session;

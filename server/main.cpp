@@ -106,6 +106,9 @@ std::vector<Limit> daemon_limits() {
          [](auto v, Config& c) { c.auth_timeout = milliseconds(v); }},
         {"--max-output-bytes", "replies a client leaves unread before it is dropped [512M]", 4096, 1ull << 40, true,
          [](auto v, Config& c) { c.max_output_bytes = v; }},
+        {"--calibration-size", "pixels a side of the larger frame the device's cost model is measured at, for "
+                               "budgets; the smaller is half [64]",
+         8, 4096, false, [](auto v, Config& c) { c.calibration_size = static_cast<int>(v); }},
         {"--drain-seconds", "on SIGTERM, finish in-flight work for at most N s, then cancel it; a second signal "
                             "exits at once [10]",
          0, 3600, false, [](auto v, Config& c) { c.drain_timeout = std::chrono::seconds(v); }},

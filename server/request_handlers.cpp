@@ -112,6 +112,11 @@ void RequestHandlers::execute(const std::shared_ptr<Request>& request, Renderer&
     try {
         request->check_still_wanted();
         if (auto* render = std::get_if<RenderOrder>(&request->order.value()); render && render->budget && !render->planned) {
+            registry.get(render->scene);  // an unknown scene is refused before any calibration
+            if (!known_device_costs(renderer)) {
+                wait_for_calibration(request, renderer);
+                return;
+            }
             plan_budgeted(*render, renderer, registry);  // before the visit: it changes the order
         }
         const std::span<const std::uint8_t> attachment = request->message().attachment;
@@ -437,6 +442,61 @@ void RequestHandlers::render_probes(const RenderOrder& order, Renderer& renderer
     }
 }
 
+void RequestHandlers::wait_for_calibration(const std::shared_ptr<Request>& request, Renderer& renderer) {
+    if (!calibration_) {
+        planning::CalibrationSettings settings;
+        settings.large_size = daemon_.config().calibration_size;
+        settings.small_size = std::max(1, settings.large_size / 2);
+        log::info("planner", "calibrating the cost model for '{}' on the Cornell box, a preset at a time",
+                  renderer.gpu_info().renderer);
+        calibration_ = std::make_unique<planning::Calibration>(renderer, settings);
+        if (!daemon_.render_service().post([this](Renderer& r, SceneRegistry& registry) { calibration_step(r, registry); })) {
+            calibration_.reset();
+            throw RequestError(ErrorCode::shutting_down, "the daemon is shutting down");
+        }
+    }
+    calibration_waiters_.push_back(request);
+    request->send(protocol::make_message(MessageType::progress, request->id(),
+                                         {{"fraction", calibration_->fraction()},
+                                          {"stage", "calibrating the device's costs: " + calibration_->next_step()}}));
+}
+
+// One step, then the next queued behind whatever came meanwhile: other clients' frames are served
+// between the presets (seconds each at most), not after the whole calibration.
+void RequestHandlers::calibration_step(Renderer& renderer, SceneRegistry& registry) {
+    std::vector<std::shared_ptr<Request>> waiters;
+    try {
+        if (!calibration_->step(renderer)) {
+            for (const auto& waiter : calibration_waiters_) {
+                waiter->send(protocol::make_message(
+                    MessageType::progress, waiter->id(),
+                    {{"fraction", calibration_->fraction()},
+                     {"stage", "calibrating the device's costs: " + calibration_->next_step()}}));
+            }
+            if (daemon_.render_service().post([this](Renderer& r, SceneRegistry& g) { calibration_step(r, g); })) return;
+            throw RequestError(ErrorCode::shutting_down, "the daemon is shutting down");
+        }
+        device_costs_ = calibration_->result();
+        log::info("planner", "calibrated in {:.0f} ms of steps", device_costs_->calibration_ms);
+        if (const auto& cache_dir = daemon_.config().cache_dir) {
+            try {
+                device_costs_->save(planning::DeviceCosts::cache_path(*cache_dir, device_costs_->renderer()));
+            } catch (const std::exception& error) {
+                log::warn("planner", "the cost model stays in memory only: {}", error.what());
+            }
+        }
+        calibration_.reset();
+        waiters.swap(calibration_waiters_);
+    } catch (...) {
+        // A failed calibration fails its waiters; the next budget starts one afresh.
+        calibration_.reset();
+        waiters.swap(calibration_waiters_);
+        for (const auto& waiter : waiters) waiter->fail(std::current_exception());
+        return;
+    }
+    for (const auto& waiter : waiters) execute(waiter, renderer, registry);  // each as if just dequeued
+}
+
 const planning::DeviceCosts& RequestHandlers::device_costs(Renderer& renderer) {
     if (const planning::DeviceCosts* known = known_device_costs(renderer)) return *known;
     device_costs_ = planning::load_or_calibrate(renderer, daemon_.config().cache_dir);
@@ -461,6 +521,10 @@ json RequestHandlers::stats(Renderer& renderer, SceneRegistry& registry) {
     reply["queue_depth"] = daemon_.render_service().queue_depth();
     reply["renderer"] = renderer.gpu_info().renderer;
     reply["streams"] = daemon_.streams().stats();
+    // The device's cost model for budgets: read or measured, being measured, or not yet asked for.
+    reply["planner"] = device_costs_  ? json{{"cost_model", "ready"}}
+                       : calibration_ ? json{{"cost_model", "calibrating"}, {"calibrated_fraction", calibration_->fraction()}}
+                                      : json{{"cost_model", "none"}};
     reply["gpu_memory"] = {{"budget_bytes", renderer.memory_budget().bytes},
                            {"budget_source", renderer.memory_budget().source},
                            {"resident_bytes", renderer.resident_bytes()}};

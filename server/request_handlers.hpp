@@ -12,6 +12,7 @@
 // no input reaches terminate().
 #pragma once
 
+#include "renderer/planning/calibration.hpp"
 #include "renderer/planning/resolution.hpp"
 #include "server/frame_json.hpp"
 #include "server/request.hpp"
@@ -64,6 +65,10 @@ private:
 
     // A render with a budget becomes a render of the plan the planner chooses for it.
     void plan_budgeted(RenderOrder& order, Renderer& renderer, SceneRegistry& registry);
+    // Queues `request` until the device's costs are calibrated (starting the calibration if none
+    // runs); it then runs as if just dequeued. Waiters get `progress` events.
+    void wait_for_calibration(const std::shared_ptr<Request>& request, Renderer& renderer);
+    void calibration_step(Renderer& renderer, SceneRegistry& registry);
     // Renders the order's probes whose structures are built (a probe never waits for a bake) and
     // compares each with the reference frame of its view when there is one.
     void render_probes(const RenderOrder& order, Renderer& renderer, SceneRegistry& registry);
@@ -79,6 +84,10 @@ private:
     std::map<std::string, std::shared_ptr<SharedWork>> running_work_;  // render thread only, by work key
     std::optional<planning::DeviceCosts> device_costs_;  // render thread only
     bool looked_for_cached_costs_ = false;
+    // Budgets that came before the device's costs were known wait for its calibration, which runs
+    // a step at a time on the render thread with other jobs served between steps (render thread only).
+    std::unique_ptr<planning::Calibration> calibration_;
+    std::vector<std::shared_ptr<Request>> calibration_waiters_;
 };
 
 }  // namespace bounce::server

@@ -1,13 +1,16 @@
 // The device's cost lines (costs.hpp), measured: every GPU method at every preset renders the
 // built-in Cornell box at two sizes, warm (after a frame that builds its structures), and a line
-// goes through the two times, at the presets' own bounce counts. Runs on the render thread, once per device: the daemon caches the
-// result in its cache folder under the renderer's name.
+// goes through the two times, at the presets' own bounce counts. Runs on the render thread, once
+// per device, a step at a time (Calibration): the daemon caches the result in its cache folder
+// under the renderer's name.
 #pragma once
 
 #include "renderer/planning/costs.hpp"
 #include "renderer/renderer.hpp"
 
+#include <chrono>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -18,6 +21,31 @@ struct CalibrationSettings {
     int large_size = 64;
     int timed_frames = 1;  // per size, after one untimed frame; the fastest counts
     std::vector<std::string> methods;  // the GPU methods to measure; empty: every one
+};
+
+// A calibration one method and preset at a time, so that its caller (the daemon's render thread)
+// can serve other work between steps. Each step renders the preset at both sizes.
+class Calibration {
+public:
+    Calibration(Renderer& renderer, CalibrationSettings settings);  // uploads the Cornell box
+
+    // Measures the next method and preset; true when every one is measured.
+    bool step(Renderer& renderer);
+    bool done() const { return next_ >= steps_.size(); }
+    double fraction() const { return steps_.empty() ? 1.0 : static_cast<double>(next_) / static_cast<double>(steps_.size()); }
+    // What the next step measures ("vct medium"), or "calibrated".
+    std::string next_step() const;
+    // The measured model; only once done().
+    DeviceCosts result() const;
+
+private:
+    CalibrationSettings settings_;
+    std::unique_ptr<scene::Scene> scene_;  // its resources read it every frame: a stable address
+    std::unique_ptr<SceneResources> resources_;
+    std::vector<std::pair<std::string, std::string>> steps_;  // method, preset
+    std::size_t next_ = 0;
+    DeviceCosts costs_;
+    double measured_ms_ = 0.0;  // time spent in steps
 };
 
 // `progress` (fraction done, what runs) may be empty.

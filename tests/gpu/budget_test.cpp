@@ -6,6 +6,7 @@
 // error promise holds. GPU methods at a few milliseconds make the planner choose among them; the
 // reference alone tests its noise model.
 #include "gpu_fixture.hpp"
+#include "renderer/base/error.hpp"
 #include "renderer/image/metrics.hpp"
 #include "renderer/planning/calibration.hpp"
 #include "renderer/planning/planner.hpp"
@@ -142,6 +143,30 @@ TEST(Budgets, APlanAtHalfSizeKeepsItsPredictedError) {
     const double measured = image::compare(up.frame, truth()).rel_mse;
     std::printf("%s: measured %.4f\n", plan.why.c_str(), measured);
     EXPECT_LE(measured, plan.chosen.predicted_error) << plan.why;
+}
+
+// A calibration a step at a time: one preset per step, in order, and a model only once done.
+TEST(Budgets, ACalibrationMeasuresOnePresetAStep) {
+    planning::CalibrationSettings settings;
+    settings.small_size = 8;
+    settings.large_size = 16;
+    settings.methods = {"direct"};
+    planning::Calibration calibration(shared_renderer(), settings);
+    EXPECT_EQ(calibration.next_step(), "direct draft");
+    EXPECT_DOUBLE_EQ(calibration.fraction(), 0.0);
+    EXPECT_THROW(calibration.result(), Error);
+    const auto& presets = methods::preset_names();
+    for (std::size_t i = 0; i < presets.size(); ++i) {
+        EXPECT_EQ(calibration.next_step(), "direct " + presets[i]);
+        EXPECT_EQ(calibration.step(shared_renderer()), i + 1 == presets.size());
+        EXPECT_DOUBLE_EQ(calibration.fraction(), static_cast<double>(i + 1) / presets.size());
+    }
+    EXPECT_TRUE(calibration.step(shared_renderer()));  // done stays done
+    EXPECT_EQ(calibration.next_step(), "calibrated");
+    const planning::DeviceCosts costs = calibration.result();
+    for (const std::string& preset : presets) EXPECT_TRUE(costs.line("direct", preset)) << preset;
+    EXPECT_FALSE(costs.line("vct", "draft"));
+    EXPECT_GT(costs.calibration_ms, 0.0);
 }
 
 // Calibration measures a line per preset (two methods here, at small sizes, to keep the test short)

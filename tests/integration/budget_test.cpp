@@ -163,6 +163,37 @@ TEST(Budget, AFrameRenderedSmallerIsUpsampledToTheSizeAskedFor) {
     EXPECT_EQ(full["scale"], 1.0) << full.dump();
 }
 
+// Without a cost model the first budget calibrates one, a preset at a time on the render thread:
+// its client gets progress events, other clients are served between the steps (a `stats` answered
+// mid-calibration says how far it is), and the model is saved in the cache folder.
+TEST(Budget, TheFirstBudgetCalibratesAPresetAtATimeWhileOthersAreServed) {
+    const auto cache = std::filesystem::temp_directory_path() / ("bounce-calibrate-" + std::to_string(::getpid()));
+    DaemonProcess daemon{{"--cache-dir", cache.string(), "--calibration-size", "16"}};
+    Client a(daemon.endpoint()), b(daemon.endpoint());
+    EXPECT_EQ(b.request(MessageType::stats, json::object()).body["planner"]["cost_model"], "none");
+    a.send_raw(frame_bytes(MessageType::render, 1,
+                           {{"scene", "cornell"}, {"method", "auto"}, {"budget", {{"max_ms", 1000.0}}}, {"width", 32},
+                            {"height", 32}, {"format", "exr"}}));
+    auto first = a.read();
+    ASSERT_EQ(first.type, static_cast<std::uint16_t>(MessageType::progress)) << first.body.dump();
+    EXPECT_NE(first.body["stage"].get<std::string>().find("calibrating"), std::string::npos) << first.body.dump();
+    // Queued behind the first step: answered between two steps, not after the last.
+    const json planner = b.request(MessageType::stats, json::object()).body["planner"];
+    EXPECT_EQ(planner["cost_model"], "calibrating") << planner.dump();
+    EXPECT_GT(planner["calibrated_fraction"].get<double>(), 0.0) << planner.dump();
+    EXPECT_LT(planner["calibrated_fraction"].get<double>(), 1.0) << planner.dump();
+    int progress = 1;
+    protocol::Message frame;
+    for (frame = a.read(); frame.type == static_cast<std::uint16_t>(MessageType::progress); frame = a.read()) ++progress;
+    ASSERT_EQ(frame.type, static_cast<std::uint16_t>(MessageType::frame)) << frame.body.dump();
+    EXPECT_TRUE(frame.body["plan"].is_object());
+    EXPECT_GE(progress, 20);  // one a step: 4 GPU methods x 5 presets
+    EXPECT_EQ(b.request(MessageType::stats, json::object()).body["planner"]["cost_model"], "ready");
+    const std::string renderer = b.hello()["renderer"].get<std::string>();
+    EXPECT_TRUE(planning::DeviceCosts::load(planning::DeviceCosts::cache_path(cache, renderer), renderer).has_value());
+    std::filesystem::remove_all(cache);
+}
+
 TEST(Budget, MalformedBudgetsAreRefusedNamingTheField) {
     BudgetDaemon d;
     const auto refused = [&](json body, const std::string& field) {
