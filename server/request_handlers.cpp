@@ -389,12 +389,13 @@ void RequestHandlers::plan_budgeted(RenderOrder& order, Renderer& renderer, Scen
     }
 }
 
-// Measured once per scene and frame size, on the first budgeted view at that size: each GPU
-// method whose draft structures are built (a measurement never waits for a bake) renders three
-// draft frames, milliseconds on a GPU. A method without a measurement is planned at full size only.
+// Measured once per scene and frame size (capped: planning::measured_size), on the first budgeted
+// view at that size: each GPU method whose draft structures are built (a measurement never waits
+// for a bake) renders three draft frames, milliseconds on a GPU. A method without a measurement is planned at full size only.
 planning::ResampleErrors RequestHandlers::resample_errors(const RenderOrder& order, Renderer& renderer, SceneEntry& entry) {
     RenderRequest view = order.request;
     if (auto camera = view_camera(*entry.scene, order)) view.camera = std::move(camera);
+    std::tie(view.width, view.height) = planning::measured_size(view.width, view.height);
     Hasher key;
     key.add(view.width).add(view.height);
     if (entry.resampling && entry.resampling->key == key.value()) return entry.resampling->errors;

@@ -12,6 +12,12 @@ std::pair<int, int> scaled_size(int width, int height, double scale) {
     return {std::max(1, static_cast<int>(std::lround(width * scale))), std::max(1, static_cast<int>(std::lround(height * scale)))};
 }
 
+std::pair<int, int> measured_size(int width, int height) {
+    const int longer = std::max(width, height);
+    if (longer <= kMeasuredSide) return {width, height};
+    return scaled_size(width, height, static_cast<double>(kMeasuredSide) / longer);
+}
+
 ResampleErrors measure_resample_errors(Renderer& renderer, SceneResources& resources, const RenderRequest& view,
                                        const std::vector<std::string>& methods) {
     ResampleErrors errors;

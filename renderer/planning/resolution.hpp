@@ -22,6 +22,14 @@ inline constexpr int kMinScaledSide = 16;  // smaller frames are not offered
 // The size a frame of width x height renders at, at `scale`; at least one pixel a side.
 std::pair<int, int> scaled_size(int width, int height, double scale);
 
+// The size upsampling's loss is measured at for frames of width x height: theirs, or, past
+// kMeasuredSide on the longer side, the same shape that long, so that a client cannot make the
+// measurement cost more than frames of that size. A smaller frame has more of its pixels on edges
+// and loses more there: for edges, the loss measured is on the safe side (not for fine texture
+// that only the larger frame resolves).
+inline constexpr int kMeasuredSide = 256;
+std::pair<int, int> measured_size(int width, int height);
+
 // Per method of `methods` (GPU methods): relMSE of upsampling at each scale of kFrameScales whose
 // frame keeps kMinScaledSide a side, from its draft frames of `view` on the render thread.
 using ResampleErrors = std::map<std::string, std::map<double, double>>;

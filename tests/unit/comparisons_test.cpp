@@ -77,10 +77,10 @@ TEST(OwnError, TheLargestOfTheLastComparisonsAtABounceCountElseAtThePresetsOther
     EXPECT_DOUBLE_EQ(measured.own_error("cssm", "low", 2)->rel_mse, 0.01);
 }
 
-TEST(OwnError, TheErrorModelUsesWhatTheSceneMeasuredAndScalesThePresetsItDidNot) {
+TEST(OwnError, TheErrorModelUsesWhatTheSceneMeasuredAndNeverPredictsACostlierPresetBetter) {
     const SceneAnalysis analysis = made_up_analysis();
     SceneMeasurements measured;
-    const double prior_low = *own_error_prior("cssm", "low"), prior_medium = *own_error_prior("cssm", "medium");
+    const double prior_low = *own_error_prior("cssm", "low");
     measured.record_own_error("cssm", "low", 2, 0.25 * prior_low);
     const ErrorPrediction low = predict_error(analysis, "cssm", "low", {{"bounces", 2}}, &measured);
     EXPECT_DOUBLE_EQ(low.rel_mse, 0.1 / 4.0 + 0.25 * prior_low);
@@ -88,10 +88,18 @@ TEST(OwnError, TheErrorModelUsesWhatTheSceneMeasuredAndScalesThePresetsItDidNot)
     // Net of bounces: the same own error at another count.
     EXPECT_DOUBLE_EQ(predict_error(analysis, "cssm", "low", {{"bounces", 6}}, &measured).rel_mse,
                      0.1 / 64.0 + 0.25 * prior_low);
-    // Another preset of the method: its prior times what the measured preset got of its own.
+    // A costlier preset of the method: no better than the cheaper one measured.
     const ErrorPrediction medium = predict_error(analysis, "cssm", "medium", {{"bounces", 2}}, &measured);
-    EXPECT_NEAR(medium.rel_mse, 0.1 / 4.0 + 0.25 * prior_medium, 1e-12);
-    EXPECT_NE(medium.basis.find("as this scene's other cssm presets measured"), std::string::npos) << medium.basis;
+    EXPECT_DOUBLE_EQ(medium.rel_mse, 0.1 / 4.0 + 0.25 * prior_low);
+    EXPECT_NE(medium.basis.find("as this scene's cssm low measured"), std::string::npos) << medium.basis;
+    // A cheaper one: its prior in the proportion the measured preset got of its own.
+    const double prior_draft = *own_error_prior("cssm", "draft");
+    const ErrorPrediction draft = predict_error(analysis, "cssm", "draft", {{"bounces", 2}}, &measured);
+    EXPECT_NEAR(draft.rel_mse, 0.1 / 4.0 + 0.25 * prior_draft, 1e-12);
+    EXPECT_NE(draft.basis.find("as this scene's costlier cssm presets measured"), std::string::npos) << draft.basis;
+    // A measured costlier preset's own error is the nearest cheaper one's, not an older one's.
+    measured.record_own_error("cssm", "high", 2, 0.01);
+    EXPECT_DOUBLE_EQ(predict_error(analysis, "cssm", "ultra", {{"bounces", 2}}, &measured).rel_mse, 0.1 / 4.0 + 0.01);
     // Another method keeps its prior.
     EXPECT_DOUBLE_EQ(predict_error(analysis, "vct", "low", {}, &measured).rel_mse, 0.1 / 2.0 + *own_error_prior("vct", "low"));
 }
@@ -230,6 +238,8 @@ TEST(Resolution, BilinearUpsamplingBetweenPixelCentres) {
     EXPECT_THROW(image::resample_linear(image::Frame{}, 4, 4), InputError);
     EXPECT_EQ(scaled_size(64, 48, 0.5), (std::pair{32, 24}));
     EXPECT_EQ(scaled_size(3, 3, 0.25), (std::pair{1, 1}));
+    EXPECT_EQ(measured_size(200, 100), (std::pair{200, 100}));
+    EXPECT_EQ(measured_size(1920, 1080), (std::pair{256, 144}));
 }
 
 TEST(Resolution, AHalfSizePlanIsTakenWhereOnlyItFitsAndPaysWhatUpsamplingLoses) {
