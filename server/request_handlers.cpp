@@ -16,7 +16,6 @@ using protocol::ErrorCode;
 using protocol::MessageType;
 using Clock = std::chrono::steady_clock;
 
-// The view a render asks for, as a one-off: the scene's own cameras are untouched.
 // Frames of one view: the scene's state, the camera and the size (FrameComparisons compares them).
 std::uint64_t view_key(std::uint64_t scene_version, const RenderRequest& frame) {
     Hasher hash;
@@ -29,6 +28,7 @@ std::uint64_t view_key(std::uint64_t scene_version, const RenderRequest& frame) 
     return hash.value();
 }
 
+// The view a render asks for, as a one-off: the scene's own cameras are untouched.
 std::optional<scene::Camera> view_camera(const scene::Scene& scene, const RenderOrder& order) {
     if (!order.view) return std::nullopt;
     try {
@@ -391,7 +391,8 @@ void RequestHandlers::plan_budgeted(RenderOrder& order, Renderer& renderer, Scen
 
 // Measured once per scene and frame size (capped: planning::measured_size), on the first budgeted
 // view at that size: each GPU method whose draft structures are built (a measurement never waits
-// for a bake) renders three draft frames, milliseconds on a GPU. A method without a measurement is planned at full size only.
+// for a bake) renders three draft frames, milliseconds on a GPU. A method without a measurement is
+// planned at full size only.
 planning::ResampleErrors RequestHandlers::resample_errors(const RenderOrder& order, Renderer& renderer, SceneEntry& entry) {
     RenderRequest view = order.request;
     if (auto camera = view_camera(*entry.scene, order)) view.camera = std::move(camera);

@@ -146,7 +146,10 @@ std::vector<Candidate> candidates(const PlanningInputs& inputs, std::vector<std:
             Candidate candidate{method, preset, knobs, 0.0, error.rel_mse + resample_error, {}, error.basis, scale};
             PlanningInputs scaled = inputs;
             std::tie(scaled.width, scaled.height) = scaled_size(inputs.width, inputs.height, scale);
-            if (scale != 1.0) candidate.error_basis += fmt::format("; upsampling adds {:.3f} (this scene's {} draft frames)", resample_error, method);
+            if (scale != 1.0) {
+                candidate.error_basis +=
+                    fmt::format("; upsampling adds {:.3f} (this scene's {} draft frames)", resample_error, method);
+            }
             candidate.predicted_ms = predicted_ms(scaled, method, preset, knobs, &candidate.cost_basis);
             if (std::isfinite(candidate.predicted_ms)) all.push_back(std::move(candidate));
         }
