@@ -61,17 +61,6 @@ SceneResources::~SceneResources() {
 
 namespace {
 
-std::uint64_t lights_fingerprint(const scene::Scene& scene) {
-    Hasher hash;
-    for (const scene::Light& light : scene.lights) {
-        hash.add(light.type).add(light.position.x).add(light.position.y).add(light.position.z);
-        hash.add(light.direction.x).add(light.direction.y).add(light.direction.z);
-        hash.add(light.color.r).add(light.color.g).add(light.color.b).add(light.intensity);
-        hash.add(light.inner_cone).add(light.outer_cone);
-    }
-    return hash.value();
-}
-
 // Knobs a method leaves to the scene: `bounce_tolerance` above 0 sets `bounces` from the scene
 // analysis (the fewest whose frame lacks at most that share of the light, within the knob's range),
 // unless the request set `bounces` itself.
@@ -87,6 +76,17 @@ void resolve_scene_knobs(SceneResources& resources, const RenderRequest& request
 
 }  // namespace
 
+std::uint64_t lights_fingerprint(const scene::Scene& scene) {
+    Hasher hash;
+    for (const scene::Light& light : scene.lights) {
+        hash.add(light.type).add(light.position.x).add(light.position.y).add(light.position.z);
+        hash.add(light.direction.x).add(light.direction.y).add(light.direction.z);
+        hash.add(light.color.r).add(light.color.g).add(light.color.b).add(light.intensity);
+        hash.add(light.inner_cone).add(light.outer_cone);
+    }
+    return hash.value();
+}
+
 const SceneAnalysis& SceneResources::analysis() {
     const scene::Scene& scene = gpu_scene.scene();
     const std::uint64_t lights = lights_fingerprint(scene);
@@ -95,6 +95,15 @@ const SceneAnalysis& SceneResources::analysis() {
         analysis_lights_ = lights;
     }
     return *analysis_;
+}
+
+bool SceneResources::analysis_current() const {
+    return analysis_ && analysis_lights_ == lights_fingerprint(gpu_scene.scene());
+}
+
+void SceneResources::install_analysis(SceneAnalysis analysis, std::uint64_t lights) {
+    analysis_ = std::move(analysis);
+    analysis_lights_ = lights;
 }
 
 std::uint64_t SceneResources::resident_bytes() const {

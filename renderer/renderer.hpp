@@ -94,6 +94,11 @@ public:
     const SceneAnalysis& analysis();
     // The analysis if a frame or a plan made it, without making it.
     const SceneAnalysis* analysis_if_made() const { return analysis_ ? &*analysis_ : nullptr; }
+    // Whether analysis() would answer without analysing: made, for the lights the scene has now.
+    bool analysis_current() const;
+    // Installs an analysis made elsewhere (on CPU threads, from a copy of the scene) for the lights
+    // it was made with (lights_fingerprint of that copy); analysis() makes it anew if they changed.
+    void install_analysis(SceneAnalysis analysis, std::uint64_t lights);
 
     // What this scene's frames measured, for the planner (renderer/planning/). Shared: CPU frames
     // record into it from the CPU pool, and may outlive the resources.
@@ -105,6 +110,10 @@ private:
     std::uint64_t analysis_lights_ = 0;  // the lights it was made for
     std::set<const SceneResources*>* live_ = nullptr;  // the uploading Renderer's list, for its memory budget
 };
+
+// A hash of a scene's lights: what its analysis depends on besides geometry, which a scene's
+// resources never change.
+std::uint64_t lights_fingerprint(const scene::Scene& scene);
 
 class Renderer {
 public:

@@ -117,6 +117,7 @@ void RequestHandlers::execute(const std::shared_ptr<Request>& request, Renderer&
                 wait_for_calibration(request, renderer);
                 return;
             }
+            if (wait_for_analysis(request, render->scene, registry.get(render->scene))) return;
             plan_budgeted(*render, renderer, registry);  // before the visit: it changes the order
         }
         const std::span<const std::uint8_t> attachment = request->message().attachment;
@@ -442,6 +443,56 @@ void RequestHandlers::render_probes(const RenderOrder& order, Renderer& renderer
             log::warn("planner", "probe {} {} failed: {}", probe.method, probe.preset, error.what());
         }
     }
+}
+
+bool RequestHandlers::wait_for_analysis(const std::shared_ptr<Request>& request, const std::string& scene_name,
+                                        SceneEntry& entry) {
+    if (entry.resources->analysis_current()) return false;
+    const std::uint64_t resources_id = entry.resources->id;
+    const std::string key = fmt::format("{}/analysis", resources_id);
+    if (const auto running = running_work_.find(key); running != running_work_.end()) {
+        running->second->add(request);
+        return true;
+    }
+    // Every CPU slot taken: analysed here, on the render thread, as a frame that needs it would be.
+    if (!daemon_.try_start_cpu_job()) return false;
+    auto slot = std::make_shared<CpuSlot>(daemon_);
+    auto shared = std::make_shared<SharedWork>();
+    shared->add(request);
+    running_work_[key] = shared;
+    auto snapshot = std::make_shared<const scene::Scene>(*entry.scene);
+    boost::asio::post(daemon_.cpu_pool(), [this, shared, key, resources_id, scene_name, snapshot, slot] {
+        std::optional<SceneAnalysis> analysis;
+        std::exception_ptr failure;
+        try {
+            analysis = analyze_scene(*snapshot);
+        } catch (...) {
+            failure = std::current_exception();
+        }
+        const std::uint64_t lights = lights_fingerprint(*snapshot);
+        const bool resumed = daemon_.render_service().resume(
+            [this, shared, key, resources_id, scene_name, lights, analysis = std::move(analysis), failure](
+                Renderer& renderer, SceneRegistry& registry) mutable {
+                running_work_.erase(key);
+                const auto waiters = shared->take();
+                if (failure) {
+                    for (const auto& waiter : waiters) waiter->fail(failure);
+                    return;
+                }
+                const auto entry = registry.entries().find(scene_name);
+                if (entry != registry.entries().end() && entry->second.resources->id == resources_id) {
+                    entry->second.resources->install_analysis(std::move(*analysis), lights);
+                }
+                // Each runs as if just dequeued: lights changed meanwhile start another analysis.
+                for (const auto& waiter : waiters) execute(waiter, renderer, registry);
+            });
+        if (!resumed) {
+            for (const auto& waiter : shared->take()) {
+                waiter->fail(std::make_exception_ptr(RequestError(ErrorCode::shutting_down, "the daemon is shutting down")));
+            }
+        }
+    });
+    return true;
 }
 
 void RequestHandlers::wait_for_calibration(const std::shared_ptr<Request>& request, Renderer& renderer) {

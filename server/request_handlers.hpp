@@ -69,6 +69,11 @@ private:
     // runs); it then runs as if just dequeued. Waiters get `progress` events.
     void wait_for_calibration(const std::shared_ptr<Request>& request, Renderer& renderer);
     void calibration_step(Renderer& renderer, SceneRegistry& registry);
+    // A budget needs the scene's analysis for its current lights: made on the CPU pool from a copy
+    // of the scene (tenths of a second on the bench scenes, more on larger ones) while the render
+    // thread serves others; the requests that need it wait and run again once it is installed.
+    // False when it is current, or when every CPU slot is taken (the caller then analyses here).
+    bool wait_for_analysis(const std::shared_ptr<Request>& request, const std::string& scene_name, SceneEntry& entry);
     // Renders the order's probes whose structures are built (a probe never waits for a bake) and
     // compares each with the reference frame of its view when there is one.
     void render_probes(const RenderOrder& order, Renderer& renderer, SceneRegistry& registry);

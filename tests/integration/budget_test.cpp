@@ -195,6 +195,20 @@ TEST(Budget, TheFirstBudgetCalibratesAPresetAtATimeWhileOthersAreServed) {
     std::filesystem::remove_all(cache);
 }
 
+// The analysis a plan reads is of the scene's current lights: made off the render thread for the
+// first budget, and again after a light changes (here, with the only light gone, no bounce adds
+// anything).
+TEST(Budget, ThePlanReadsAnAnalysisOfTheCurrentLights) {
+    BudgetDaemon d;
+    const auto lit = d.render({{"method", "direct"}, {"budget", {{"max_error", 0.9}}}});
+    const std::string lit_why = lit.body["plan"]["why"].get<std::string>();
+    EXPECT_EQ(lit_why.find("0 bounces lack 0.000"), std::string::npos) << lit_why;  // the box's indirect light
+    d.client.request(MessageType::light_remove, {{"scene", "cornell"}, {"light", "ceiling_light"}});
+    const auto dark = d.render({{"method", "direct"}, {"budget", {{"max_error", 0.9}}}});
+    const std::string dark_why = dark.body["plan"]["why"].get<std::string>();
+    EXPECT_NE(dark_why.find("0 bounces lack 0.000"), std::string::npos) << dark_why;
+}
+
 TEST(Budget, MalformedBudgetsAreRefusedNamingTheField) {
     BudgetDaemon d;
     const auto refused = [&](json body, const std::string& field) {
