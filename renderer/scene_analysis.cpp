@@ -373,6 +373,11 @@ IndirectVisibility indirect_visibility(const scene::Scene& scene, const raytrace
 
 }  // namespace
 
+double BounceEnergy::at(const std::vector<double>& values, int bounces) {
+    if (values.empty()) return 0.0;
+    return values[static_cast<std::size_t>(std::clamp(bounces, 0, static_cast<int>(values.size()) - 1))];
+}
+
 int BounceEnergy::bounces_for(double tolerance) const {
     // A dark frame needs no bounce.
     double missing = std::accumulate(share.begin(), share.end(), 0.0) + tail;

@@ -33,6 +33,9 @@ struct BounceEnergy {
     double tail = 0.0;
     // The fewest indirect bounces whose frame lacks at most `tolerance` of the light.
     int bounces_for(double tolerance) const;
+    // values[k] of one of the per-count vectors below, k clamped to the counts measured; 0 for an
+    // empty vector (a scene not analysed that far).
+    static double at(const std::vector<double>& values, int bounces);
 
     // What the planner predicts from, per bounce count k = 0..max_bounces (renderer/planning/):
     // stopped_error[k]: relMSE (image::compare) of the frame with k bounces against the one with

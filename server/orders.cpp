@@ -191,11 +191,15 @@ planning::Budget parse_budget(const json& body) {
     planning::Budget budget;
     try {
         if (const auto ms = protocol::get_optional_number(field, "max_ms")) {
-            if (!(*ms > 0.0 && *ms <= 24.0 * 3600 * 1000)) throw FieldError("max_ms", fmt::format("field 'max_ms' is {}, outside (0, 86400000]", *ms));
+            if (!(*ms > 0.0 && *ms <= 24.0 * 3600 * 1000)) {
+                throw FieldError("max_ms", fmt::format("field 'max_ms' is {}, outside (0, 86400000]", *ms));
+            }
             budget.max_ms = *ms;
         }
         if (const auto error = protocol::get_optional_number(field, "max_error")) {
-            if (!(*error > 0.0 && *error <= 100.0)) throw FieldError("max_error", fmt::format("field 'max_error' is {}, outside (0, 100]", *error));
+            if (!(*error > 0.0 && *error <= 100.0)) {
+                throw FieldError("max_error", fmt::format("field 'max_error' is {}, outside (0, 100]", *error));
+            }
             budget.max_error = *error;
         }
     } catch (const FieldError& error) {

@@ -10,6 +10,12 @@ namespace bounce::methods {
 // Knob values by name, after presets and overrides are resolved and validated.
 using KnobValues = std::map<std::string, double>;
 
+// A knob's value, or `otherwise` where the values lack it.
+inline double knob_or(const KnobValues& knobs, const std::string& name, double otherwise) {
+    const auto it = knobs.find(name);
+    return it == knobs.end() ? otherwise : it->second;
+}
+
 // A structure a method keeps resident, its size, and why the scene needs it.
 struct ResidentStructure {
     std::string name;

@@ -12,14 +12,11 @@ namespace bounce::planning {
 namespace {
 
 double knob(const FrameStats& stats, const std::string& name, double otherwise) {
-    const auto it = stats.knobs.find(name);
-    return it == stats.knobs.end() ? otherwise : it->second;
+    return methods::knob_or(stats.knobs, name, otherwise);
 }
 
 double stopped_at(const SceneAnalysis* analysis, int bounces) {
-    if (!analysis || analysis->bounces.stopped_error.empty()) return 0.0;
-    const auto& stopped = analysis->bounces.stopped_error;
-    return stopped[static_cast<std::size_t>(std::clamp(bounces, 0, static_cast<int>(stopped.size()) - 1))];
+    return analysis ? BounceEnergy::at(analysis->bounces.stopped_error, bounces) : 0.0;
 }
 
 }  // namespace

@@ -10,17 +10,14 @@
 #include <vector>
 
 namespace bounce::planning {
-namespace {
-
 using nlohmann::json;
 
 double median(std::vector<double> values) {
+    BOUNCE_CHECK(!values.empty(), "the median of no values");
     std::sort(values.begin(), values.end());
     const std::size_t n = values.size();
     return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
 }
-
-}  // namespace
 
 CostLine CostLine::through(double pixels_a, double ms_a, double pixels_b, double ms_b) {
     CostLine line;

@@ -15,9 +15,13 @@
 #include <string>
 #include <tuple>
 #include <utility>
+#include <vector>
 #include <algorithm>
 
 namespace bounce::planning {
+
+// The median of measured values (of frame-time ratios, of own errors); `values` must not be empty.
+double median(std::vector<double> values);
 
 struct CostLine {
     double fixed_ms = 0.0;

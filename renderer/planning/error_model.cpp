@@ -30,17 +30,6 @@ const std::map<std::pair<std::string, std::string>, double> kOwnError = {
 };
 // clang-format on
 
-double at_bounces(const std::vector<double>& values, int bounces) {
-    if (values.empty()) return 0.0;
-    return values[static_cast<std::size_t>(std::clamp(bounces, 0, static_cast<int>(values.size()) - 1))];
-}
-
-double median(std::vector<double> values) {
-    std::sort(values.begin(), values.end());
-    const std::size_t n = values.size();
-    return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
-}
-
 // A GPU method's own error at a preset on this scene, and where it comes from:
 //   - measured here against the scene's reference frames;
 //   - else that of the nearest cheaper preset measured here: a costlier preset is not assumed to do
@@ -88,19 +77,18 @@ std::optional<double> own_error_prior(const std::string& method, const std::stri
 
 int modelled_bounces(const std::string& method, const methods::KnobValues& knobs) {
     if (method == "direct") return 0;
-    if (const auto it = knobs.find("bounces"); it != knobs.end()) return static_cast<int>(it->second);
-    return 1;
+    return static_cast<int>(methods::knob_or(knobs, "bounces", 1.0));
 }
 
 ErrorPrediction predict_error(const SceneAnalysis& analysis, const std::string& method, const std::string& preset,
                               const methods::KnobValues& knobs, const SceneMeasurements* measured) {
     const BounceEnergy& energy = analysis.bounces;
     const int bounces = modelled_bounces(method, knobs);
-    const double stopped = at_bounces(energy.stopped_error, bounces);
+    const double stopped = BounceEnergy::at(energy.stopped_error, bounces);
     ErrorPrediction prediction;
     if (method == "reference") {
-        const double spp = std::max(1.0, knobs.count("spp") ? knobs.at("spp") : 1.0);
-        const double analysed = at_bounces(energy.noise_per_sample, bounces);
+        const double spp = std::max(1.0, methods::knob_or(knobs, "spp", 1.0));
+        const double analysed = BounceEnergy::at(energy.noise_per_sample, bounces);
         const double ratio = std::max(1.0, measured ? measured->noise_ratio(bounces).value_or(1.0) : 1.0);
         const double noise = ratio * analysed / spp;
         prediction.rel_mse = stopped + noise;

@@ -88,10 +88,9 @@ std::optional<double> baseline_ms(const SceneAnalysis* analysis, const DeviceCos
     const double pixels = static_cast<double>(width) * height;
     if (method == "reference") {
         if (!analysis || analysis->bounces.sample_ns.empty()) return std::nullopt;
-        const auto& ns = analysis->bounces.sample_ns;
-        const int bounces = std::clamp(modelled_bounces(method, knobs), 0, static_cast<int>(ns.size()) - 1);
-        const double spp = knobs.count("spp") ? knobs.at("spp") : 1.0;
-        return analysis->bounces.tracer_build_ms + ns[static_cast<std::size_t>(bounces)] * 1e-6 * pixels * spp;
+        const double ns = BounceEnergy::at(analysis->bounces.sample_ns, modelled_bounces(method, knobs));
+        const double spp = methods::knob_or(knobs, "spp", 1.0);
+        return analysis->bounces.tracer_build_ms + ns * 1e-6 * pixels * spp;
     }
     const auto line = device.line(method, preset);
     if (!line) return std::nullopt;
@@ -224,9 +223,8 @@ void record_frame(SceneMeasurements& measurements, const SceneAnalysis* analysis
     const auto spp = stats.knobs.find("spp");
     if (noise != stats.method_statistics.end() && spp != stats.knobs.end() && spp->second >= 4 && analysis) {
         const int bounces = modelled_bounces(stats.method, stats.knobs);
-        const auto& analysed = analysis->bounces.noise_per_sample;
-        const std::size_t at = static_cast<std::size_t>(std::clamp(bounces, 0, static_cast<int>(analysed.size()) - 1));
-        if (!analysed.empty() && analysed[at] > 0.0) measurements.record_noise(bounces, noise->second / analysed[at]);
+        const double analysed = BounceEnergy::at(analysis->bounces.noise_per_sample, bounces);
+        if (analysed > 0.0) measurements.record_noise(bounces, noise->second / analysed);
     }
 }
 
