@@ -128,6 +128,7 @@ Renderer::~Renderer() {
 }
 
 std::unique_ptr<SceneResources> Renderer::upload(const scene::Scene& scene) {
+    context_->make_current();
     if (budget_.bytes > 0) {
         const std::uint64_t needed = gpu::GpuScene::bytes_for(scene), held = resident_bytes();
         if (held + needed > budget_.bytes) {
@@ -208,6 +209,7 @@ void Renderer::with_frame(SceneResources& resources, const RenderRequest& reques
                           Run&& run, const std::atomic<bool>* cancelled) {
     FramePlan plan = plan_frame(request);
     if (plan.site != FrameSite::gpu) throw InputError(fmt::format("method '{}' {}", request.method, kRunsOnCpu));
+    context_->make_current();
     const scene::Scene& scene = resources.gpu_scene.scene();
     const auto& info = methods::MethodRegistry::builtin().find(request.method);
     resolve_scene_knobs(resources, request, info, plan.knobs);
@@ -278,6 +280,7 @@ std::optional<methods::PendingWork> Renderer::pending_work(SceneResources& resou
 
 void Renderer::install(SceneResources& resources, const std::string& method,
                        std::shared_ptr<methods::PrecomputeResult> result) {
+    context_->make_current();
     if (const auto it = resources.methods.find(method); it != resources.methods.end()) it->second->install(std::move(result));
 }
 

@@ -9,9 +9,40 @@
 
 #include <charconv>
 #include <cstdlib>
+#include <map>
+#include <mutex>
 
 namespace bounce::gpu {
 namespace {
+
+// EGL hands every context on a device the same display, and eglTerminate on it ends them all: each
+// context holds a reference, and the last one terminates the display.
+class DisplayReferences {
+public:
+    static void acquire(EGLDisplay display) {
+        const std::lock_guard lock(mutex());
+        ++counts()[display];
+    }
+    // Whether the caller held the last reference.
+    static bool release(EGLDisplay display) {
+        const std::lock_guard lock(mutex());
+        auto& held = counts();
+        const auto it = held.find(display);
+        if (it == held.end() || --it->second > 0) return false;
+        held.erase(it);
+        return true;
+    }
+
+private:
+    static std::mutex& mutex() {
+        static std::mutex m;
+        return m;
+    }
+    static std::map<EGLDisplay, int>& counts() {
+        static std::map<EGLDisplay, int> c;
+        return c;
+    }
+};
 
 struct EglExtensions {
     PFNEGLQUERYDEVICESEXTPROC query_devices = nullptr;
@@ -193,6 +224,7 @@ std::unique_ptr<EglContext> EglContext::create(const DeviceChoice& choice) {
                     describe_all(infos));
     }
     context->display_ = display;
+    DisplayReferences::acquire(display);
     const std::string display_extensions = eglQueryString(display, EGL_EXTENSIONS);
     for (const char* required : {"EGL_KHR_surfaceless_context", "EGL_KHR_create_context"}) {
         if (display_extensions.find(required) == std::string::npos) {
@@ -252,17 +284,20 @@ std::unique_ptr<EglContext> EglContext::create(const DeviceChoice& choice) {
 }
 
 void EglContext::make_current() {
+    if (eglGetCurrentContext() == context_) return;
     if (!eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, context_)) {
         BOUNCE_FAIL("eglMakeCurrent failed ({})", egl_error_name(eglGetError()));
     }
 }
 
 EglContext::~EglContext() {
-    if (display_) {
+    if (!display_) return;
+    // Only this context is released: another one current on the thread stays current.
+    if (context_ && eglGetCurrentContext() == context_) {
         eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
-        if (context_) eglDestroyContext(display_, context_);
-        eglTerminate(display_);
     }
+    if (context_) eglDestroyContext(display_, context_);
+    if (DisplayReferences::release(display_)) eglTerminate(display_);
 }
 
 }  // namespace bounce::gpu

@@ -44,8 +44,10 @@ struct GpuInfo {
     std::string summary() const;  // "renderer (vendor), OpenGL version, device N of M"
 };
 
-// Owns the EGL display and a current OpenGL 4.5 core context on the thread that created it.
-// Exactly one thread (the render thread) may create and use it.
+// Owns an OpenGL 4.5 core context on an EGL device's display, current on the thread that created it.
+// Exactly one thread (the render thread) may create and use it. Several contexts may share one device:
+// EGL gives them one display, which is terminated only when the last of them goes, and destroying one
+// leaves another that is current on the thread current.
 class EglContext {
 public:
     // Throws Error naming the devices found and what they offered when no device fits or the
@@ -56,6 +58,8 @@ public:
     EglContext& operator=(const EglContext&) = delete;
 
     const GpuInfo& info() const { return info_; }
+    // Makes this context current on the calling thread, unless it already is: GL work that follows
+    // another context's creation must bind its own first.
     void make_current();
 
 private:

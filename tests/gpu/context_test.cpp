@@ -65,6 +65,27 @@ TEST(Context, HardwareDeviceIsAGpuOrARefusalNamingWhatWasFound) {
     shared_renderer();  // the shared context is still usable afterwards
 }
 
+// EGL gives every context on a device one display. A second context made and dropped on the render
+// thread (as the hardware check above does where there is a GPU) must neither terminate that display
+// nor leave the thread without the shared context: the same frame renders before and after, to the
+// pixel (rasterizing one request on one context is deterministic).
+TEST(Context, AnotherContextOnTheSameDeviceComesAndGoesWithoutHarmingTheFirst) {
+    const scene::Scene scene = scene::make_cornell_box();
+    const RenderRequest request = method_request("direct", "draft", 32);
+    const RenderResult before = render_scene(scene, request);
+    {
+        const auto other = gpu::EglContext::create(gpu::DeviceChoice::resolve(std::nullopt));
+        EXPECT_EQ(other->info().renderer, shared_renderer().gpu_info().renderer);
+    }
+    const auto resources = shared_renderer().upload(scene);  // GL work right after the other context went
+    {
+        const auto another = gpu::EglContext::create(gpu::DeviceChoice::resolve(std::nullopt));
+    }
+    const RenderResult after = shared_renderer().render(*resources, request);
+    ASSERT_EQ(after.frame.rgba.size(), before.frame.rgba.size());
+    EXPECT_EQ(after.frame.rgba, before.frame.rgba);
+}
+
 TEST(Shaders, IncludesExpandOnceWithLineDirectives) {
     const auto source = gpu::expand_shader_source("passes/direct_light.frag", {"EXAMPLE 1"});
     EXPECT_EQ(source.text.rfind("#version 450 core\n#define EXAMPLE 1\n", 0), 0u);
