@@ -42,6 +42,7 @@ struct Options {
     std::vector<double> errors = {0.1, 0.05, 0.02};
     std::vector<double> budgets_ms = {50, 200, 1000};
     bool analysis_only = false;  // print each scene's analysis and stop
+    bool references_only = false;  // render (or read) each scene's reference and stop: fills the cache
     int passes = 2;
 };
 
@@ -124,11 +125,13 @@ int main(int argc, char** argv) {
         else if (flag == "--errors") options.errors = numbers(arguments.value());
         else if (flag == "--budgets-ms") options.budgets_ms = numbers(arguments.value());
         else if (flag == "--analysis-only") options.analysis_only = true;
+        else if (flag == "--references-only") options.references_only = true;
         else if (flag == "--passes") options.passes = arguments.number();
         else {
             std::fprintf(stderr,
                          "usage: bounce_bench_planner [--size N] [--reference-spp N] [--reference-bounces N] [--cache DIR] "
-                         "[--scene NAME]... [--errors E,E] [--budgets-ms T,T] [--passes N] [--out DIR] [--markdown FILE]\n");
+                         "[--scene NAME]... [--errors E,E] [--budgets-ms T,T] [--passes N] [--out DIR] [--markdown FILE] "
+                         "[--analysis-only | --references-only]\n");
             return 2;
         }
     }
@@ -144,6 +147,17 @@ int main(int argc, char** argv) {
                            bench_scene.name, a.analysis_ms, fmt::join(a.bounces.stopped_error, " "),
                            fmt::join(a.bounces.noise_per_sample, " "), fmt::join(a.bounces.sample_ns, " "),
                            a.visibility.occluded_fraction, a.visibility.pairs, leaks);
+            }
+            return 0;
+        }
+        if (options.references_only) {
+            for (const bench::BenchScene& bench_scene : bench::corpus_scenes()) {
+                if (!options.scenes.empty() &&
+                    std::find(options.scenes.begin(), options.scenes.end(), bench_scene.name) == options.scenes.end()) {
+                    continue;
+                }
+                bench::reference_image(bench_scene, methods::reference::PathTracer(bench_scene.scene),
+                                       {options.size, options.reference_spp, true, options.cache}, options.reference_bounces);
             }
             return 0;
         }

@@ -46,6 +46,7 @@ struct Options {
     int detail = 1;
     int reference_bounces = 4;
     int repeats = 3;
+    std::vector<std::string> methods;  // measure only these (the reference among them); all when empty
     fs::path out = "bench/results";
     fs::path cache = "build/bench-cache";
     fs::path markdown = "docs/benchmarks.md";
@@ -60,6 +61,7 @@ struct Row {
     std::size_t resident_bytes = 0;
     double rel_mse = 0, rmse = 0, rel_mse_same_bounces = 0, mean_ratio = 0;
     double rays_per_second = 0;
+    double cold_ms = 0;  // GPU methods: the first frame, which builds the scene's structures
 };
 
 bench::ReferenceSpec reference_spec(const Options& options) {
@@ -69,11 +71,11 @@ bench::ReferenceSpec reference_spec(const Options& options) {
 void write_csv(const fs::path& path, const std::vector<Row>& rows) {
     std::ofstream out(path);
     out << "scene,method,preset,bounces,wall_ms,gpu_ms,passes_ms,resident_bytes,rel_mse,rmse,rel_mse_same_bounces,"
-           "mean_ratio,rays_per_second\n";
+           "mean_ratio,rays_per_second,cold_ms\n";
     for (const Row& r : rows) {
-        out << fmt::format("{},{},{},{},{:.3f},{:.3f},{},{},{:.6g},{:.6g},{:.6g},{:.5f},{:.4g}\n", r.scene, r.method, r.preset,
-                           r.bounces, r.wall_ms, r.gpu_ms, r.passes, r.resident_bytes, r.rel_mse, r.rmse,
-                           r.rel_mse_same_bounces, r.mean_ratio, r.rays_per_second);
+        out << fmt::format("{},{},{},{},{:.3f},{:.3f},{},{},{:.6g},{:.6g},{:.6g},{:.5f},{:.4g},{:.3f}\n", r.scene, r.method,
+                           r.preset, r.bounces, r.wall_ms, r.gpu_ms, r.passes, r.resident_bytes, r.rel_mse, r.rmse,
+                           r.rel_mse_same_bounces, r.mean_ratio, r.rays_per_second, r.cold_ms);
     }
 }
 
@@ -212,10 +214,12 @@ int main(int argc, char** argv) {
         else if (flag == "--pixel-centre") options.pixel_centre = true;
         else if (flag == "--previews") options.previews = arguments.value();
         else if (flag == "--detail") options.detail = std::max(1, arguments.number());
+        else if (flag == "--method") options.methods.push_back(arguments.value());
         else {
             std::fprintf(stderr,
                          "usage: quality [--size N] [--reference-spp N] [--reference-bounces N] [--repeats N]\n"
-                         "               [--scene NAME ...] [--corpus [--detail N]] [--pixel-centre] [--previews DIR]\n"
+                         "               [--scene NAME ...] [--method NAME ...] [--corpus [--detail N]] [--pixel-centre]\n"
+                         "               [--previews DIR]\n"
                          "               [--out DIR]\n"
                          "               [--cache DIR]\n"
                          "               [--markdown FILE]\n"
@@ -225,6 +229,17 @@ int main(int argc, char** argv) {
         }
     }
     const std::string& command = arguments.command();
+    for (const std::string& method : options.methods) {
+        const auto names = methods::MethodRegistry::builtin().names();
+        if (std::find(names.begin(), names.end(), method) == names.end()) {
+            std::fprintf(stderr, "quality: unknown method '%s'\n", method.c_str());
+            return 2;
+        }
+    }
+    const auto measured = [&](const std::string& method) {
+        return options.methods.empty() ||
+               std::find(options.methods.begin(), options.methods.end(), method) != options.methods.end();
+    };
     try {
         Renderer renderer(gpu::DeviceChoice::resolve(std::nullopt));
         std::vector<Row> rows;
@@ -255,9 +270,10 @@ int main(int argc, char** argv) {
                 if (plan_frame(linear_request(method, "medium", {}, options.size)).site != FrameSite::gpu) {
                     continue;  // CPU methods (the reference) are measured below
                 }
+                if (!measured(method)) continue;
                 for (const auto& preset : methods::preset_names()) {
                     const RenderRequest request = linear_request(method, preset, {}, options.size);
-                    renderer.render(*resources, request);  // warm-up: shaders, structures
+                    const RenderResult cold = renderer.render(*resources, request);  // warm-up: shaders, structures
                     std::vector<RenderResult> results;
                     for (int r = 0; r < options.repeats; ++r) results.push_back(renderer.render(*resources, request));
                     std::sort(results.begin(), results.end(),
@@ -275,6 +291,7 @@ int main(int argc, char** argv) {
                                                                            : static_cast<int>(bounces_knob->second);
                     row.wall_ms = median.stats.render_ms;
                     row.gpu_ms = median.stats.gpu_ms;
+                    row.cold_ms = cold.stats.render_ms;
                     for (const auto& pass : median.stats.passes) {
                         row.passes += fmt::format("{}{}={:.2f}", row.passes.empty() ? "" : ";", pass.pass, pass.gpu_ms);
                     }
@@ -284,20 +301,25 @@ int main(int argc, char** argv) {
                     row.rmse = full.rmse;
                     row.mean_ratio = full.mean_reference > 0 ? full.mean_test / full.mean_reference : 0.0;
                     row.rel_mse_same_bounces = image::compare(median.frame, truth_at(row.bounces)).rel_mse;
-                    log::info("bench", "{} {} {}: {:.1f} ms relMSE {:.4f} (same bounces {:.5f})", row.scene, method, preset,
-                              row.wall_ms, row.rel_mse, row.rel_mse_same_bounces);
+                    std::string cold_passes;
+                    for (const auto& pass : cold.stats.passes) {
+                        if (pass.gpu_ms >= 1.0) cold_passes += fmt::format(" {}={:.0f}", pass.pass, pass.gpu_ms);
+                    }
+                    log::info("bench", "{} {} {}: {:.1f} ms (first frame {:.1f} ms, GPU ms over 1:{}) relMSE {:.4f} (same bounces {:.5f})",
+                              row.scene, method, preset, row.wall_ms, row.cold_ms, cold_passes, row.rel_mse,
+                              row.rel_mse_same_bounces);
                     rows.push_back(row);
                 }
             }
             resources.reset();
-            if (bench_scene.name == "cornell") {
+            if (bench_scene.name == "cornell" && measured("vct")) {
                 details += "\n## vct per pass (bench/quality)\n\nThe built-in Cornell box. Cold: a fresh scene, so the "
                            "octree is built, the light injected and mipmapped, then cones traced; warm: the same view "
                            "again (cones only). Sparse: the octree; dense: the same pipeline over every level's "
                            "full lattice (knob `dense`). Structure MiB: nodes, leaf data and voxel pools.\n\n" +
                            vct_passes_markdown(renderer, bench_scene.scene, {256, 512});
             }
-            if (bench_scene.name == "thin_wall") {
+            if (bench_scene.name == "thin_wall" && measured("vct")) {
                 details += fmt::format("\n## Light leaking through a thin wall (bench/quality, {0}x{0})\n\n"
                                        "thin_wall: a 2 cm slab seals the light above it, so the reference is exactly "
                                        "zero below it.\n\n",
@@ -306,6 +328,7 @@ int main(int argc, char** argv) {
             }
             // The reference itself: error reached per CPU second.
             for (const int spp : {1, 4, 16, 64}) {
+                if (!measured("reference")) break;
                 methods::reference::PathTracerSettings settings;
                 settings.max_bounces = options.reference_bounces;
                 settings.seed = 7;
