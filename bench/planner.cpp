@@ -208,7 +208,7 @@ int main(int argc, char** argv) {
             const planning::PlanningInputs inputs{
                 analysis, device, &costs, options.size, options.size, std::nullopt,
                 planning::measure_resample_errors(renderer, *resources, bench::linear_request("direct", "draft", {}, options.size),
-                                                  {"direct", "vct", "isr", "cssm"})};
+                                                  {"direct", "vct", "isr", "cssm"}, &costs, &device)};
             planning::FrameComparisons comparisons;
             int pass = 1;
             const auto run = [&](const planning::Budget& budget, const std::string& text) {

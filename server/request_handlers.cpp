@@ -413,7 +413,8 @@ planning::ResampleErrors RequestHandlers::resample_errors(const RenderOrder& ord
         if (!renderer.pending_work(*entry.resources, draft)) ready.push_back(method);
     }
     try {
-        planning::ResampleErrors errors = planning::measure_resample_errors(renderer, *entry.resources, view, ready);
+        planning::ResampleErrors errors = planning::measure_resample_errors(
+            renderer, *entry.resources, view, ready, entry.resources->measurements.get(), known_device_costs(renderer));
         // Kept only once every GPU method is in it: until then, measured again as more are built.
         if (ready.size() == gpu_methods) entry.resampling = SceneEntry::Resampling{key.value(), errors};
         return errors;

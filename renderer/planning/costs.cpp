@@ -101,28 +101,43 @@ void DeviceCosts::save(const std::filesystem::path& file) const {
 }
 
 void SceneMeasurements::record(const std::string& method, const std::string& preset, int bounces, double measured_ms,
-                               double predicted_ms) {
-    if (!(predicted_ms > 0.0) || !(measured_ms >= 0.0)) return;
+                               double predicted_ms, double pixels) {
+    if (!(predicted_ms > 0.0) || !(measured_ms >= 0.0) || !(pixels >= 0.0)) return;
     const std::lock_guard lock(mutex_);
-    auto& kept = ratios_[{method, preset, bounces}];
-    kept.push_back(measured_ms / predicted_ms);
+    auto& kept = frames_[{method, preset, bounces}][pixels];
+    kept.push_back({pixels, measured_ms, predicted_ms});
     if (kept.size() > kKept) kept.pop_front();
 }
+
+namespace {
+using FrameTime = SceneMeasurements::FrameTime;
+
+// The median measured/baseline ratio of one key's frames, over every size.
+std::optional<double> median_ratio(const std::map<double, std::deque<FrameTime>>& by_size) {
+    std::vector<double> ratios;
+    for (const auto& [pixels, kept] : by_size) {
+        for (const FrameTime& frame : kept) ratios.push_back(frame.measured_ms / frame.baseline_ms);
+    }
+    if (ratios.empty()) return std::nullopt;
+    return median(std::move(ratios));
+}
+}  // namespace
 
 std::optional<double> SceneMeasurements::ratio(const std::string& method, const std::string& preset, int bounces,
                                                bool* exact) const {
     const std::lock_guard lock(mutex_);
     if (exact) *exact = false;
-    if (const auto it = ratios_.find({method, preset, bounces}); it != ratios_.end() && !it->second.empty()) {
-        if (exact) *exact = true;
-        return median({it->second.begin(), it->second.end()});
+    if (const auto it = frames_.find({method, preset, bounces}); it != frames_.end()) {
+        if (const auto own = median_ratio(it->second)) {
+            if (exact) *exact = true;
+            return own;
+        }
     }
     for (const bool same_preset : {true, false}) {
         std::vector<double> others;
-        for (const auto& [key, kept] : ratios_) {
-            if (std::get<0>(key) == method && (!same_preset || std::get<1>(key) == preset) && !kept.empty()) {
-                others.push_back(median({kept.begin(), kept.end()}));
-            }
+        for (const auto& [key, by_size] : frames_) {
+            if (std::get<0>(key) != method || (same_preset && std::get<1>(key) != preset)) continue;
+            if (const auto r = median_ratio(by_size)) others.push_back(*r);
         }
         if (!others.empty()) return median(others);
     }
@@ -132,12 +147,58 @@ std::optional<double> SceneMeasurements::ratio(const std::string& method, const 
 std::optional<double> SceneMeasurements::scene_ratio() const {
     const std::lock_guard lock(mutex_);
     std::vector<double> all;
-    for (const auto& [key, kept] : ratios_) {
+    for (const auto& [key, by_size] : frames_) {
         // The reference runs on CPU threads: its ratio says nothing of the GPU's.
-        if (!kept.empty() && std::get<0>(key) != "reference") all.push_back(median({kept.begin(), kept.end()}));
+        if (std::get<0>(key) == "reference") continue;
+        if (const auto r = median_ratio(by_size)) all.push_back(*r);
     }
     if (all.empty()) return std::nullopt;
     return median(all);
+}
+
+std::vector<SceneMeasurements::FrameTime> SceneMeasurements::frames(const std::string& method, const std::string& preset,
+                                                                    int bounces) const {
+    const std::lock_guard lock(mutex_);
+    std::vector<FrameTime> all;
+    if (const auto it = frames_.find({method, preset, bounces}); it != frames_.end()) {
+        for (const auto& [pixels, kept] : it->second) all.insert(all.end(), kept.begin(), kept.end());
+    }
+    return all;
+}
+
+std::optional<CostLine> SceneMeasurements::line_locked(const Key& key) const {
+    const auto it = frames_.find(key);
+    if (it == frames_.end()) return std::nullopt;
+    const std::map<double, std::deque<FrameTime>>& by_size = it->second;
+    const auto smallest = by_size.upper_bound(0.0);  // sizes not known are left out
+    if (smallest == by_size.end() || smallest->second.empty()) return std::nullopt;
+    const auto& [large_pixels, large] = *by_size.rbegin();
+    if (large_pixels < kLineSpan * smallest->first || large.empty()) return std::nullopt;
+    const auto median_ms = [](const std::deque<FrameTime>& kept) {
+        std::vector<double> ms;
+        for (const FrameTime& frame : kept) ms.push_back(frame.measured_ms);
+        return median(std::move(ms));
+    };
+    return CostLine::through(smallest->first, median_ms(smallest->second), large_pixels, median_ms(large));
+}
+
+std::optional<CostLine> SceneMeasurements::line(const std::string& method, const std::string& preset, int bounces) const {
+    const std::lock_guard lock(mutex_);
+    return line_locked({method, preset, bounces});
+}
+
+std::optional<SceneMeasurements::PresetLine> SceneMeasurements::method_line(const std::string& method,
+                                                                          const std::string& preset) const {
+    const std::lock_guard lock(mutex_);
+    std::optional<PresetLine> found;
+    for (const auto& [key, by_size] : frames_) {
+        if (std::get<0>(key) != method) continue;
+        const auto line = line_locked(key);
+        if (!line) continue;
+        const bool same_preset = std::get<1>(key) == preset;
+        if (!found || (same_preset && found->preset != preset)) found = PresetLine{std::get<1>(key), std::get<2>(key), *line};
+    }
+    return found;
 }
 
 void SceneMeasurements::record_noise(int bounces, double noise_ratio) {

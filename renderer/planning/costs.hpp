@@ -62,13 +62,20 @@ private:
     std::map<std::pair<std::string, std::string>, CostLine> lines_;
 };
 
-// What frames of one scene measured: their times, as ratios to what the device's lines predicted,
-// and the reference's noise. Thread-safe: GPU frames are recorded on the render thread, CPU frames
-// on the CPU pool.
+// What frames of one scene measured: their times, against what the device's lines predicted and at
+// their sizes, and the reference's noise. Thread-safe: GPU frames are recorded on the render thread,
+// CPU frames on the CPU pool.
 class SceneMeasurements {
 public:
+    struct FrameTime {
+        double pixels = 0.0;  // 0 where the size is not known
+        double measured_ms = 0.0;
+        double baseline_ms = 0.0;  // what the device's line (or the analysis, for the reference) predicted
+    };
+
     // `bounces`: the frame's `bounces` knob, or -1 for methods without one.
-    void record(const std::string& method, const std::string& preset, int bounces, double measured_ms, double predicted_ms);
+    void record(const std::string& method, const std::string& preset, int bounces, double measured_ms, double predicted_ms,
+                double pixels = 0.0);
     // The median of the last frames at this preset and bounce count; else at this preset; else of
     // the method's other presets; nullopt when no frame of the method was measured on the scene.
     // `exact`, when given, says whether frames at this preset and bounce count were measured.
@@ -77,6 +84,24 @@ public:
     // The median over every GPU method measured here: how much heavier the scene is than the
     // calibration scene, for GPU methods not yet measured on it. nullopt when none was.
     std::optional<double> scene_ratio() const;
+
+    // The frames kept at this preset and bounce count, at every size.
+    std::vector<FrameTime> frames(const std::string& method, const std::string& preset, int bounces) const;
+    // This scene's own cost line at a preset and bounce count: through the median times at the
+    // smallest and the largest size measured, where those are at least kLineSpan apart in pixels. A
+    // scene's size changes the fixed part of a frame's cost (geometry, structures) and its per-pixel
+    // part differently: a line of the device's, scaled by one ratio, misprices the sizes it was not
+    // measured at. nullopt until frames of two such sizes were measured.
+    std::optional<CostLine> line(const std::string& method, const std::string& preset, int bounces) const;
+    struct PresetLine {
+        std::string preset;
+        int bounces = -1;
+        CostLine line;
+    };
+    // A line of `method` on this scene at any preset (line()), `preset`'s own first: the shape that
+    // the method's other presets take on this scene (planner.cpp). nullopt when none was measured.
+    std::optional<PresetLine> method_line(const std::string& method, const std::string& preset) const;
+    static constexpr double kLineSpan = 3.0;
 
     // A reference frame's noise per sample (methods::reference::noise_per_sample) at a bounce count,
     // as a multiple of what the analysis measured there: over a whole frame's samples it meets rare
@@ -103,11 +128,13 @@ public:
     void record_compared(const std::string& method, const std::string& preset);
     bool compared(const std::string& method, const std::string& preset) const;
 
-    static constexpr std::size_t kKept = 5;  // frames kept per preset: a median of them ignores one slow frame
+    static constexpr std::size_t kKept = 5;  // frames kept per preset and size: a median of them ignores one slow frame
 
 private:
+    using Key = std::tuple<std::string, std::string, int>;
+    std::optional<CostLine> line_locked(const Key& key) const;
     mutable std::mutex mutex_;
-    std::map<std::tuple<std::string, std::string, int>, std::deque<double>> ratios_;
+    std::map<Key, std::map<double, std::deque<FrameTime>>> frames_;  // by pixels
     std::map<int, double> noise_;
     std::map<std::tuple<std::string, std::string, int>, std::deque<double>> own_errors_;
     std::set<std::pair<std::string, std::string>> compared_;

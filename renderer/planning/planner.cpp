@@ -97,28 +97,73 @@ std::optional<double> baseline_ms(const SceneAnalysis* analysis, const DeviceCos
     return line->at(pixels);
 }
 
+namespace {
+
+// The device's lines are of the presets' own bounce counts (one for cssm). More bounces than a
+// preset's own, not yet measured on the scene, are priced as repeating the first: an upper bound,
+// since a bounce repeats the gather and shares the rest (bench: at most 4x for 8).
+double unmeasured_bounce_factor(const std::string& method, const std::string& preset, const methods::KnobValues& knobs) {
+    const auto& presets = methods::MethodRegistry::builtin().find(method).presets;
+    const auto own = presets.find(preset);
+    const auto requested = bounces_knob(knobs);
+    if (!requested || own == presets.end() || !own->second.count("bounces")) return 1.0;
+    return std::max(1.0, *requested / std::max(1.0, own->second.at("bounces")));
+}
+
+// A GPU preset's time on this scene from the scene's own lines (SceneMeasurements::line), where it
+// has any for the method: the preset's own line; else the device's line for the preset bent to the
+// scene's line of another preset of the method (at each size, that preset's time here times the
+// device's ratio between the two), scaled by this preset's frames measured here, if any.
+std::optional<double> scene_line_ms(const PlanningInputs& inputs, const std::string& method, const std::string& preset,
+                                    const methods::KnobValues& knobs, double pixels, std::string* basis) {
+    const int bounces = bounces_knob(knobs).value_or(-1);
+    if (const auto own = inputs.scene->line(method, preset, bounces)) {
+        if (basis) *basis = "this scene's own line for the preset, from its frames at two sizes or more";
+        return own->at(pixels);
+    }
+    const auto shape = inputs.scene->method_line(method, preset);
+    const auto device_line = inputs.device.line(method, preset);
+    const auto shape_device_line = shape ? inputs.device.line(method, shape->preset) : std::nullopt;
+    if (!shape || !device_line || !shape_device_line) return std::nullopt;
+    const auto model = [&](double p) {
+        const double device_shape_ms = shape_device_line->at(p);
+        return device_shape_ms > 0.0 ? shape->line.at(p) * device_line->at(p) / device_shape_ms : shape->line.at(p);
+    };
+    std::vector<double> ratios;
+    for (const SceneMeasurements::FrameTime& frame : inputs.scene->frames(method, preset, bounces)) {
+        if (frame.pixels > 0.0 && model(frame.pixels) > 0.0) ratios.push_back(frame.measured_ms / model(frame.pixels));
+    }
+    const bool same_bounces = shape->preset == preset || shape->bounces == bounces;
+    const double factor = !ratios.empty() ? median(ratios)
+                          : same_bounces  ? 1.0
+                                          : unmeasured_bounce_factor(method, preset, knobs);
+    if (basis) {
+        *basis = fmt::format("this scene's line for {} {} (frames at two sizes or more) x the device's ratio of the "
+                             "presets",
+                             method, shape->preset);
+        if (!ratios.empty()) *basis += fmt::format(" x {:.2f} as this preset measured here", factor);
+        else if (factor > 1.0) *basis += fmt::format(", x {:g} for bounces not yet measured", factor);
+    }
+    return model(pixels) * factor;
+}
+
+}  // namespace
+
 double predicted_ms(const PlanningInputs& inputs, const std::string& method, const std::string& preset,
                     const methods::KnobValues& knobs, std::string* basis) {
     const auto base = baseline_ms(&inputs.analysis, inputs.device, method, preset, knobs, inputs.width, inputs.height);
     if (!base) return std::numeric_limits<double>::infinity();
+    if (inputs.scene && method != "reference") {
+        const double pixels = static_cast<double>(inputs.width) * inputs.height;
+        if (const auto ms = scene_line_ms(inputs, method, preset, knobs, pixels, basis)) return *ms;
+    }
     std::optional<double> ratio, scene_ratio;
     bool exact = false;
     if (inputs.scene) {
         ratio = inputs.scene->ratio(method, preset, bounces_knob(knobs).value_or(-1), &exact);
         if (!ratio && method != "reference") scene_ratio = inputs.scene->scene_ratio();
     }
-    // The device's lines are of the presets' own bounce counts (one for cssm). More bounces than a
-    // preset's own, not yet measured on the scene, are priced as repeating the first: an upper
-    // bound, since a bounce repeats the gather and shares the rest (bench: at most 4x for 8).
-    double bounce_factor = 1.0;
-    if (method != "reference" && !exact) {
-        const auto& presets = methods::MethodRegistry::builtin().find(method).presets;
-        const auto own = presets.find(preset);
-        const auto requested = bounces_knob(knobs);
-        if (requested && own != presets.end() && own->second.count("bounces")) {
-            bounce_factor = std::max(1.0, *requested / std::max(1.0, own->second.at("bounces")));
-        }
-    }
+    const double bounce_factor = method != "reference" && !exact ? unmeasured_bounce_factor(method, preset, knobs) : 1.0;
     const std::string source = method == "reference" ? "the analysis' times" : "the device's calibration";
     if (basis) {
         *basis = ratio         ? fmt::format("{} x {:.2f} measured on this scene", source, *ratio)
@@ -217,7 +262,8 @@ std::vector<Candidate> probes(const std::vector<Candidate>& all, const Candidate
 void record_frame(SceneMeasurements& measurements, const SceneAnalysis* analysis, const DeviceCosts& device,
                   const FrameStats& stats, int width, int height) {
     if (const auto baseline = baseline_ms(analysis, device, stats.method, stats.preset, stats.knobs, width, height)) {
-        measurements.record(stats.method, stats.preset, bounces_knob(stats.knobs).value_or(-1), stats.render_ms, *baseline);
+        measurements.record(stats.method, stats.preset, bounces_knob(stats.knobs).value_or(-1), stats.render_ms, *baseline,
+                            static_cast<double>(width) * height);
     }
     const auto noise = stats.method_statistics.find("noise_per_sample");
     const auto spp = stats.knobs.find("spp");

@@ -2,6 +2,7 @@
 
 #include "renderer/image/metrics.hpp"
 #include "renderer/image/tone.hpp"
+#include "renderer/planning/planner.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -19,22 +20,30 @@ std::pair<int, int> measured_size(int width, int height) {
 }
 
 ResampleErrors measure_resample_errors(Renderer& renderer, SceneResources& resources, const RenderRequest& view,
-                                       const std::vector<std::string>& methods) {
+                                       const std::vector<std::string>& methods, SceneMeasurements* measurements,
+                                       const DeviceCosts* device) {
     ResampleErrors errors;
+    const auto record = [&](const RenderResult& result, const RenderRequest& request) {
+        if (measurements && device) {
+            record_frame(*measurements, resources.analysis_if_made(), *device, result.stats, request.width, request.height);
+        }
+    };
     for (const std::string& method : methods) {
         RenderRequest draft = view;
         draft.method = method;
         draft.preset = "draft";
         draft.knobs.clear();
         draft.make_display_image = false;
-        const image::Frame full = renderer.render(resources, draft).frame;
+        const image::Frame full = renderer.render(resources, draft).frame;  // may build the method's structures
         for (const double scale : kFrameScales) {
             RenderRequest small = draft;
             std::tie(small.width, small.height) = scaled_size(view.width, view.height, scale);
             if (std::min(small.width, small.height) < kMinScaledSide) continue;
-            const image::Frame up = image::resample_linear(renderer.render(resources, small).frame, view.width, view.height);
-            errors[method][scale] = image::compare(up, full).rel_mse;
+            const RenderResult rendered = renderer.render(resources, small);
+            record(rendered, small);
+            errors[method][scale] = image::compare(image::resample_linear(rendered.frame, view.width, view.height), full).rel_mse;
         }
+        if (measurements && device && errors.count(method)) record(renderer.render(resources, draft), draft);
     }
     return errors;
 }

@@ -7,6 +7,7 @@
 // by under 10%.
 #pragma once
 
+#include "renderer/planning/costs.hpp"
 #include "renderer/renderer.hpp"
 
 #include <map>
@@ -31,10 +32,14 @@ inline constexpr int kMeasuredSide = 256;
 std::pair<int, int> measured_size(int width, int height);
 
 // Per method of `methods` (GPU methods): relMSE of upsampling at each scale of kFrameScales whose
-// frame keeps kMinScaledSide a side, from its draft frames of `view` on the render thread.
+// frame keeps kMinScaledSide a side, from its draft frames of `view` on the render thread. With
+// `measurements` and `device`, the draft frames' times are recorded there too (the full-size one
+// from a second, warm frame): frames of one preset at three sizes give the scene its own cost line
+// (SceneMeasurements::line), which prices every size the planner offers.
 using ResampleErrors = std::map<std::string, std::map<double, double>>;
 ResampleErrors measure_resample_errors(Renderer& renderer, SceneResources& resources, const RenderRequest& view,
-                                       const std::vector<std::string>& methods);
+                                       const std::vector<std::string>& methods, SceneMeasurements* measurements = nullptr,
+                                       const DeviceCosts* device = nullptr);
 
 // A frame rendered at a smaller size, upsampled to width x height, with its display image remade
 // from the upsampled radiance when the request asks for one.

@@ -16,6 +16,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <set>
 
 #include <unistd.h>
 
@@ -118,6 +119,33 @@ TEST(Budgets, UpsamplingLosesWhatTheMethodsDraftFramesSay) {
             const double lost = image::compare(up.frame, at_full).rel_mse;
             EXPECT_NEAR(lost, predicted, 0.1 * predicted) << method << " high at 1/" << 1.0 / scale;
         }
+    }
+}
+
+// Measuring upsampling renders each method's draft at three sizes; recorded, those frames give the
+// scene its own cost line for the draft (the fixed and per-pixel parts of its cost here, which the
+// planner then prices every size and preset of the method from).
+TEST(Budgets, MeasuringUpsamplingGivesTheSceneACostLinePerMethod) {
+    const scene::Scene scene = scene::make_cornell_box();
+    auto resources = shared_renderer().upload(scene);
+    planning::DeviceCosts device("made up");
+    device.set("direct", "draft", {1.0, 1000.0});
+    device.set("cssm", "draft", {1.0, 1000.0});
+    planning::SceneMeasurements measurements;
+    constexpr int kLarge = 64;
+    planning::measure_resample_errors(shared_renderer(), *resources, method_request("direct", "draft", kLarge, {}),
+                                      {"direct", "cssm"}, &measurements, &device);
+    for (const auto& [method, bounces] : std::vector<std::pair<std::string, int>>{{"direct", -1}, {"cssm", 1}}) {
+        std::set<double> sizes;
+        for (const auto& frame : measurements.frames(method, "draft", bounces)) sizes.insert(frame.pixels);
+        EXPECT_EQ(sizes, (std::set<double>{16.0 * 16.0, 32.0 * 32.0, 64.0 * 64.0})) << method;
+        const auto line = measurements.line(method, "draft", bounces);
+        ASSERT_TRUE(line.has_value()) << method;
+        const SceneAnalysis analysis;
+        const planning::PlanningInputs at_16{analysis, device, &measurements, 16, 16, std::nullopt};
+        methods::KnobValues knobs;
+        if (bounces >= 0) knobs["bounces"] = bounces;
+        EXPECT_DOUBLE_EQ(planning::predicted_ms(at_16, method, "draft", knobs), line->at(16.0 * 16.0)) << method;
     }
 }
 

@@ -227,6 +227,63 @@ TEST(Costs, MeasuredFramesScaleTheDeviceLineAndOneSlowFrameDoesNot) {
                      2.0 + 2000.0 * 1e-6 * 100 * 100 * 8);
 }
 
+// A geometry-heavy scene: its frames cost nearly the same at every size, where the calibration box's
+// cost was mostly per pixel. One ratio to the device's line, measured at one size, misprices the
+// others; the scene's own line through two sizes does not.
+TEST(Costs, AScenesOwnLineThroughTwoSizesPricesEverySize) {
+    const SceneAnalysis analysis = made_up_analysis();
+    DeviceCosts device("test");
+    device.set("vct", "medium", {2.0, 2000.0});  // at 64x64: 10.19 ms, at 16x16: 2.51 ms
+    SceneMeasurements scene;
+    const double full = 64.0 * 64.0, quarter = 16.0 * 16.0;
+    scene.record("vct", "medium", 1, 40.0, device.line("vct", "medium")->at(full), full);
+    const PlanningInputs at_16{analysis, device, &scene, 16, 16, std::nullopt};
+    // One size measured: the device's line times the ratio, 40 / 10.19 x 2.51 = 9.9 ms.
+    EXPECT_NEAR(predicted_ms(at_16, "vct", "medium", {{"bounces", 1}}),
+                40.0 / device.line("vct", "medium")->at(full) * device.line("vct", "medium")->at(quarter), 1e-9);
+    scene.record("vct", "medium", 1, 37.0, device.line("vct", "medium")->at(quarter), quarter);
+    const CostLine own = CostLine::through(quarter, 37.0, full, 40.0);
+    EXPECT_NEAR(predicted_ms(at_16, "vct", "medium", {{"bounces", 1}}), 37.0, 1e-9);
+    const PlanningInputs at_32{analysis, device, &scene, 32, 32, std::nullopt};
+    std::string basis;
+    EXPECT_NEAR(predicted_ms(at_32, "vct", "medium", {{"bounces", 1}}, &basis), own.at(32.0 * 32.0), 1e-9);
+    EXPECT_NE(basis.find("own line"), std::string::npos) << basis;
+    // Sizes closer than kLineSpan apart make no line: two noisy points that near would tilt it anywhere.
+    SceneMeasurements near;
+    near.record("vct", "medium", 1, 40.0, 10.0, full);
+    near.record("vct", "medium", 1, 30.0, 10.0, full / 2.0);
+    EXPECT_FALSE(near.line("vct", "medium", 1).has_value());
+}
+
+// Another preset of the method takes the shape of the scene's line for the preset measured at
+// several sizes (the draft frames that measure upsampling), scaled by the device's ratio between the
+// two presets at each size, and by its own frames where it has any.
+TEST(Costs, OtherPresetsTakeTheShapeOfTheMethodsLineOnTheScene) {
+    const SceneAnalysis analysis = made_up_analysis();
+    DeviceCosts device("test");
+    device.set("cssm", "draft", {1.0, 1000.0});
+    device.set("cssm", "medium", {4.0, 8000.0});
+    SceneMeasurements scene;
+    const double full = 64.0 * 64.0, quarter = 16.0 * 16.0;
+    scene.record("cssm", "draft", 1, 20.0, 1.0, quarter);  // draft here: 20 ms at 16x16, 24 ms at 64x64
+    scene.record("cssm", "draft", 1, 24.0, 1.0, full);
+    const CostLine draft_here = CostLine::through(quarter, 20.0, full, 24.0);
+    const auto model = [&](double pixels) {
+        return draft_here.at(pixels) * device.line("cssm", "medium")->at(pixels) / device.line("cssm", "draft")->at(pixels);
+    };
+    const PlanningInputs at_16{analysis, device, &scene, 16, 16, std::nullopt};
+    EXPECT_NEAR(predicted_ms(at_16, "cssm", "medium", {{"bounces", 1}}), model(quarter), 1e-9);
+    EXPECT_NEAR(predicted_ms(at_16, "cssm", "medium", {{"bounces", 4}}), 4.0 * model(quarter), 1e-9);  // bounces unmeasured
+    scene.record("cssm", "medium", 1, 1.5 * model(full), 99.0, full);  // medium measured 1.5x the shape at full size
+    std::string basis;
+    EXPECT_NEAR(predicted_ms(at_16, "cssm", "medium", {{"bounces", 1}}, &basis), 1.5 * model(quarter), 1e-9);
+    EXPECT_NE(basis.find("cssm draft"), std::string::npos) << basis;
+    // Another method's line says nothing of this one's.
+    device.set("vct", "draft", {1.0, 1000.0});
+    EXPECT_NEAR(predicted_ms(at_16, "vct", "draft", {}), device.line("vct", "draft")->at(quarter) * scene.scene_ratio().value(),
+                1e-9);
+}
+
 TEST(Costs, AReferenceFrameRecordsItsNoiseAgainstTheAnalysis) {
     const SceneAnalysis analysis = made_up_analysis();
     SceneMeasurements measured;
