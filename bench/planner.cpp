@@ -33,7 +33,9 @@ namespace {
 
 struct Options {
     int size = 128;
-    int reference_spp = 1024;
+    // The references' own noise adds to every error measured against them: at 4096 spp it is at most
+    // 0.0018 of relMSE on these scenes (noise per sample at 8 bounces under 7.3, scene analysis).
+    int reference_spp = 4096;
     int reference_bounces = 8;
     fs::path cache = "build/bench-cache";
     fs::path out = "bench/results";
@@ -82,14 +84,26 @@ Measured render_plan(Renderer& renderer, SceneResources& resources, const scene:
     RenderRequest request = bench::linear_request(method, preset, knobs, size);
     std::tie(request.width, request.height) = planning::scaled_size(size, size, scale);
     const FramePlan frame_plan = plan_frame(request);
-    RenderResult result;
-    if (frame_plan.site == FrameSite::cpu) {
-        result = render_on_cpu(scene, request, frame_plan);
-    } else {
-        renderer.render(resources, request);  // builds the structures
-        result = renderer.render(resources, request);
+    // Frames under kRepeatBelowMs are rendered kRepeats times and the median kept (each recorded, as a
+    // daemon records every frame): on a loaded two-core machine one frame of a few milliseconds varies
+    // by more than the 1.5x and 1.2x that the budgets are judged by.
+    constexpr double kRepeatBelowMs = 500.0;
+    constexpr int kRepeats = 3;
+    const auto render_once = [&] {
+        RenderResult once = frame_plan.site == FrameSite::cpu ? render_on_cpu(scene, request, frame_plan)
+                                                               : renderer.render(resources, request);
+        planning::record_frame(costs, &analysis, device, once.stats, request.width, request.height);
+        return once;
+    };
+    if (frame_plan.site == FrameSite::gpu) renderer.render(resources, request);  // builds the structures
+    std::vector<RenderResult> results;
+    results.push_back(render_once());
+    while (results.front().stats.render_ms < kRepeatBelowMs && results.size() < static_cast<std::size_t>(kRepeats)) {
+        results.push_back(render_once());
     }
-    planning::record_frame(costs, &analysis, device, result.stats, request.width, request.height);
+    std::sort(results.begin(), results.end(),
+              [](const RenderResult& a, const RenderResult& b) { return a.stats.render_ms < b.stats.render_ms; });
+    RenderResult result = std::move(results[results.size() / 2]);
     if (scale != 1.0) result = planning::upsampled(result, size, size, request);
     const double error = image::compare(result.frame, truth).rel_mse;
     const std::string name = label(method, preset, knobs) + (scale != 1.0 ? fmt::format(" at 1/{:g} size", 1.0 / scale) : "");
@@ -251,6 +265,9 @@ int main(int argc, char** argv) {
                 rows.push_back(row);
             }
             }
+            std::string ratios;
+            for (const auto& [bounces, ratio] : costs.noise_ratios()) ratios += fmt::format(" {}:{:.2f}", bounces, ratio);
+            log::info("bench", "{}: reference noise measured / analysed, by bounces:{}", bench_scene.name, ratios);
         }
         fs::create_directories(options.out);
         std::ofstream fixed_csv(options.out / "planner_fixed.csv");

@@ -6,6 +6,7 @@
 #include "renderer/planning/error_model.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <vector>
 
 namespace bounce::planning {
@@ -49,8 +50,8 @@ std::optional<Comparison> FrameComparisons::compare(const RenderResult& gpu_fram
     c.bounces = modelled_bounces(c.method, gpu_frame.stats.knobs);
     c.rel_mse = image::compare(gpu_frame.frame, reference.frame).rel_mse;
     measurements.record_compared(c.method, c.preset);
-    c.reference_noise =
-        reference.stats.method_statistics.at("noise_per_sample") / std::max(1.0, knob(reference.stats, "spp", 1.0));
+    c.reference_noise = measurements.noise_scale().value_or(1.0) * reference.stats.method_statistics.at("noise_per_sample") /
+                        std::max(1.0, knob(reference.stats, "spp", 1.0));
     // A reference with fewer bounces than the frame counts the frame's extra light as error: left
     // in, which overstates the own error (the safe side for a promise).
     const int reference_bounces = modelled_bounces("reference", reference.stats.knobs);
@@ -66,12 +67,33 @@ std::optional<Comparison> FrameComparisons::compare(const RenderResult& gpu_fram
     return c;
 }
 
+std::optional<double> FrameComparisons::calibrate_noise(const RenderResult& fewer, const RenderResult& more,
+                                                       const SceneAnalysis* analysis, SceneMeasurements& measurements) {
+    if (!usable_reference(fewer.stats) || !usable_reference(more.stats)) return std::nullopt;
+    if (fewer.frame.width != more.frame.width || fewer.frame.height != more.frame.height) return std::nullopt;
+    if (knob(fewer.stats, "pixel_jitter", 1.0) != knob(more.stats, "pixel_jitter", 1.0)) return std::nullopt;
+    const double fewer_spp = knob(fewer.stats, "spp", 1.0), more_spp = knob(more.stats, "spp", 1.0);
+    if (more_spp < kCalibrationSpan * fewer_spp) return std::nullopt;
+    const double rel_mse = image::compare(fewer.frame, more.frame).rel_mse;
+    const double gap = std::abs(stopped_at(analysis, modelled_bounces("reference", fewer.stats.knobs)) -
+                                stopped_at(analysis, modelled_bounces("reference", more.stats.knobs)));
+    const double statistic = fewer.stats.method_statistics.at("noise_per_sample") / fewer_spp +
+                             more.stats.method_statistics.at("noise_per_sample") / more_spp;
+    if (!(rel_mse >= 0.0) || !(statistic > 0.0) || gap > 0.5 * rel_mse) return std::nullopt;
+    const double scale = (rel_mse - gap) / statistic;
+    measurements.record_noise_scale(scale);
+    log::info("planner", "reference noise: {:.0f} against {:.0f} spp, relMSE {:.4f} (bounces {:.4f}) where the noise "
+              "statistic says {:.4f}: x {:.2f}",
+              fewer_spp, more_spp, rel_mse, gap, statistic, scale);
+    return scale;
+}
+
 std::vector<Comparison> FrameComparisons::add(std::uint64_t view, std::shared_ptr<const RenderResult> frame,
                                               const SceneAnalysis* analysis, SceneMeasurements& measurements) {
     const FrameStats& stats = frame->stats;
     const bool is_reference = usable_reference(stats);
     if (!is_reference && !usable_gpu_frame(stats)) return {};
-    std::shared_ptr<const RenderResult> reference;
+    std::shared_ptr<const RenderResult> reference, kept_reference;
     std::vector<std::shared_ptr<const RenderResult>> to_compare;
     {
         const std::lock_guard lock(mutex_);
@@ -80,9 +102,13 @@ std::vector<Comparison> FrameComparisons::add(std::uint64_t view, std::shared_pt
             reference_.reset();
             gpu_frames_.clear();
         }
+        kept_reference = reference_;
         if (is_reference) {
             // The one with the most samples: the least noise to subtract.
-            if (reference_ && knob(reference_->stats, "spp", 0.0) >= knob(stats, "spp", 0.0)) return {};
+            if (reference_ && knob(reference_->stats, "spp", 0.0) >= knob(stats, "spp", 0.0)) {
+                calibrate_noise(*frame, *reference_, analysis, measurements);
+                return {};
+            }
             reference_ = frame;
             for (const auto& [key, kept] : gpu_frames_) to_compare.push_back(kept);
         } else {
@@ -93,6 +119,7 @@ std::vector<Comparison> FrameComparisons::add(std::uint64_t view, std::shared_pt
         }
         reference = reference_;
     }
+    if (is_reference && kept_reference) calibrate_noise(*kept_reference, *frame, analysis, measurements);
     std::vector<Comparison> made;
     for (const auto& gpu_frame : to_compare) {
         if (auto c = compare(*gpu_frame, *reference, analysis, measurements)) {

@@ -5,7 +5,8 @@
 //
 // own error = relMSE(GPU frame, reference frame) - the reference's noise (its measured noise per
 // sample over its samples) - the light of the bounces the reference has and the GPU frame lacks
-// (stopped_error[k] - stopped_error[b] from the analysis). Left out: comparisons where those two
+// (stopped_error[k] - stopped_error[b] from the analysis). The noise is the reference's statistic
+// scaled by what two reference frames of a view measured it to make (calibrate_noise). Left out: comparisons where those two
 // are over half of the relMSE (the own part would be mostly noise or missing light), references
 // that are denoised, without indirect visibility, with ambient occlusion or under 16 samples, and
 // GPU frames whose knobs are not their preset's (other than `bounces`).
@@ -56,6 +57,16 @@ public:
     // One comparison, made and recorded (add() calls it; public for tests).
     static std::optional<Comparison> compare(const RenderResult& gpu_frame, const RenderResult& reference,
                                              const SceneAnalysis* analysis, SceneMeasurements& measurements);
+
+    // Two reference frames of one view, the second with at least kCalibrationSpan times the samples:
+    // relMSE between them, less the light of the bounces one has beyond the other, over what their noise
+    // statistics say (noise_per_sample / spp of each) is how much relMSE the statistic makes on this
+    // scene (SceneMeasurements::noise_scale), recorded and returned. nullopt, recording nothing, where
+    // they are not so (other sizes, pixel positions or too few samples apart) or the bounces make over
+    // half of the relMSE. add() calls it whenever a reference frame meets the view's kept one.
+    static std::optional<double> calibrate_noise(const RenderResult& fewer, const RenderResult& more,
+                                                 const SceneAnalysis* analysis, SceneMeasurements& measurements);
+    static constexpr double kCalibrationSpan = 2.0;
 
 private:
     std::mutex mutex_;

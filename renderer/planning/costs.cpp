@@ -218,6 +218,24 @@ std::optional<double> SceneMeasurements::noise_ratio(int bounces) const {
     return above->second;
 }
 
+std::map<int, double> SceneMeasurements::noise_ratios() const {
+    const std::lock_guard lock(mutex_);
+    return noise_;
+}
+
+void SceneMeasurements::record_noise_scale(double scale) {
+    if (!(scale > 0.0) || !std::isfinite(scale)) return;
+    const std::lock_guard lock(mutex_);
+    noise_scales_.push_back(scale);
+    if (noise_scales_.size() > kKept) noise_scales_.pop_front();
+}
+
+std::optional<double> SceneMeasurements::noise_scale() const {
+    const std::lock_guard lock(mutex_);
+    if (noise_scales_.empty()) return std::nullopt;
+    return median({noise_scales_.begin(), noise_scales_.end()});
+}
+
 void SceneMeasurements::record_own_error(const std::string& method, const std::string& preset, int bounces, double rel_mse) {
     if (!(rel_mse >= 0.0) || !std::isfinite(rel_mse)) return;
     const std::lock_guard lock(mutex_);

@@ -109,6 +109,17 @@ public:
     void record_noise(int bounces, double noise_ratio);
     // The largest ratio recorded at the nearest bounce count (the higher of two as near); nullopt when none.
     std::optional<double> noise_ratio(int bounces) const;
+    // Every bounce count's ratio recorded (for logs and the bench).
+    std::map<int, double> noise_ratios() const;
+
+    // How much relMSE a reference frame's noise statistic (noise_per_sample over its samples) makes
+    // against a converged frame, on this scene: measured from two reference frames of one view
+    // (comparisons.hpp). The statistic is a luminance variance over a neighbourhood's value; relMSE
+    // weighs each channel by its own value, and the two part on scenes of coloured or high-contrast
+    // light (the sunlit atrium: the statistic says three times what relMSE measures). The median of
+    // the last kKept; nullopt until measured.
+    void record_noise_scale(double scale);
+    std::optional<double> noise_scale() const;
 
     // A GPU frame's own error on this scene: its relMSE against a reference frame of the same view,
     // less the reference's noise and the bounces one has and the other lacks (comparisons.hpp).
@@ -136,6 +147,7 @@ private:
     mutable std::mutex mutex_;
     std::map<Key, std::map<double, std::deque<FrameTime>>> frames_;  // by pixels
     std::map<int, double> noise_;
+    std::deque<double> noise_scales_;
     std::map<std::tuple<std::string, std::string, int>, std::deque<double>> own_errors_;
     std::set<std::pair<std::string, std::string>> compared_;
 };

@@ -90,13 +90,19 @@ ErrorPrediction predict_error(const SceneAnalysis& analysis, const std::string& 
         const double spp = std::max(1.0, methods::knob_or(knobs, "spp", 1.0));
         const double analysed = BounceEnergy::at(energy.noise_per_sample, bounces);
         const double ratio = std::max(1.0, measured ? measured->noise_ratio(bounces).value_or(1.0) : 1.0);
-        const double noise = ratio * analysed / spp;
+        const std::optional<double> scale = measured ? measured->noise_scale() : std::nullopt;
+        const double noise = scale.value_or(1.0) * ratio * analysed / spp;
         prediction.rel_mse = stopped + noise;
-        prediction.basis = ratio > 1.0 ? fmt::format("{} bounces lack {:.3f}; noise {:.3f} at {:.0f} spp ({:.1f}x the "
-                                                     "analysis', as this scene's reference frames measured)",
-                                                     bounces, stopped, noise, spp, ratio)
-                                       : fmt::format("{} bounces lack {:.3f}; noise {:.3f} at {:.0f} spp", bounces, stopped,
-                                                     noise, spp);
+        prediction.basis = fmt::format("{} bounces lack {:.3f}; noise {:.3f} at {:.0f} spp", bounces, stopped, noise, spp);
+        if (ratio > 1.0) {
+            prediction.basis += fmt::format(" ({:.1f}x the analysis' statistic, as this scene's reference frames measured it", ratio);
+        } else {
+            prediction.basis += " (the analysis' statistic";
+        }
+        prediction.basis += scale ? fmt::format(", x {:.2f}, the relMSE that statistic made between this scene's reference "
+                                                "frames)",
+                                                *scale)
+                                  : ")";
         return prediction;
     }
     const auto [own, own_basis] = own_error(method, preset, bounces, measured);

@@ -157,6 +157,44 @@ TEST(FrameComparisons, AReferenceWithMoreSamplesComparesAgainAndOneWithFewerIsIg
     EXPECT_EQ(measured.own_error("isr", "medium", 1)->frames, 2);
 }
 
+// Two reference frames of one view tell how much relMSE the noise statistic makes on the scene: here
+// the fewer-sample frame is off by +-0.3 in a checkerboard (relMSE 0.09 / 1.01 against the converged
+// one) while its statistic claimed 0.18 / 16 x 16 samples = 0.18: the scene's scale is a half, and it
+// halves the reference's predicted noise and the noise taken out of a GPU frame's comparison.
+TEST(FrameComparisons, TwoReferenceFramesOfAViewMeasureWhatTheirNoiseStatisticMakes) {
+    const SceneAnalysis analysis = made_up_analysis();
+    SceneMeasurements measured;
+    FrameComparisons comparisons;
+    auto noisy = std::make_shared<RenderResult>(*reference(16, 16.0 * 0.18));
+    for (int i = 0; i < 64; ++i) {
+        const float offset = ((i % 8 + i / 8) % 2 == 0) ? 0.3f : -0.3f;
+        for (int c = 0; c < 3; ++c) noisy->frame.rgba[4 * i + c] += offset;
+    }
+    comparisons.add(3, reference(4096, 0.0), &analysis, measured);
+    EXPECT_FALSE(measured.noise_scale().has_value());
+    comparisons.add(3, noisy, &analysis, measured);  // fewer samples: compared with the kept one, not kept
+    ASSERT_TRUE(measured.noise_scale().has_value());
+    EXPECT_NEAR(*measured.noise_scale(), (0.09 / 1.01) / 0.18, 1e-6);
+    // The error model's noise for the reference, and a comparison's, scale by it.
+    const double analysed = analysis.bounces.noise_per_sample[4];
+    EXPECT_NEAR(predict_error(analysis, "reference", "medium", {{"spp", 64}, {"bounces", 4}}, &measured).rel_mse,
+                analysis.bounces.stopped_error[4] + *measured.noise_scale() * analysed / 64.0, 1e-12);
+    const auto made = comparisons.add(3, frame("cssm", "low", {{"bounces", 4}}, 2.0f), &analysis, measured);
+    ASSERT_EQ(made.size(), 1u);
+    EXPECT_DOUBLE_EQ(made[0].reference_noise, 0.0);  // the kept reference's statistic is 0
+    // Not calibrated: references too few samples apart, of other pixel positions, or whose difference
+    // is mostly the bounces one lacks.
+    SceneMeasurements other;
+    EXPECT_FALSE(FrameComparisons::calibrate_noise(*noisy, *reference(24, 0.1), &analysis, other));
+    auto jittered = std::make_shared<RenderResult>(*reference(4096, 0.0));
+    jittered->stats.knobs["pixel_jitter"] = 1;
+    EXPECT_FALSE(FrameComparisons::calibrate_noise(*noisy, *jittered, &analysis, other));
+    auto fewer_bounces = std::make_shared<RenderResult>(*noisy);
+    fewer_bounces->stats.knobs["bounces"] = 0;  // lacks 0.1 - 0.1 / 16 of the light: over half of 0.089
+    EXPECT_FALSE(FrameComparisons::calibrate_noise(*fewer_bounces, *reference(4096, 0.0), &analysis, other));
+    EXPECT_FALSE(other.noise_scale().has_value());
+}
+
 TEST(FrameComparisons, NoisyDenoisedOrUnlikeFramesAreNotCompared) {
     const SceneAnalysis analysis = made_up_analysis();
     // The reference's noise over half of the relMSE: the own part would be mostly noise.
