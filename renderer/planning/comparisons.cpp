@@ -77,14 +77,19 @@ std::optional<double> FrameComparisons::calibrate_noise(const RenderResult& fewe
     const double rel_mse = image::compare(fewer.frame, more.frame).rel_mse;
     const double gap = std::abs(stopped_at(analysis, modelled_bounces("reference", fewer.stats.knobs)) -
                                 stopped_at(analysis, modelled_bounces("reference", more.stats.knobs)));
-    const double statistic = fewer.stats.method_statistics.at("noise_per_sample") / fewer_spp +
-                             more.stats.method_statistics.at("noise_per_sample") / more_spp;
+    // Frames of one seed share their first samples (a sample draws from the seed, the pixel and its
+    // index alone): the larger holds the smaller, and their difference is the smaller's noise less
+    // the larger's, not the sum of the two.
+    const double fewer_noise = fewer.stats.method_statistics.at("noise_per_sample");
+    const bool nested = knob(fewer.stats, "seed", 0.0) == knob(more.stats, "seed", 1.0);
+    const double statistic = nested ? fewer_noise * (1.0 / fewer_spp - 1.0 / more_spp)
+                                    : fewer_noise / fewer_spp + more.stats.method_statistics.at("noise_per_sample") / more_spp;
     if (!(rel_mse >= 0.0) || !(statistic > 0.0) || gap > 0.5 * rel_mse) return std::nullopt;
     const double scale = (rel_mse - gap) / statistic;
     measurements.record_noise_scale(scale);
-    log::info("planner", "reference noise: {:.0f} against {:.0f} spp, relMSE {:.4f} (bounces {:.4f}) where the noise "
+    log::info("planner", "reference noise: {:.0f} against {:.0f} spp{}, relMSE {:.4f} (bounces {:.4f}) where the noise "
               "statistic says {:.4f}: x {:.2f}",
-              fewer_spp, more_spp, rel_mse, gap, statistic, scale);
+              fewer_spp, more_spp, nested ? " of one seed" : "", rel_mse, gap, statistic, scale);
     return scale;
 }
 

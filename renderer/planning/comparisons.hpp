@@ -60,7 +60,8 @@ public:
 
     // Two reference frames of one view, the second with at least kCalibrationSpan times the samples:
     // relMSE between them, less the light of the bounces one has beyond the other, over what their noise
-    // statistics say (noise_per_sample / spp of each) is how much relMSE the statistic makes on this
+    // statistics say (noise_per_sample / spp of each, or of the smaller less the larger where one seed
+    // made both and the larger holds the smaller's samples) is how much relMSE the statistic makes on this
     // scene (SceneMeasurements::noise_scale), recorded and returned. nullopt, recording nothing, where
     // they are not so (other sizes, pixel positions or too few samples apart) or the bounces make over
     // half of the relMSE. add() calls it whenever a reference frame meets the view's kept one.

@@ -133,7 +133,8 @@ std::optional<double> scene_line_ms(const PlanningInputs& inputs, const std::str
     for (const SceneMeasurements::FrameTime& frame : inputs.scene->frames(method, preset, bounces)) {
         if (frame.pixels > 0.0 && model(frame.pixels) > 0.0) ratios.push_back(frame.measured_ms / model(frame.pixels));
     }
-    const bool same_bounces = shape->preset == preset || shape->bounces == bounces;
+    // The shape's own bounce count, or the preset's own where the plan asks for none.
+    const bool same_bounces = bounces < 0 || shape->bounces == bounces;
     const double factor = !ratios.empty() ? median(ratios)
                           : same_bounces  ? 1.0
                                           : unmeasured_bounce_factor(method, preset, knobs);

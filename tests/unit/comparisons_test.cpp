@@ -170,7 +170,9 @@ TEST(FrameComparisons, TwoReferenceFramesOfAViewMeasureWhatTheirNoiseStatisticMa
         const float offset = ((i % 8 + i / 8) % 2 == 0) ? 0.3f : -0.3f;
         for (int c = 0; c < 3; ++c) noisy->frame.rgba[4 * i + c] += offset;
     }
-    comparisons.add(3, reference(4096, 0.0), &analysis, measured);
+    auto converged = std::make_shared<RenderResult>(*reference(4096, 0.0));
+    converged->stats.knobs["seed"] = 2;  // another seed: the two frames' noise is independent
+    comparisons.add(3, converged, &analysis, measured);
     EXPECT_FALSE(measured.noise_scale().has_value());
     comparisons.add(3, noisy, &analysis, measured);  // fewer samples: compared with the kept one, not kept
     ASSERT_TRUE(measured.noise_scale().has_value());
@@ -182,6 +184,11 @@ TEST(FrameComparisons, TwoReferenceFramesOfAViewMeasureWhatTheirNoiseStatisticMa
     const auto made = comparisons.add(3, frame("cssm", "low", {{"bounces", 4}}, 2.0f), &analysis, measured);
     ASSERT_EQ(made.size(), 1u);
     EXPECT_DOUBLE_EQ(made[0].reference_noise, 0.0);  // the kept reference's statistic is 0
+    // Of one seed, the larger frame holds the smaller's 16 samples: their difference is the smaller's
+    // noise less the larger's, 1/16 - 1/4096 of the statistic per sample.
+    SceneMeasurements nested;
+    EXPECT_NEAR(*FrameComparisons::calibrate_noise(*noisy, *reference(4096, 0.0), &analysis, nested),
+                (0.09 / 1.01) / (16.0 * 0.18 * (1.0 / 16.0 - 1.0 / 4096.0)), 1e-6);
     // Not calibrated: references too few samples apart, of other pixel positions, or whose difference
     // is mostly the bounces one lacks.
     SceneMeasurements other;

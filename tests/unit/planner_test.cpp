@@ -274,6 +274,8 @@ TEST(Costs, OtherPresetsTakeTheShapeOfTheMethodsLineOnTheScene) {
     const PlanningInputs at_16{analysis, device, &scene, 16, 16, std::nullopt};
     EXPECT_NEAR(predicted_ms(at_16, "cssm", "medium", {{"bounces", 1}}), model(quarter), 1e-9);
     EXPECT_NEAR(predicted_ms(at_16, "cssm", "medium", {{"bounces", 4}}), 4.0 * model(quarter), 1e-9);  // bounces unmeasured
+    // The measured preset itself at a bounce count not measured: its line, repeated per bounce.
+    EXPECT_NEAR(predicted_ms(at_16, "cssm", "draft", {{"bounces", 4}}), 4.0 * draft_here.at(quarter), 1e-9);
     scene.record("cssm", "medium", 1, 1.5 * model(full), 99.0, full);  // medium measured 1.5x the shape at full size
     std::string basis;
     EXPECT_NEAR(predicted_ms(at_16, "cssm", "medium", {{"bounces", 1}}, &basis), 1.5 * model(quarter), 1e-9);
