@@ -116,7 +116,13 @@ double unmeasured_bounce_factor(const std::string& method, const std::string& pr
 // device's ratio between the two), scaled by this preset's frames measured here, if any.
 std::optional<double> scene_line_ms(const PlanningInputs& inputs, const std::string& method, const std::string& preset,
                                     const methods::KnobValues& knobs, double pixels, std::string* basis) {
-    const int bounces = bounces_knob(knobs).value_or(-1);
+    // Frames are recorded under their resolved knobs: a plan that names no bounce count has its preset's.
+    const auto& presets = methods::MethodRegistry::builtin().find(method).presets;
+    const auto own_knobs = presets.find(preset);
+    const int preset_bounces = own_knobs != presets.end() && own_knobs->second.count("bounces")
+                                   ? static_cast<int>(own_knobs->second.at("bounces"))
+                                   : -1;
+    const int bounces = bounces_knob(knobs).value_or(preset_bounces);
     if (const auto own = inputs.scene->line(method, preset, bounces)) {
         if (basis) *basis = "this scene's own line for the preset, from its frames at two sizes or more";
         return own->at(pixels);
@@ -133,8 +139,7 @@ std::optional<double> scene_line_ms(const PlanningInputs& inputs, const std::str
     for (const SceneMeasurements::FrameTime& frame : inputs.scene->frames(method, preset, bounces)) {
         if (frame.pixels > 0.0 && model(frame.pixels) > 0.0) ratios.push_back(frame.measured_ms / model(frame.pixels));
     }
-    // The shape's own bounce count, or the preset's own where the plan asks for none.
-    const bool same_bounces = bounces < 0 || shape->bounces == bounces;
+    const bool same_bounces = shape->bounces == bounces;
     const double factor = !ratios.empty() ? median(ratios)
                           : same_bounces  ? 1.0
                                           : unmeasured_bounce_factor(method, preset, knobs);

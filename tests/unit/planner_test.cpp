@@ -280,9 +280,21 @@ TEST(Costs, OtherPresetsTakeTheShapeOfTheMethodsLineOnTheScene) {
     std::string basis;
     EXPECT_NEAR(predicted_ms(at_16, "cssm", "medium", {{"bounces", 1}}, &basis), 1.5 * model(quarter), 1e-9);
     EXPECT_NE(basis.find("cssm draft"), std::string::npos) << basis;
-    // Another method's line says nothing of this one's.
+    // A plan that names no bounce count has its preset's: vct medium's frames, recorded under its
+    // resolved knobs (one bounce), scale the shape of vct draft's line.
     device.set("vct", "draft", {1.0, 1000.0});
-    EXPECT_NEAR(predicted_ms(at_16, "vct", "draft", {}), device.line("vct", "draft")->at(quarter) * scene.scene_ratio().value(),
+    device.set("vct", "medium", {2.0, 3000.0});
+    scene.record("vct", "draft", 1, 30.0, 1.0, quarter);
+    scene.record("vct", "draft", 1, 36.0, 1.0, full);
+    const CostLine vct_draft = CostLine::through(quarter, 30.0, full, 36.0);
+    const auto vct_model = [&](double pixels) {
+        return vct_draft.at(pixels) * device.line("vct", "medium")->at(pixels) / device.line("vct", "draft")->at(pixels);
+    };
+    scene.record("vct", "medium", 1, 2.0 * vct_model(full), 99.0, full);
+    EXPECT_NEAR(predicted_ms(at_16, "vct", "medium", {}), 2.0 * vct_model(quarter), 1e-9);
+    // Another method's line says nothing of this one's.
+    device.set("isr", "draft", {1.0, 1000.0});
+    EXPECT_NEAR(predicted_ms(at_16, "isr", "draft", {}), device.line("isr", "draft")->at(quarter) * scene.scene_ratio().value(),
                 1e-9);
 }
 
