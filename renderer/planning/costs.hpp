@@ -101,7 +101,10 @@ public:
     // A line of `method` on this scene at any preset (line()), `preset`'s own first: the shape that
     // the method's other presets take on this scene (planner.cpp). nullopt when none was measured.
     std::optional<PresetLine> method_line(const std::string& method, const std::string& preset) const;
-    static constexpr double kLineSpan = 3.0;
+    // Sizes this far apart in pixels, at least: a line through two measured times is extrapolated,
+    // and 10% of noise in each swings its fixed part by a quarter at 4x apart, by a ninth at 8x. Frames
+    // of 64 pixels a side and more have their quarter-size draft (16x); smaller ones keep the ratio.
+    static constexpr double kLineSpan = 8.0;
 
     // A reference frame's noise per sample (methods::reference::noise_per_sample) at a bounce count,
     // as a multiple of what the analysis measured there: over a whole frame's samples it meets rare

@@ -63,9 +63,12 @@ TEST(Budget, AnAutoRenderCarriesItsPlanAndKeepsThePredictedTime) {
 
 TEST(Budget, AMethodWithABudgetPlansWithinItAndLearnsFromItsFrames) {
     BudgetDaemon d;
+    // The first budget renders the method's draft at the sizes it may plan (what upsampling loses):
+    // those frames, recorded, already price its plan on this scene.
     const auto first = d.render({{"method", "vct"}, {"budget", {{"max_error", 0.5}}}});
     EXPECT_EQ(first.body["plan"]["method"], "vct");
-    EXPECT_EQ(first.body["plan"]["why"].get<std::string>().find("measured on this scene"), std::string::npos);
+    EXPECT_NE(first.body["plan"]["why"].get<std::string>().find("measured on this scene"), std::string::npos)
+        << first.body["plan"].dump();
     // Two more frames: their median, not a first frame that built the octree, is the scene's cost.
     d.render({{"method", "vct"}, {"budget", {{"max_error", 0.5}}}});
     const auto third = d.render({{"method", "vct"}, {"budget", {{"max_error", 0.5}}}});
@@ -148,7 +151,14 @@ TEST(Budget, AStreamPlansItsInteractiveAndStillRungsForItsBudget) {
 // reply is a frame of the size asked for, and its plan says at which scale it was rendered.
 TEST(Budget, AFrameRenderedSmallerIsUpsampledToTheSizeAskedFor) {
     BudgetDaemon d(true);
-    const auto reply = d.render({{"method", "direct"}, {"budget", {{"max_ms", 10.0}}}});  // 23 ms at 48x48, 6 at 24x24
+    // Where the full size fits, it is rendered at full size.
+    const json full = d.render({{"method", "direct"}, {"budget", {{"max_ms", 1e6}}}}).body["plan"];
+    EXPECT_EQ(full["scale"], 1.0) << full.dump();
+    // Half of the full size's predicted time: only a smaller frame fits. The made-up device line
+    // prices 24x24 at about a quarter of 48x48 (6 ms against 23), and the scene's measured frames scale
+    // both alike (a scene line needs sizes 8x apart; these are 4x).
+    const double half_time = 0.5 * full["predicted_ms"].get<double>();
+    const auto reply = d.render({{"method", "direct"}, {"budget", {{"max_ms", half_time}}}});
     const json& plan = reply.body["plan"];
     ASSERT_TRUE(plan["meets_budget"].get<bool>()) << plan.dump();
     EXPECT_EQ(plan["scale"], 0.5) << plan.dump();
@@ -157,11 +167,6 @@ TEST(Budget, AFrameRenderedSmallerIsUpsampledToTheSizeAskedFor) {
     const auto frame = image::decode_image(reply.attachment);
     EXPECT_EQ(frame.width, 48);
     EXPECT_EQ(frame.height, 48);
-    // And where the full size fits, it is rendered at full size. The scene's measured frames scale
-    // the made-up 23 ms (by over 100 on llvmpipe, whose first ultra frame builds large shadow maps):
-    // a budget far above it.
-    const json full = d.render({{"method", "direct"}, {"budget", {{"max_ms", 1e6}}}}).body["plan"];
-    EXPECT_EQ(full["scale"], 1.0) << full.dump();
 }
 
 // Without a cost model the first budget calibrates one, a preset at a time on the render thread:

@@ -251,7 +251,7 @@ TEST(Costs, AScenesOwnLineThroughTwoSizesPricesEverySize) {
     // Sizes closer than kLineSpan apart make no line: two noisy points that near would tilt it anywhere.
     SceneMeasurements near;
     near.record("vct", "medium", 1, 40.0, 10.0, full);
-    near.record("vct", "medium", 1, 30.0, 10.0, full / 2.0);
+    near.record("vct", "medium", 1, 30.0, 10.0, full / 4.0);
     EXPECT_FALSE(near.line("vct", "medium", 1).has_value());
 }
 
