@@ -84,7 +84,9 @@ std::optional<double> FrameComparisons::calibrate_noise(const RenderResult& fewe
     const bool nested = knob(fewer.stats, "seed", 0.0) == knob(more.stats, "seed", 1.0);
     const double statistic = nested ? fewer_noise * (1.0 / fewer_spp - 1.0 / more_spp)
                                     : fewer_noise / fewer_spp + more.stats.method_statistics.at("noise_per_sample") / more_spp;
-    if (!(rel_mse >= 0.0) || !(statistic > 0.0) || gap > 0.5 * rel_mse) return std::nullopt;
+    // The bounce gap is the analysis' estimate, noisy itself: a pair whose difference is over a quarter
+    // gap says too little of the noise.
+    if (!(rel_mse >= 0.0) || !(statistic > 0.0) || gap > kMaxCalibrationGap * rel_mse) return std::nullopt;
     const double scale = (rel_mse - gap) / statistic;
     measurements.record_noise_scale(scale);
     log::info("planner", "reference noise: {:.0f} against {:.0f} spp{}, relMSE {:.4f} (bounces {:.4f}) where the noise "

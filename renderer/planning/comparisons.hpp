@@ -64,10 +64,11 @@ public:
     // made both and the larger holds the smaller's samples) is how much relMSE the statistic makes on this
     // scene (SceneMeasurements::noise_scale), recorded and returned. nullopt, recording nothing, where
     // they are not so (other sizes, pixel positions or too few samples apart) or the bounces make over
-    // half of the relMSE. add() calls it whenever a reference frame meets the view's kept one.
+    // a quarter of the relMSE. add() calls it whenever a reference frame meets the view's kept one.
     static std::optional<double> calibrate_noise(const RenderResult& fewer, const RenderResult& more,
                                                  const SceneAnalysis* analysis, SceneMeasurements& measurements);
     static constexpr double kCalibrationSpan = 2.0;
+    static constexpr double kMaxCalibrationGap = 0.25;
 
 private:
     std::mutex mutex_;

@@ -230,10 +230,11 @@ void SceneMeasurements::record_noise_scale(double scale) {
     if (noise_scales_.size() > kKept) noise_scales_.pop_front();
 }
 
+// The largest, as for own errors: a target error is a promise.
 std::optional<double> SceneMeasurements::noise_scale() const {
     const std::lock_guard lock(mutex_);
     if (noise_scales_.empty()) return std::nullopt;
-    return median({noise_scales_.begin(), noise_scales_.end()});
+    return *std::max_element(noise_scales_.begin(), noise_scales_.end());
 }
 
 void SceneMeasurements::record_own_error(const std::string& method, const std::string& preset, int bounces, double rel_mse) {

@@ -119,8 +119,8 @@ public:
     // against a converged frame, on this scene: measured from two reference frames of one view
     // (comparisons.hpp). The statistic is a luminance variance over a neighbourhood's value; relMSE
     // weighs each channel by its own value, and the two part on scenes of coloured or high-contrast
-    // light (the sunlit atrium: the statistic says three times what relMSE measures). The median of
-    // the last kKept; nullopt until measured.
+    // light (pairs of frames measure 0.5 to 0.9 of it on the bench corpus). The largest of the last
+    // kKept; nullopt until measured.
     void record_noise_scale(double scale);
     std::optional<double> noise_scale() const;
 

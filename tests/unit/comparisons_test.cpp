@@ -200,6 +200,9 @@ TEST(FrameComparisons, TwoReferenceFramesOfAViewMeasureWhatTheirNoiseStatisticMa
     fewer_bounces->stats.knobs["bounces"] = 0;  // lacks 0.1 - 0.1 / 16 of the light: over half of 0.089
     EXPECT_FALSE(FrameComparisons::calibrate_noise(*fewer_bounces, *reference(4096, 0.0), &analysis, other));
     EXPECT_FALSE(other.noise_scale().has_value());
+    // The scale is the largest of the last five measured: a target error is a promise.
+    for (const double scale : {0.6, 0.9, 0.7}) other.record_noise_scale(scale);
+    EXPECT_DOUBLE_EQ(*other.noise_scale(), 0.9);
 }
 
 TEST(FrameComparisons, NoisyDenoisedOrUnlikeFramesAreNotCompared) {
