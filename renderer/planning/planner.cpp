@@ -99,15 +99,21 @@ std::optional<double> baseline_ms(const SceneAnalysis* analysis, const DeviceCos
 
 namespace {
 
+// A preset's own `bounces` knob, or -1 where the method has none.
+int preset_bounces(const std::string& method, const std::string& preset) {
+    const auto& presets = methods::MethodRegistry::builtin().find(method).presets;
+    const auto own = presets.find(preset);
+    return own != presets.end() && own->second.count("bounces") ? static_cast<int>(own->second.at("bounces")) : -1;
+}
+
 // The device's lines are of the presets' own bounce counts (one for cssm). More bounces than a
 // preset's own, not yet measured on the scene, are priced as repeating the first: an upper bound,
 // since a bounce repeats the gather and shares the rest (bench: at most 4x for 8).
 double unmeasured_bounce_factor(const std::string& method, const std::string& preset, const methods::KnobValues& knobs) {
-    const auto& presets = methods::MethodRegistry::builtin().find(method).presets;
-    const auto own = presets.find(preset);
     const auto requested = bounces_knob(knobs);
-    if (!requested || own == presets.end() || !own->second.count("bounces")) return 1.0;
-    return std::max(1.0, *requested / std::max(1.0, own->second.at("bounces")));
+    const int own = preset_bounces(method, preset);
+    if (!requested || own < 0) return 1.0;
+    return std::max(1.0, *requested / std::max(1.0, static_cast<double>(own)));
 }
 
 // A GPU preset's time on this scene from the scene's own lines (SceneMeasurements::line), where it
@@ -117,12 +123,7 @@ double unmeasured_bounce_factor(const std::string& method, const std::string& pr
 std::optional<double> scene_line_ms(const PlanningInputs& inputs, const std::string& method, const std::string& preset,
                                     const methods::KnobValues& knobs, double pixels, std::string* basis) {
     // Frames are recorded under their resolved knobs: a plan that names no bounce count has its preset's.
-    const auto& presets = methods::MethodRegistry::builtin().find(method).presets;
-    const auto own_knobs = presets.find(preset);
-    const int preset_bounces = own_knobs != presets.end() && own_knobs->second.count("bounces")
-                                   ? static_cast<int>(own_knobs->second.at("bounces"))
-                                   : -1;
-    const int bounces = bounces_knob(knobs).value_or(preset_bounces);
+    const int bounces = bounces_knob(knobs).value_or(preset_bounces(method, preset));
     if (const auto own = inputs.scene->line(method, preset, bounces)) {
         if (basis) *basis = "this scene's own line for the preset, from its frames at two sizes or more";
         return own->at(pixels);

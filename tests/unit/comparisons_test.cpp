@@ -199,6 +199,10 @@ TEST(FrameComparisons, TwoReferenceFramesOfAViewMeasureWhatTheirNoiseStatisticMa
     auto fewer_bounces = std::make_shared<RenderResult>(*noisy);
     fewer_bounces->stats.knobs["bounces"] = 0;  // lacks 0.1 - 0.1 / 16 of the light: over half of 0.089
     EXPECT_FALSE(FrameComparisons::calibrate_noise(*fewer_bounces, *reference(4096, 0.0), &analysis, other));
+    // A gap between a quarter and a half of the relMSE: the analysis' own noise in it would swing the
+    // scale too far (one bounce lacks 0.05 - 0.00625 = 0.044, 0.49 of 0.089).
+    fewer_bounces->stats.knobs["bounces"] = 1;
+    EXPECT_FALSE(FrameComparisons::calibrate_noise(*fewer_bounces, *reference(4096, 0.0), &analysis, other));
     EXPECT_FALSE(other.noise_scale().has_value());
     // The scale is the largest of the last five measured: a target error is a promise.
     for (const double scale : {0.6, 0.9, 0.7}) other.record_noise_scale(scale);
