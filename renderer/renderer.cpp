@@ -7,6 +7,8 @@
 #include "renderer/base/log.hpp"
 #include "renderer/memory_admission.hpp"
 
+#include "common/shared_layout.h"
+
 #include <chrono>
 
 namespace bounce {
@@ -119,7 +121,17 @@ scene::Camera camera_for(const scene::Scene& scene, const RenderRequest& request
 }
 
 Renderer::Renderer(const gpu::DeviceChoice& device)
-    : context_(gpu::EglContext::create(device)), budget_(gpu::default_memory_budget(context_->info())) {}
+    : context_(gpu::EglContext::create(device)), budget_(gpu::default_memory_budget(context_->info())) {
+    if (gpu::shader_bounds_checks_enabled()) {
+        context_->make_current();
+        GLint bindings = 0;
+        glGetIntegerv(GL_MAX_SHADER_STORAGE_BUFFER_BINDINGS, &bindings);
+        BOUNCE_CHECK(bindings > BOUNCE_BINDING_BOUNDS_CHECK,
+                     "the bounds-checked shader build needs storage binding {}; this device has {}",
+                     BOUNCE_BINDING_BOUNDS_CHECK, bindings);
+        bounds_check_.emplace(BOUNCE_BINDING_BOUNDS_CHECK);
+    }
+}
 
 Renderer::~Renderer() {
     // GL objects must go while the context is current; members are destroyed before context_.
@@ -229,6 +241,7 @@ void Renderer::with_frame(SceneResources& resources, const RenderRequest& reques
 
     ensure_output(request.width, request.height);
     brdf_tables_.bind();
+    if (bounds_check_) bounds_check_->bind();
 
     const scene::Camera camera = camera_for(scene, request);
     const float aspect = static_cast<float>(request.width) / static_cast<float>(request.height);
@@ -243,6 +256,11 @@ void Renderer::with_frame(SceneResources& resources, const RenderRequest& reques
     try {
         run(*method, frame, knobs);
         gpu::check_out_of_memory(fmt::format("a '{}' frame", request.method));
+        if (bounds_check_) {
+            if (const auto violation = bounds_check_->take()) {
+                BOUNCE_FAIL("a '{}' frame ({} preset): {}", request.method, request.preset, violation->describe());
+            }
+        }
     } catch (const ResourceExhausted&) {
         // Whatever the method allocated is in an unknown state: free it all, so the next frame starts clean.
         resources.methods.erase(request.method);

@@ -5,6 +5,7 @@
 // to render_on_cpu() on any other thread.
 #pragma once
 
+#include "renderer/gpu/bounds_check.hpp"
 #include "renderer/gpu/brdf_tables.hpp"
 #include "renderer/gpu/egl_device.hpp"
 #include "renderer/gpu/memory_budget.hpp"
@@ -168,6 +169,8 @@ private:
     gpu::GpuTimers timers_;
     gpu::BrdfTables brdf_tables_;  // bound for every frame: every method's BRDF reads them
     passes::TonemapPass tonemap_;
+    // With BOUNCE_SHADER_BOUNDS_CHECK: where checked shaders record an out-of-bounds access.
+    std::optional<gpu::BoundsCheckBuffer> bounds_check_;
     void ensure_output(int width, int height);
     void fill_stats(FrameStats& stats, const RenderRequest& request, const methods::KnobValues& knobs,
                     const methods::Method& method, const SceneResources& resources);

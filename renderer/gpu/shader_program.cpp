@@ -1,6 +1,9 @@
 #include "renderer/gpu/shader_program.hpp"
 
 #include "renderer/base/error.hpp"
+#include "renderer/gpu/bounds_check.hpp"
+
+#include "common/shared_layout.h"
 
 #include <glm/gtc/type_ptr.hpp>
 
@@ -25,12 +28,16 @@ std::string_view find_file(const std::string& path, const std::string& included_
     return it->second;
 }
 
+// GLSL wants #extension before any code, so extensions an included file asks for are moved up to
+// just after #version (an empty line keeps the file's line numbers).
 void expand_into(const std::string& path, const std::string& included_from, ExpandedSource& out,
-                 std::set<std::string>& included, bool top_level, const std::vector<std::string>& defines) {
+                 std::set<std::string>& included, bool top_level, const std::vector<std::string>& defines,
+                 std::vector<std::string>& extensions) {
     const int file_number = static_cast<int>(out.files.size());
     out.files.push_back(path);
     std::istringstream lines{std::string(find_file(path, included_from))};
     static const std::regex include_pattern(R"(^\s*#\s*include\s+\"([^\"]+)\"\s*$)");
+    static const std::regex extension_pattern(R"(^\s*#\s*extension\b.*$)");
     std::string line;
     int line_number = 0;
     bool version_seen = !top_level;
@@ -47,14 +54,21 @@ void expand_into(const std::string& path, const std::string& included_from, Expa
         } else if (std::regex_match(line, match, include_pattern)) {
             const std::string include = match[1];
             if (included.insert(include).second) {
-                expand_into(include, path, out, included, false, defines);
+                expand_into(include, path, out, included, false, defines, extensions);
             }
             out.text += fmt::format("#line {} {}\n", line_number + 1, file_number);
+        } else if (std::regex_match(line, extension_pattern)) {
+            if (std::find(extensions.begin(), extensions.end(), line) == extensions.end()) extensions.push_back(line);
+            out.text += "\n";
         } else {
             out.text += line + "\n";
         }
     }
-    if (top_level && !version_seen) BOUNCE_FAIL("shader '{}' has no #version line", path);
+    if (!top_level) return;
+    if (!version_seen) BOUNCE_FAIL("shader '{}' has no #version line", path);
+    std::string hoisted;
+    for (const auto& extension : extensions) hoisted += extension + "\n";
+    out.text.insert(out.text.find('\n') + 1, hoisted);
 }
 
 const char* stage_name(GLenum stage) {
@@ -68,7 +82,10 @@ const char* stage_name(GLenum stage) {
 }
 
 ShaderObject compile(GLenum stage, const std::string& path, const std::vector<std::string>& defines) {
-    const ExpandedSource source = expand_shader_source(path, defines);
+    ExpandedSource source = expand_shader_source(path, defines);
+    const bool checked = shader_bounds_checks_enabled() ||
+                         std::find(defines.begin(), defines.end(), kBoundsCheckDefine) != defines.end();
+    if (checked) source = insert_bounds_checks(source, BOUNCE_BINDING_BOUNDS_CHECK);
     ShaderObject shader(glCreateShader(stage));
     const char* text = source.text.c_str();
     glShaderSource(shader.id(), 1, &text, nullptr);
@@ -97,7 +114,8 @@ std::string ProgramSource::key() const {
 ExpandedSource expand_shader_source(const std::string& path, const std::vector<std::string>& defines) {
     ExpandedSource out;
     std::set<std::string> included;
-    expand_into(path, "", out, included, true, defines);
+    std::vector<std::string> extensions;
+    expand_into(path, "", out, included, true, defines, extensions);
     return out;
 }
 

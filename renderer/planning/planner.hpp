@@ -52,10 +52,13 @@ struct Plan {
 
 // Of the plans not chosen, GPU presets not yet compared with a reference frame of this scene, one plan
 // per preset (its most accurate that fits alone), cheapest first, while their predicted times add
-// to at most kProbeShare of a chosen reference plan's: the GPU is idle while the reference traces on CPU
-// threads, and what they measure lets later budgets take a GPU plan where the bench's priors
-// ruled it out. None when the chosen plan is not the reference.
-inline constexpr double kProbeShare = 0.25;
+// to at most kProbeShare of a chosen reference plan's. On a GPU they cost little: it is idle while the
+// reference traces on CPU threads. Where the GPU is slow (software rasterizers) a GPU frame can cost
+// as much as a reference frame, and a smaller share let none fit on the bench corpus, so a GPU
+// method's error there was never learned. A preset is probed once per scene, and each one that then
+// meets a later budget saves a reference frame on every such request: the probes may take as long as
+// the reference plan itself. None when the chosen plan is not the reference.
+inline constexpr double kProbeShare = 1.0;
 std::vector<Candidate> probes(const std::vector<Candidate>& all, const Candidate& chosen, const SceneMeasurements* scene);
 
 // Chooses among predicted plans (a pure function: the planner's unit tests call it on tables).

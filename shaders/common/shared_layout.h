@@ -33,6 +33,10 @@
 #define BOUNCE_UNIT_BRDF_ALBEDO 14   // RG32F, (A, B) of the specular lobe by n.v (x) and roughness (y)
 #define BOUNCE_UNIT_BRDF_AVERAGE 15  // RG32F, their cosine-weighted means by roughness (x)
 
+// Storage binding of the bounds-checked shader build's failure record (renderer/gpu/bounds_check.hpp);
+// no pass binds anything else here.
+#define BOUNCE_BINDING_BOUNDS_CHECK 31
+
 // glTF alphaMode, as scene::AlphaMode numbers it.
 #define BOUNCE_ALPHA_OPAQUE 0
 #define BOUNCE_ALPHA_MASK 1

@@ -27,8 +27,6 @@ void main() {
         irradiance += u_cones[i].w * trace_cone(p, n, frame * u_cones[i].xyz, u_cone_tan).radiance;
     }
     vec3 radiance = leaf_light_at(slot) + finite_or_zero(albedo * INV_PI * irradiance * u_radiance_unscale);
-    leaf_light[slot * 3u] = floatBitsToUint(radiance.r);
-    leaf_light[slot * 3u + 1u] = floatBitsToUint(radiance.g);
-    leaf_light[slot * 3u + 2u] = floatBitsToUint(radiance.b);
+    set_leaf_light(slot, radiance);
     atomicMax(counters[VCT_COUNTER_MAX_RADIANCE], floatBitsToUint(max(radiance.r, max(radiance.g, radiance.b))));
 }

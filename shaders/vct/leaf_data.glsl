@@ -1,7 +1,9 @@
-// Per-leaf-slot data of the octree's leaves (vct/vct_layout.h) and float addition on them by
-// compare-and-swap (core GLSL has no float atomics).
-layout(std430, binding = VCT_BINDING_LEAF_SUMS) coherent buffer LeafSums { uint leaf_sums[]; };
-layout(std430, binding = VCT_BINDING_LEAF_LIGHT) coherent buffer LeafLight { uint leaf_light[]; };
+// Per-leaf-slot data of the octree's leaves (vct/vct_layout.h), summed by many threads at once
+// (common/float_atomics.glsl).
+#include "common/float_atomics.glsl"
+
+layout(std430, binding = VCT_BINDING_LEAF_SUMS) coherent buffer LeafSums { FLOAT_WORD leaf_sums[]; };
+layout(std430, binding = VCT_BINDING_LEAF_LIGHT) coherent buffer LeafLight { FLOAT_WORD leaf_light[]; };
 
 // Leaves are allocated last, contiguously: the static part's, then (after the dynamic part's inner
 // nodes) the dynamic part's. Leaf data holds the static leaves, then the dynamic ones.
@@ -41,23 +43,18 @@ uvec3 slot_lattice(uint slot) {
 }
 #endif
 
-#define VCT_DEFINE_FLOAT_ADD(name, buffer)                                                   \
-    void name(uint index, float value) {                                                    \
-        if (value == 0.0) return;                                                           \
-        uint seen = buffer[index];                                                          \
-        for (int attempt = 0; attempt < 1000000; ++attempt) {                               \
-            uint expected = seen;                                                           \
-            seen = atomicCompSwap(buffer[index], expected, floatBitsToUint(uintBitsToFloat(expected) + value)); \
-            if (seen == expected) break;                                                    \
-        }                                                                                   \
-    }
-
-VCT_DEFINE_FLOAT_ADD(add_leaf_sum, leaf_sums)
-VCT_DEFINE_FLOAT_ADD(add_leaf_light, leaf_light)
+FLOAT_ADD_FUNCTION(add_leaf_sum, leaf_sums)
+FLOAT_ADD_FUNCTION(add_leaf_light, leaf_light)
 
 vec3 leaf_light_at(uint slot) {
-    return vec3(uintBitsToFloat(leaf_light[slot * 3u]), uintBitsToFloat(leaf_light[slot * 3u + 1u]),
-                uintBitsToFloat(leaf_light[slot * 3u + 2u]));
+    return vec3(float_word_value(leaf_light[slot * 3u]), float_word_value(leaf_light[slot * 3u + 1u]),
+                float_word_value(leaf_light[slot * 3u + 2u]));
 }
 
-float leaf_sum(uint slot, uint word) { return uintBitsToFloat(leaf_sums[slot * VCT_LEAF_SUM_WORDS + word]); }
+void set_leaf_light(uint slot, vec3 value) {
+    leaf_light[slot * 3u] = float_word(value.r);
+    leaf_light[slot * 3u + 1u] = float_word(value.g);
+    leaf_light[slot * 3u + 2u] = float_word(value.b);
+}
+
+float leaf_sum(uint slot, uint word) { return float_word_value(leaf_sums[slot * VCT_LEAF_SUM_WORDS + word]); }

@@ -25,8 +25,6 @@ void main() {
     } else if (max(flux.r, max(flux.g, flux.b)) > 0.0) {
         atomicAdd(counters[VCT_COUNTER_STRAY_SLOTS], 1u);
     }
-    leaf_light[slot * 3u] = floatBitsToUint(radiance.r);
-    leaf_light[slot * 3u + 1u] = floatBitsToUint(radiance.g);
-    leaf_light[slot * 3u + 2u] = floatBitsToUint(radiance.b);
+    set_leaf_light(slot, radiance);
     atomicMax(counters[VCT_COUNTER_MAX_RADIANCE], floatBitsToUint(max(radiance.r, max(radiance.g, radiance.b))));
 }
