@@ -95,6 +95,9 @@ struct RenderOrder {
     // GPU frames the planner asks for beside a reference plan, to measure their error on this scene
     // (planning::probes): rendered on the render thread while the reference traces, never sent.
     std::vector<RenderRequest> probes;
+    // Reference frames the planner asks for beside those, of a probe's own bounce count (the
+    // probes' companions): traced on the reference's CPU slot after its frame is sent, never sent.
+    std::vector<RenderRequest> reference_probes;
     // Set when the plan renders smaller than asked (planning/resolution.hpp): the size the frame is
     // upsampled to before it is encoded. `request` then holds the size it renders at.
     std::optional<std::pair<int, int>> output_size;

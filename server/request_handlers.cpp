@@ -239,6 +239,23 @@ void RequestHandlers::render_on_cpu(const std::shared_ptr<Request>& request, con
             deliver(request, order, std::move(result), version, clock);
         } catch (...) {
             request->fail(std::current_exception());
+            return;
+        }
+        // The probes' companions, after the frame went out; like a probe, one that fails only teaches less.
+        for (RenderRequest probe : order.reference_probes) {
+            try {
+                probe.camera = frame.camera;
+                auto result = std::make_shared<const RenderResult>(
+                    bounce::render_on_cpu(*snapshot, probe, plan_frame(probe), request->cancelled.get()));
+                if (device) {
+                    planning::record_frame(*measurements, analysis ? &*analysis : nullptr, *device, result->stats,
+                                           probe.width, probe.height);
+                }
+                comparisons->add(view, result, analysis ? &*analysis : nullptr, *measurements);
+            } catch (const std::exception& error) {
+                log::warn("planner", "reference probe at {} bounces failed: {}", methods::knob_or(probe.knobs, "bounces", 0.0),
+                          error.what());
+            }
         }
     });
 }
@@ -386,7 +403,7 @@ void RequestHandlers::plan_budgeted(RenderOrder& order, Renderer& renderer, Scen
         probe_frame.preset = probe.preset;
         probe_frame.knobs = probe.knobs;
         probe_frame.make_display_image = false;
-        order.probes.push_back(std::move(probe_frame));
+        (probe.method == "reference" ? order.reference_probes : order.probes).push_back(std::move(probe_frame));
     }
 }
 

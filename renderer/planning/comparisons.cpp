@@ -41,6 +41,26 @@ bool FrameComparisons::usable_gpu_frame(const FrameStats& stats) {
     return true;
 }
 
+namespace {
+
+// What of a GPU frame's relMSE against `reference` is expected not to be its own: the reference's
+// noise, and the light of the bounces the reference has and the frame lacks.
+std::pair<double, double> expected_parts(const FrameStats& gpu_frame, const FrameStats& reference,
+                                         const SceneAnalysis* analysis, const SceneMeasurements& measurements) {
+    const double noise = measurements.noise_scale().value_or(1.0) * reference.method_statistics.at("noise_per_sample") /
+                         std::max(1.0, knob(reference, "spp", 1.0));
+    // A reference with fewer bounces than the frame counts the frame's extra light as error: left
+    // in, which overstates the own error (the safe side for a promise).
+    const int bounces = modelled_bounces(gpu_frame.method, gpu_frame.knobs);
+    const int reference_bounces = modelled_bounces("reference", reference.knobs);
+    const double gap = reference_bounces > bounces
+                           ? std::max(0.0, stopped_at(analysis, bounces) - stopped_at(analysis, reference_bounces))
+                           : 0.0;
+    return {noise, gap};
+}
+
+}  // namespace
+
 std::optional<Comparison> FrameComparisons::compare(const RenderResult& gpu_frame, const RenderResult& reference,
                                                     const SceneAnalysis* analysis, SceneMeasurements& measurements) {
     if (gpu_frame.frame.width != reference.frame.width || gpu_frame.frame.height != reference.frame.height) return std::nullopt;
@@ -50,14 +70,7 @@ std::optional<Comparison> FrameComparisons::compare(const RenderResult& gpu_fram
     c.bounces = modelled_bounces(c.method, gpu_frame.stats.knobs);
     c.rel_mse = image::compare(gpu_frame.frame, reference.frame).rel_mse;
     measurements.record_compared(c.method, c.preset);
-    c.reference_noise = measurements.noise_scale().value_or(1.0) * reference.stats.method_statistics.at("noise_per_sample") /
-                        std::max(1.0, knob(reference.stats, "spp", 1.0));
-    // A reference with fewer bounces than the frame counts the frame's extra light as error: left
-    // in, which overstates the own error (the safe side for a promise).
-    const int reference_bounces = modelled_bounces("reference", reference.stats.knobs);
-    if (reference_bounces > c.bounces) {
-        c.bounce_gap = std::max(0.0, stopped_at(analysis, c.bounces) - stopped_at(analysis, reference_bounces));
-    }
+    std::tie(c.reference_noise, c.bounce_gap) = expected_parts(gpu_frame.stats, reference.stats, analysis, measurements);
     // The own part must be at least half of what was measured: a frame whose error is mostly the
     // reference's noise or the bounces it lacks says little of its own, and what it says would be
     // carried to other bounce counts.
@@ -95,43 +108,69 @@ std::optional<double> FrameComparisons::calibrate_noise(const RenderResult& fewe
     return scale;
 }
 
+std::shared_ptr<const RenderResult> FrameComparisons::best_reference(const FrameStats& gpu_frame, const SceneAnalysis* analysis,
+                                                                    const SceneMeasurements& measurements) const {
+    std::shared_ptr<const RenderResult> best;
+    double best_parts = 0.0;
+    const int frame_bounces = modelled_bounces(gpu_frame.method, gpu_frame.knobs);
+    for (const auto& [bounces, reference] : references_) {
+        // The light of the bounces between the two counts, either way: a reference with fewer bounces
+        // counts the frame's extra light as its error.
+        const double noise = expected_parts(gpu_frame, reference->stats, analysis, measurements).first;
+        const double gap = std::abs(stopped_at(analysis, frame_bounces) - stopped_at(analysis, bounces));
+        if (!best || noise + gap < best_parts) {
+            best = reference;
+            best_parts = noise + gap;
+        }
+    }
+    return best;
+}
+
 std::vector<Comparison> FrameComparisons::add(std::uint64_t view, std::shared_ptr<const RenderResult> frame,
                                               const SceneAnalysis* analysis, SceneMeasurements& measurements) {
     const FrameStats& stats = frame->stats;
     const bool is_reference = usable_reference(stats);
     if (!is_reference && !usable_gpu_frame(stats)) return {};
-    std::shared_ptr<const RenderResult> reference, kept_reference;
-    std::vector<std::shared_ptr<const RenderResult>> to_compare;
+    std::shared_ptr<const RenderResult> most_samples;  // kept before this frame, for the noise calibration
+    std::vector<std::pair<std::shared_ptr<const RenderResult>, std::shared_ptr<const RenderResult>>> to_compare;
     {
         const std::lock_guard lock(mutex_);
         if (view_ != view) {
             view_ = view;
-            reference_.reset();
+            references_.clear();
             gpu_frames_.clear();
         }
-        kept_reference = reference_;
+        for (const auto& [bounces, reference] : references_) {
+            if (!most_samples || knob(reference->stats, "spp", 0.0) > knob(most_samples->stats, "spp", 0.0)) most_samples = reference;
+        }
         if (is_reference) {
-            // The one with the most samples: the least noise to subtract.
-            if (reference_ && knob(reference_->stats, "spp", 0.0) >= knob(stats, "spp", 0.0)) {
-                calibrate_noise(*frame, *reference_, analysis, measurements);
-                return {};
+            // Per bounce count, the one with the most samples: the least noise to subtract.
+            auto& kept = references_[modelled_bounces("reference", stats.knobs)];
+            if (!kept || knob(kept->stats, "spp", 0.0) < knob(stats, "spp", 0.0)) {
+                kept = frame;
+                // Each GPU frame is compared with the reference that leaves the least of its relMSE
+                // not its own: where that is now this one.
+                for (const auto& [key, gpu_frame] : gpu_frames_) {
+                    if (best_reference(gpu_frame->stats, analysis, measurements) == frame) to_compare.emplace_back(gpu_frame, frame);
+                }
             }
-            reference_ = frame;
-            for (const auto& [key, kept] : gpu_frames_) to_compare.push_back(kept);
         } else {
             const std::tuple key{stats.method, stats.preset, modelled_bounces(stats.method, stats.knobs)};
             if (gpu_frames_.size() >= kMaxFrames && !gpu_frames_.count(key)) gpu_frames_.erase(gpu_frames_.begin());
             gpu_frames_[key] = frame;
-            if (reference_) to_compare.push_back(frame);
+            if (auto reference = best_reference(stats, analysis, measurements)) to_compare.emplace_back(frame, reference);
         }
-        reference = reference_;
     }
-    if (is_reference && kept_reference) calibrate_noise(*kept_reference, *frame, analysis, measurements);
+    if (is_reference && most_samples) {
+        if (knob(most_samples->stats, "spp", 0.0) >= knob(stats, "spp", 0.0)) calibrate_noise(*frame, *most_samples, analysis, measurements);
+        else calibrate_noise(*most_samples, *frame, analysis, measurements);
+    }
     std::vector<Comparison> made;
-    for (const auto& gpu_frame : to_compare) {
+    for (const auto& [gpu_frame, reference] : to_compare) {
         if (auto c = compare(*gpu_frame, *reference, analysis, measurements)) {
-            log::info("planner", "{} {} at {} bounces against this view's reference: relMSE {:.4f}, own error {:.4f}", c->method,
-                      c->preset, c->bounces, c->rel_mse, c->own_error);
+            log::info("planner", "{} {} at {} bounces against this view's {}-bounce reference: relMSE {:.4f}, own error {:.4f}",
+                      c->method, c->preset, c->bounces, modelled_bounces("reference", reference->stats.knobs), c->rel_mse,
+                      c->own_error);
             made.push_back(std::move(*c));
         }
     }

@@ -44,8 +44,11 @@ public:
 
     // Adds a frame of the view `view` (a key of the scene's state, the camera and the size: frames
     // are compared only with frames of the same key) and records, in `measurements`, the own error
-    // of every GPU frame that now has a reference frame to be compared with. A new view drops the
-    // frames of the old one. Thread-safe: GPU frames come from the render thread, reference frames
+    // of every GPU frame that now has a reference frame to be compared with. References are kept
+    // per bounce count (the one with the most samples), and a GPU frame is compared with the one
+    // whose noise and missing bounces leave least of its relMSE unexplained: a reference of the
+    // frame's own bounce count measures a frame whose own error the missing light would drown
+    // (`direct` against a multi-bounce reference). A new view drops the frames of the old one. Thread-safe: GPU frames come from the render thread, reference frames
     // from the CPU pool. Returns the comparisons made.
     std::vector<Comparison> add(std::uint64_t view, std::shared_ptr<const RenderResult> frame, const SceneAnalysis* analysis,
                                 SceneMeasurements& measurements);
@@ -71,9 +74,14 @@ public:
     static constexpr double kMaxCalibrationGap = 0.25;
 
 private:
+    // Of the kept references, the one whose noise and missing bounces leave least of a GPU frame's
+    // relMSE unexplained (a reference of the frame's own bounce count has no bounce gap).
+    std::shared_ptr<const RenderResult> best_reference(const FrameStats& gpu_frame, const SceneAnalysis* analysis,
+                                                       const SceneMeasurements& measurements) const;
+
     std::mutex mutex_;
     std::optional<std::uint64_t> view_;
-    std::shared_ptr<const RenderResult> reference_;
+    std::map<int, std::shared_ptr<const RenderResult>> references_;  // by bounce count
     std::map<std::tuple<std::string, std::string, int>, std::shared_ptr<const RenderResult>> gpu_frames_;
 };
 

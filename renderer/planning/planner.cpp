@@ -2,6 +2,7 @@
 
 #include "renderer/base/error.hpp"
 #include "renderer/methods/registry.hpp"
+#include "renderer/planning/comparisons.hpp"
 #include "renderer/planning/error_model.hpp"
 #include "renderer/planning/resolution.hpp"
 
@@ -235,11 +236,12 @@ Plan plan(const PlanningInputs& inputs, const Budget& budget) {
     }
     Plan chosen = choose(all, budget);
     chosen.ruled_out = std::move(ruled_out);
-    chosen.probes = probes(all, chosen.chosen, inputs.scene);
+    chosen.probes = probes(all, chosen.chosen, inputs.scene, &inputs.analysis);
     return chosen;
 }
 
-std::vector<Candidate> probes(const std::vector<Candidate>& all, const Candidate& chosen, const SceneMeasurements* scene) {
+std::vector<Candidate> probes(const std::vector<Candidate>& all, const Candidate& chosen, const SceneMeasurements* scene,
+                              const SceneAnalysis* analysis) {
     // Only full-size frames are compared: an upsampled one's error is not its method's.
     if (chosen.method != "reference" || chosen.scale != 1.0) return {};
     const double share_ms = kProbeShare * chosen.predicted_ms;
@@ -262,6 +264,35 @@ std::vector<Candidate> probes(const std::vector<Candidate>& all, const Candidate
         if (total_ms + c->predicted_ms > share_ms) break;
         total_ms += c->predicted_ms;
         chosen_probes.push_back(*c);
+    }
+    if (!analysis) return chosen_probes;
+    // Companions. A probe is compared only where the reference's noise and the light of the bounces
+    // the probe lacks (both predicted) come to less than its own error (FrameComparisons::compare);
+    // where they would not, a reference of the probe's own bounce count has no such light, and the
+    // cheapest one whose noise is under half that own error measures it.
+    const auto stopped = [&](int bounces) { return BounceEnergy::at(analysis->bounces.stopped_error, bounces); };
+    const int chosen_bounces = modelled_bounces(chosen.method, chosen.knobs);
+    const double chosen_noise = chosen.predicted_error - stopped(chosen_bounces);
+    std::map<int, double> needed;  // bounce count: the smallest own error to measure there
+    for (const Candidate& probe : chosen_probes) {
+        const int bounces = modelled_bounces(probe.method, probe.knobs);
+        const double own = probe.predicted_error - stopped(bounces);
+        if (bounces >= chosen_bounces || chosen_noise + stopped(bounces) - stopped(chosen_bounces) < own) continue;
+        const auto [it, inserted] = needed.emplace(bounces, own);
+        if (!inserted) it->second = std::min(it->second, own);
+    }
+    for (const auto& [bounces, own] : needed) {
+        const Candidate* companion = nullptr;
+        for (const Candidate& c : all) {
+            if (c.method != "reference" || c.scale != 1.0 || modelled_bounces(c.method, c.knobs) != bounces) continue;
+            if (methods::knob_or(c.knobs, "spp", 0.0) < FrameComparisons::kMinReferenceSpp) continue;
+            if (c.predicted_error - stopped(bounces) >= 0.5 * own) continue;
+            if (!companion || c.predicted_ms < companion->predicted_ms) companion = &c;
+        }
+        if (companion && total_ms + companion->predicted_ms <= share_ms) {
+            total_ms += companion->predicted_ms;
+            chosen_probes.push_back(*companion);
+        }
     }
     return chosen_probes;
 }

@@ -58,8 +58,14 @@ struct Plan {
 // method's error there was never learned. A preset is probed once per scene, and each one that then
 // meets a later budget saves a reference frame on every such request: the probes may take as long as
 // the reference plan itself. None when the chosen plan is not the reference.
+// With the scene's analysis, the probes also hold companions, reference plans (method "reference"):
+// where a probe lacks bounces whose light, with the chosen reference's noise, would drown its own
+// error in the comparison, the cheapest reference of the probe's bounce count (at least 16 samples,
+// its noise under half that own error) that still fits the share. They render on CPU threads after
+// the frame is sent.
 inline constexpr double kProbeShare = 1.0;
-std::vector<Candidate> probes(const std::vector<Candidate>& all, const Candidate& chosen, const SceneMeasurements* scene);
+std::vector<Candidate> probes(const std::vector<Candidate>& all, const Candidate& chosen, const SceneMeasurements* scene,
+                              const SceneAnalysis* analysis = nullptr);
 
 // Chooses among predicted plans (a pure function: the planner's unit tests call it on tables).
 // Throws InputError when `candidates` is empty or the budget names neither limit.

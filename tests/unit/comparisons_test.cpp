@@ -46,7 +46,7 @@ std::shared_ptr<const RenderResult> frame(const std::string& method, const std::
 
 std::shared_ptr<const RenderResult> reference(double spp, double noise_per_sample, methods::KnobValues more = {}) {
     more["spp"] = spp;
-    more["bounces"] = 4;
+    more.try_emplace("bounces", 4);
     more["pixel_jitter"] = 0;
     return frame("reference", "medium", more, 1.0f, noise_per_sample);
 }
@@ -155,6 +155,31 @@ TEST(FrameComparisons, AReferenceWithMoreSamplesComparesAgainAndOneWithFewerIsIg
     EXPECT_TRUE(comparisons.add(1, reference(32, 0.1), &analysis, measured).empty());
     EXPECT_EQ(comparisons.add(1, reference(256, 0.1), &analysis, measured).size(), 1u);
     EXPECT_EQ(measured.own_error("isr", "medium", 1)->frames, 2);
+}
+
+// `direct` lacks every bounce: against a four-bounce reference the missing light (0.094) drowns its
+// own error (0.0099), and nothing is recorded. A reference of no bounces, even at 16 samples,
+// measures it; a one-bounce frame still goes to the four-bounce reference, the nearer in light.
+TEST(FrameComparisons, AFrameIsComparedWithTheReferenceNearestItsOwnBounces) {
+    const SceneAnalysis analysis = made_up_analysis();
+    SceneMeasurements measured;
+    FrameComparisons comparisons;
+    comparisons.add(5, frame("direct", "high", {}, 1.1f), &analysis, measured);
+    EXPECT_TRUE(comparisons.add(5, reference(4096, 0.1), &analysis, measured).empty());
+    EXPECT_TRUE(measured.compared("direct", "high"));
+    EXPECT_FALSE(measured.own_error("direct", "high", 0));
+    const auto made = comparisons.add(5, reference(16, 0.0016, {{"bounces", 0}}), &analysis, measured);
+    ASSERT_EQ(made.size(), 1u);
+    EXPECT_EQ(made[0].bounce_gap, 0.0);
+    EXPECT_DOUBLE_EQ(made[0].reference_noise, 0.0016 / 16.0);
+    EXPECT_NEAR(measured.own_error("direct", "high", 0)->rel_mse, 0.01 / 1.01 - 0.0001, 1e-6);
+    // vct (one bounce, 1.5 against 1.0: relMSE 0.2475): the four-bounce reference leaves 0.044 of it
+    // unexplained, the no-bounce one 0.05 (the bounce it lacks) and its noise.
+    const auto vct = comparisons.add(5, frame("vct", "high", {}, 1.5f), &analysis, measured);
+    ASSERT_EQ(vct.size(), 1u);
+    EXPECT_DOUBLE_EQ(vct[0].bounce_gap, 0.05 - 0.1 / 16.0);
+    // A reference of no bounces with no more samples than the kept one is not kept.
+    EXPECT_TRUE(comparisons.add(5, reference(8 * 2, 0.0016, {{"bounces", 0}}), &analysis, measured).empty());
 }
 
 // Two reference frames of one view tell how much relMSE the noise statistic makes on the scene: here
@@ -270,6 +295,44 @@ TEST(Probes, BesideAReferencePlanUnmeasuredPresetsCheapestFirstWithinItsTime) {
     EXPECT_EQ(second[1].method, "direct");
     // A GPU plan chosen: no probes (no reference frame to compare with).
     EXPECT_TRUE(probes(all, all[4], nullptr).empty());
+}
+
+// made_up_analysis: stopping at k bounces loses 0.1 / 2^k. Beside a four-bounce reference of noise
+// 0.002, direct (own error 0.012) would be drowned by the 0.094 it lacks, and so would vct draft
+// (own 0.03, lacking 0.044); cssm at four bounces (own 0.02) would not. Companions: the cheapest
+// reference of no bounces, and of one, whose noise is under half the smallest own error there.
+TEST(Probes, AProbeTheMissingLightWouldDrownGetsAReferenceOfItsOwnBounces) {
+    const SceneAnalysis analysis = made_up_analysis();
+    const auto stopped = [](int k) { return 0.1 / std::pow(2.0, k); };
+    const Candidate chosen = candidate("reference", "medium", {{"spp", 256}, {"bounces", 4}}, 1000.0, stopped(4) + 0.002);
+    std::vector<Candidate> all = {
+        chosen,
+        candidate("direct", "high", {}, 5.0, stopped(0) + 0.012),
+        candidate("vct", "draft", {}, 20.0, stopped(1) + 0.03),
+        candidate("cssm", "low", {{"bounces", 4}}, 30.0, stopped(4) + 0.02),
+    };
+    for (const int bounces : {0, 1}) {
+        for (const int spp : {8, 16, 32, 64}) {
+            // Noise 0.08 / spp: at no bounces, 16 spp (0.005) is under half of 0.012; at one, 16 spp
+            // (0.005) is under half of 0.03 too; 8 spp is never a companion (under 16 samples).
+            all.push_back(candidate("reference", "medium", {{"spp", spp}, {"bounces", bounces}}, 2.0 * spp * (bounces + 1),
+                                    stopped(bounces) + 0.08 / spp));
+        }
+    }
+    const auto chosen_probes = probes(all, chosen, nullptr, &analysis);
+    ASSERT_EQ(chosen_probes.size(), 5u);
+    EXPECT_EQ(chosen_probes[3].method, "reference");
+    EXPECT_EQ(chosen_probes[3].knobs.at("bounces"), 0.0);
+    EXPECT_EQ(chosen_probes[3].knobs.at("spp"), 16.0);
+    EXPECT_EQ(chosen_probes[4].knobs.at("bounces"), 1.0);
+    EXPECT_EQ(chosen_probes[4].knobs.at("spp"), 16.0);
+    // Where the companions do not fit the share, none is taken; without the analysis, none is looked for.
+    Candidate cheap_reference = chosen;
+    cheap_reference.predicted_ms = 5.0 + 20.0 + 30.0 + 40.0;
+    const auto tight = probes(all, cheap_reference, nullptr, &analysis);
+    ASSERT_EQ(tight.size(), 4u);
+    EXPECT_EQ(tight[3].knobs.at("bounces"), 0.0);  // 32 ms at no bounces fits; 64 at one would not
+    EXPECT_EQ(probes(all, chosen, nullptr).size(), 3u);
 }
 
 TEST(Resolution, BilinearUpsamplingBetweenPixelCentres) {
