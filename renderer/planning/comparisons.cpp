@@ -47,7 +47,7 @@ namespace {
 // noise, and the light of the bounces the reference has and the frame lacks.
 std::pair<double, double> expected_parts(const FrameStats& gpu_frame, const FrameStats& reference,
                                          const SceneAnalysis* analysis, const SceneMeasurements& measurements) {
-    const double noise = measurements.noise_scale().value_or(1.0) * reference.method_statistics.at("noise_per_sample") /
+    const double noise = measurements.least_noise_scale().value_or(1.0) * reference.method_statistics.at("noise_per_sample") /
                          std::max(1.0, knob(reference, "spp", 1.0));
     // A reference with fewer bounces than the frame counts the frame's extra light as error: left
     // in, which overstates the own error (the safe side for a promise).
@@ -110,19 +110,21 @@ std::optional<double> FrameComparisons::calibrate_noise(const RenderResult& fewe
 
 std::shared_ptr<const RenderResult> FrameComparisons::best_reference(const FrameStats& gpu_frame, const SceneAnalysis* analysis,
                                                                     const SceneMeasurements& measurements) const {
+    // A reference with at least the frame's bounces, the one whose noise and bounce gap are least;
+    // one with fewer would count the frame's extra light as its error, so such a reference is taken
+    // only where there is no other (the one with the most bounces).
+    const int frame_bounces = modelled_bounces(gpu_frame.method, gpu_frame.knobs);
     std::shared_ptr<const RenderResult> best;
     double best_parts = 0.0;
-    const int frame_bounces = modelled_bounces(gpu_frame.method, gpu_frame.knobs);
     for (const auto& [bounces, reference] : references_) {
-        // The light of the bounces between the two counts, either way: a reference with fewer bounces
-        // counts the frame's extra light as its error.
-        const double noise = expected_parts(gpu_frame, reference->stats, analysis, measurements).first;
-        const double gap = std::abs(stopped_at(analysis, frame_bounces) - stopped_at(analysis, bounces));
+        if (bounces < frame_bounces) continue;
+        const auto [noise, gap] = expected_parts(gpu_frame, reference->stats, analysis, measurements);
         if (!best || noise + gap < best_parts) {
             best = reference;
             best_parts = noise + gap;
         }
     }
+    if (!best && !references_.empty()) best = references_.rbegin()->second;
     return best;
 }
 

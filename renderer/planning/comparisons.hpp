@@ -45,10 +45,10 @@ public:
     // Adds a frame of the view `view` (a key of the scene's state, the camera and the size: frames
     // are compared only with frames of the same key) and records, in `measurements`, the own error
     // of every GPU frame that now has a reference frame to be compared with. References are kept
-    // per bounce count (the one with the most samples), and a GPU frame is compared with the one
-    // whose noise and missing bounces leave least of its relMSE unexplained: a reference of the
-    // frame's own bounce count measures a frame whose own error the missing light would drown
-    // (`direct` against a multi-bounce reference). A new view drops the frames of the old one. Thread-safe: GPU frames come from the render thread, reference frames
+    // per bounce count (the one with the most samples), and a GPU frame is compared with the one of
+    // at least its bounces whose noise and missing bounces leave least of its relMSE unexplained: a
+    // reference of the frame's own bounce count measures a frame whose own error the missing light
+    // would drown (`direct` against a multi-bounce reference). A new view drops the frames of the old one. Thread-safe: GPU frames come from the render thread, reference frames
     // from the CPU pool. Returns the comparisons made.
     std::vector<Comparison> add(std::uint64_t view, std::shared_ptr<const RenderResult> frame, const SceneAnalysis* analysis,
                                 SceneMeasurements& measurements);
@@ -74,8 +74,9 @@ public:
     static constexpr double kMaxCalibrationGap = 0.25;
 
 private:
-    // Of the kept references, the one whose noise and missing bounces leave least of a GPU frame's
-    // relMSE unexplained (a reference of the frame's own bounce count has no bounce gap).
+    // Of the kept references with at least a GPU frame's bounces, the one whose noise and missing
+    // bounces leave least of its relMSE unexplained (one of the frame's own bounce count has no bounce
+    // gap); with none such, the one with the most bounces.
     std::shared_ptr<const RenderResult> best_reference(const FrameStats& gpu_frame, const SceneAnalysis* analysis,
                                                        const SceneMeasurements& measurements) const;
 

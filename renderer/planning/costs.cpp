@@ -237,6 +237,12 @@ std::optional<double> SceneMeasurements::noise_scale() const {
     return *std::max_element(noise_scales_.begin(), noise_scales_.end());
 }
 
+std::optional<double> SceneMeasurements::least_noise_scale() const {
+    const std::lock_guard lock(mutex_);
+    if (noise_scales_.empty()) return std::nullopt;
+    return *std::min_element(noise_scales_.begin(), noise_scales_.end());
+}
+
 void SceneMeasurements::record_own_error(const std::string& method, const std::string& preset, int bounces, double rel_mse) {
     if (!(rel_mse >= 0.0) || !std::isfinite(rel_mse)) return;
     const std::lock_guard lock(mutex_);

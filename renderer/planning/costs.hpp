@@ -119,10 +119,13 @@ public:
     // against a converged frame, on this scene: measured from two reference frames of one view
     // (comparisons.hpp). The statistic is a luminance variance over a neighbourhood's value; relMSE
     // weighs each channel by its own value, and the two part on scenes of coloured or high-contrast
-    // light (pairs of frames measure 0.5 to 0.9 of it on the bench corpus). The largest of the last
-    // kKept; nullopt until measured.
+    // light (pairs of frames measure 0.5 to 0.9 of it on the bench corpus). noise_scale(): the
+    // largest of the last kKept, for a reference's predicted error (a target error is a promise);
+    // least_noise_scale(): the smallest, for the noise a comparison takes out of a GPU frame's relMSE
+    // (taking out too much would promise the frame less error than it has). nullopt until measured.
     void record_noise_scale(double scale);
     std::optional<double> noise_scale() const;
+    std::optional<double> least_noise_scale() const;
 
     // A GPU frame's own error on this scene: its relMSE against a reference frame of the same view,
     // less the reference's noise and the bounces one has and the other lacks (comparisons.hpp).

@@ -165,7 +165,7 @@ TEST(FrameComparisons, AFrameIsComparedWithTheReferenceNearestItsOwnBounces) {
     SceneMeasurements measured;
     FrameComparisons comparisons;
     comparisons.add(5, frame("direct", "high", {}, 1.1f), &analysis, measured);
-    EXPECT_TRUE(comparisons.add(5, reference(4096, 0.1), &analysis, measured).empty());
+    EXPECT_TRUE(comparisons.add(5, reference(64, 0.5), &analysis, measured).empty());
     EXPECT_TRUE(measured.compared("direct", "high"));
     EXPECT_FALSE(measured.own_error("direct", "high", 0));
     const auto made = comparisons.add(5, reference(16, 0.0016, {{"bounces", 0}}), &analysis, measured);
@@ -173,8 +173,8 @@ TEST(FrameComparisons, AFrameIsComparedWithTheReferenceNearestItsOwnBounces) {
     EXPECT_EQ(made[0].bounce_gap, 0.0);
     EXPECT_DOUBLE_EQ(made[0].reference_noise, 0.0016 / 16.0);
     EXPECT_NEAR(measured.own_error("direct", "high", 0)->rel_mse, 0.01 / 1.01 - 0.0001, 1e-6);
-    // vct (one bounce, 1.5 against 1.0: relMSE 0.2475): the four-bounce reference leaves 0.044 of it
-    // unexplained, the no-bounce one 0.05 (the bounce it lacks) and its noise.
+    // vct (one bounce, 1.5 against 1.0: relMSE 0.2475) goes to the four-bounce reference: the one
+    // of no bounces would count its bounce as error, however noisy the four-bounce one is.
     const auto vct = comparisons.add(5, frame("vct", "high", {}, 1.5f), &analysis, measured);
     ASSERT_EQ(vct.size(), 1u);
     EXPECT_DOUBLE_EQ(vct[0].bounce_gap, 0.05 - 0.1 / 16.0);
@@ -229,9 +229,16 @@ TEST(FrameComparisons, TwoReferenceFramesOfAViewMeasureWhatTheirNoiseStatisticMa
     fewer_bounces->stats.knobs["bounces"] = 1;
     EXPECT_FALSE(FrameComparisons::calibrate_noise(*fewer_bounces, *reference(4096, 0.0), &analysis, other));
     EXPECT_FALSE(other.noise_scale().has_value());
-    // The scale is the largest of the last five measured: a target error is a promise.
+    // The scale is the largest of the last five measured: a target error is a promise. What a
+    // comparison takes out of a GPU frame's relMSE is the smallest, for the same reason.
     for (const double scale : {0.6, 0.9, 0.7}) other.record_noise_scale(scale);
     EXPECT_DOUBLE_EQ(*other.noise_scale(), 0.9);
+    EXPECT_DOUBLE_EQ(*other.least_noise_scale(), 0.6);
+    FrameComparisons other_view;
+    other_view.add(9, frame("cssm", "low", {{"bounces", 4}}, 2.0f), &analysis, other);
+    const auto compared = other_view.add(9, reference(64, 0.64), &analysis, other);
+    ASSERT_EQ(compared.size(), 1u);
+    EXPECT_DOUBLE_EQ(compared[0].reference_noise, 0.6 * 0.64 / 64.0);
 }
 
 TEST(FrameComparisons, NoisyDenoisedOrUnlikeFramesAreNotCompared) {
