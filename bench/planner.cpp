@@ -86,9 +86,10 @@ Measured render_plan(Renderer& renderer, SceneResources& resources, const scene:
     const FramePlan frame_plan = plan_frame(request);
     // Frames under kRepeatBelowMs are rendered kRepeats times and the median kept (each recorded, as a
     // daemon records every frame): on a loaded two-core machine one frame of a few milliseconds varies
-    // by more than the 1.5x and 1.2x that the budgets are judged by.
-    constexpr double kRepeatBelowMs = 500.0;
-    constexpr int kRepeats = 3;
+    // by more than the 1.5x and 1.2x that the budgets are judged by. Under kManyBelowMs, kManyRepeats:
+    // the foliage's direct high took 2.5 ms as a fixed plan and 3.9 ms as a planned one, medians of three.
+    constexpr double kRepeatBelowMs = 500.0, kManyBelowMs = 20.0;
+    constexpr int kRepeats = 3, kManyRepeats = 9;
     const auto render_once = [&] {
         RenderResult once = frame_plan.site == FrameSite::cpu ? render_on_cpu(scene, request, frame_plan)
                                                                : renderer.render(resources, request);
@@ -98,7 +99,8 @@ Measured render_plan(Renderer& renderer, SceneResources& resources, const scene:
     if (frame_plan.site == FrameSite::gpu) renderer.render(resources, request);  // builds the structures
     std::vector<RenderResult> results;
     results.push_back(render_once());
-    while (results.front().stats.render_ms < kRepeatBelowMs && results.size() < static_cast<std::size_t>(kRepeats)) {
+    const std::size_t repeats = results.front().stats.render_ms < kManyBelowMs ? kManyRepeats : kRepeats;
+    while (results.front().stats.render_ms < kRepeatBelowMs && results.size() < repeats) {
         results.push_back(render_once());
     }
     std::sort(results.begin(), results.end(),
@@ -309,7 +311,7 @@ int main(int argc, char** argv) {
            << "- A target error holds when it is met at no more than 1.5x the time of the cheapest fixed plan "
               "(a method at a preset, or the reference at 4 to 256 spp) that meets it; a time budget T holds when "
               "the frame takes at most 1.2 T with error no worse than the best fixed plan within T.\n"
-           << "- Frames under 0.5 s, fixed and planned, are rendered three times and the median kept (one frame of a "
+           << "- Frames under 0.5 s, fixed and planned, are rendered three times (under 20 ms, nine) and the median kept (one frame of a "
               "few milliseconds on two loaded cores varies by more than the 1.2x the budgets are judged by); the "
               "reference's own noise, about noise per sample / spp, is in every relMSE measured (under 0.0018 at 4096 "
               "spp on these scenes).\n"

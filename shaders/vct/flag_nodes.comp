@@ -16,6 +16,9 @@ void main() {
     uint index = thread_index();
     if (index >= u_fragment_count) return;
     uvec3 leaf_cell = unpack_lattice(fragments[index * VCT_FRAGMENT_WORDS]) >> 1u;
+    // The lattice's last point (2^(D+1), which the dense variant keeps) has no leaf: find_node reads
+    // only a cell's low D bits, and would flag the leaf at the grid's other side.
+    if (any(greaterThanEqual(leaf_cell, uvec3(1u << u_leaf_level)))) return;
     uint node = find_node(leaf_cell >> (u_leaf_level - u_level), u_level);
     if (node == VCT_NODE_NONE || node_child[node] != 0u) return;
     if (atomicOr(node_child[node], VCT_NODE_FLAGGED) == 0u) atomicAdd(counters[VCT_COUNTER_FLAGGED], 1u);
