@@ -3,6 +3,7 @@
 #include "renderer/base/hash.hpp"
 #include "renderer/base/log.hpp"
 #include "renderer/planning/calibration.hpp"
+#include "renderer/planning/error_model.hpp"
 #include "renderer/planning/resolution.hpp"
 #include "renderer/image/codec.hpp"
 #include "server/daemon.hpp"
@@ -456,6 +457,14 @@ void RequestHandlers::render_probes(const RenderOrder& order, Renderer& renderer
             }
             entry.comparisons->add(view_key(entry.version, probe), result, entry.resources->analysis_if_made(),
                                    *entry.resources->measurements);
+            // A probe with a companion is measured when the companion is traced, after this: counted as
+            // compared now, so that a budget in between does not probe it again.
+            const int bounces = planning::modelled_bounces(probe.method, probe.knobs);
+            if (std::any_of(order.reference_probes.begin(), order.reference_probes.end(), [&](const RenderRequest& reference) {
+                    return planning::modelled_bounces(reference.method, reference.knobs) == bounces;
+                })) {
+                entry.resources->measurements->record_compared(probe.method, probe.preset);
+            }
         } catch (const std::exception& error) {
             // A probe only teaches the planner: its failure is logged, and the request it rode on stands.
             log::warn("planner", "probe {} {} failed: {}", probe.method, probe.preset, error.what());

@@ -69,12 +69,16 @@ std::optional<Comparison> FrameComparisons::compare(const RenderResult& gpu_fram
     c.preset = gpu_frame.stats.preset;
     c.bounces = modelled_bounces(c.method, gpu_frame.stats.knobs);
     c.rel_mse = image::compare(gpu_frame.frame, reference.frame).rel_mse;
-    measurements.record_compared(c.method, c.preset);
     std::tie(c.reference_noise, c.bounce_gap) = expected_parts(gpu_frame.stats, reference.stats, analysis, measurements);
     // The own part must be at least half of what was measured: a frame whose error is mostly the
     // reference's noise or the bounces it lacks says little of its own, and what it says would be
-    // carried to other bounce counts.
-    if (!(c.rel_mse >= 0.0) || c.reference_noise + c.bounce_gap > 0.5 * c.rel_mse) return std::nullopt;
+    // carried to other bounce counts. Where the bounces it lacks were the larger part, the preset is
+    // not counted as compared: probed again, it gets a reference of its own bounce count (probes()).
+    if (!(c.rel_mse >= 0.0) || c.reference_noise + c.bounce_gap > 0.5 * c.rel_mse) {
+        if (!(c.bounce_gap > c.reference_noise)) measurements.record_compared(c.method, c.preset);
+        return std::nullopt;
+    }
+    measurements.record_compared(c.method, c.preset);
     c.own_error = std::max(0.0, c.rel_mse - c.reference_noise - c.bounce_gap);
     measurements.record_own_error(c.method, c.preset, c.bounces, c.own_error);
     return c;

@@ -141,7 +141,8 @@ public:
     // Every preset of `method` with an own error measured here, with its largest.
     std::map<std::string, double> own_errors(const std::string& method) const;
     // Whether a frame of the preset was compared with a reference frame here, whether or not that
-    // told its own error (the planner probes a preset once per scene).
+    // told its own error (the planner probes a preset once per scene), unless the light of the
+    // bounces it lacked drowned it (a reference of its own bounce count can still tell).
     void record_compared(const std::string& method, const std::string& preset);
     bool compared(const std::string& method, const std::string& preset) const;
 

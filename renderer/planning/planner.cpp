@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <limits>
+#include <set>
 
 namespace bounce::planning {
 namespace {
@@ -258,30 +259,17 @@ std::vector<Candidate> probes(const std::vector<Candidate>& all, const Candidate
         else if (more_accurate(c, **same)) *same = &c;
     }
     std::sort(cheapest.begin(), cheapest.end(), [](const Candidate* a, const Candidate* b) { return faster(*a, *b); });
-    std::vector<Candidate> chosen_probes;
-    double total_ms = 0.0;
-    for (const Candidate* c : cheapest) {
-        if (total_ms + c->predicted_ms > share_ms) break;
-        total_ms += c->predicted_ms;
-        chosen_probes.push_back(*c);
-    }
-    if (!analysis) return chosen_probes;
     // Companions. A probe is compared only where the reference's noise and the light of the bounces
     // the probe lacks (both predicted) come to less than its own error (FrameComparisons::compare);
     // where they would not, a reference of the probe's own bounce count has no such light, and the
-    // cheapest one whose noise is under half that own error measures it.
-    const auto stopped = [&](int bounces) { return BounceEnergy::at(analysis->bounces.stopped_error, bounces); };
+    // cheapest one whose noise is under half that own error measures it. A probe that needs one goes
+    // with it or not at all: alone, its comparison would be dropped.
+    const auto stopped = [&](int bounces) {
+        return analysis ? BounceEnergy::at(analysis->bounces.stopped_error, bounces) : 0.0;
+    };
     const int chosen_bounces = modelled_bounces(chosen.method, chosen.knobs);
     const double chosen_noise = chosen.predicted_error - stopped(chosen_bounces);
-    std::map<int, double> needed;  // bounce count: the smallest own error to measure there
-    for (const Candidate& probe : chosen_probes) {
-        const int bounces = modelled_bounces(probe.method, probe.knobs);
-        const double own = probe.predicted_error - stopped(bounces);
-        if (bounces >= chosen_bounces || chosen_noise + stopped(bounces) - stopped(chosen_bounces) < own) continue;
-        const auto [it, inserted] = needed.emplace(bounces, own);
-        if (!inserted) it->second = std::min(it->second, own);
-    }
-    for (const auto& [bounces, own] : needed) {
+    const auto companion_for = [&](int bounces, double own) -> const Candidate* {
         const Candidate* companion = nullptr;
         for (const Candidate& c : all) {
             if (c.method != "reference" || c.scale != 1.0 || modelled_bounces(c.method, c.knobs) != bounces) continue;
@@ -289,11 +277,28 @@ std::vector<Candidate> probes(const std::vector<Candidate>& all, const Candidate
             if (c.predicted_error - stopped(bounces) >= 0.5 * own) continue;
             if (!companion || c.predicted_ms < companion->predicted_ms) companion = &c;
         }
-        if (companion && total_ms + companion->predicted_ms <= share_ms) {
-            total_ms += companion->predicted_ms;
-            chosen_probes.push_back(*companion);
+        return companion;
+    };
+    std::vector<Candidate> chosen_probes, companions;
+    std::set<int> accompanied;  // bounce counts with a companion
+    double total_ms = 0.0;
+    for (const Candidate* c : cheapest) {
+        const int bounces = modelled_bounces(c->method, c->knobs);
+        const double own = c->predicted_error - stopped(bounces);
+        const bool needs_companion = analysis && bounces < chosen_bounces && !accompanied.contains(bounces) &&
+                                     chosen_noise + stopped(bounces) - stopped(chosen_bounces) >= own;
+        const Candidate* companion = needs_companion ? companion_for(bounces, own) : nullptr;
+        if (needs_companion && !companion) continue;
+        const double ms = c->predicted_ms + (companion ? companion->predicted_ms : 0.0);
+        if (total_ms + ms > share_ms) continue;
+        total_ms += ms;
+        chosen_probes.push_back(*c);
+        if (companion) {
+            companions.push_back(*companion);
+            accompanied.insert(bounces);
         }
     }
+    chosen_probes.insert(chosen_probes.end(), companions.begin(), companions.end());
     return chosen_probes;
 }
 

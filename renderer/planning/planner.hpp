@@ -58,11 +58,11 @@ struct Plan {
 // method's error there was never learned. A preset is probed once per scene, and each one that then
 // meets a later budget saves a reference frame on every such request: the probes may take as long as
 // the reference plan itself. None when the chosen plan is not the reference.
-// With the scene's analysis, the probes also hold companions, reference plans (method "reference"):
-// where a probe lacks bounces whose light, with the chosen reference's noise, would drown its own
-// error in the comparison, the cheapest reference of the probe's bounce count (at least 16 samples,
-// its noise under half that own error) that still fits the share. They render on CPU threads after
-// the frame is sent.
+// With the scene's analysis, the probes also hold companions, reference plans (method "reference"),
+// last: where a probe lacks bounces whose light, with the chosen reference's noise, would drown its
+// own error in the comparison, the cheapest reference of the probe's bounce count (at least 16
+// samples, its noise under half that own error); such a probe is taken with its companion within
+// the share, or not at all. Companions render on CPU threads after the frame is sent.
 inline constexpr double kProbeShare = 1.0;
 std::vector<Candidate> probes(const std::vector<Candidate>& all, const Candidate& chosen, const SceneMeasurements* scene,
                               const SceneAnalysis* analysis = nullptr);
