@@ -47,7 +47,8 @@ namespace {
 // noise, and the light of the bounces the reference has and the frame lacks.
 std::pair<double, double> expected_parts(const FrameStats& gpu_frame, const FrameStats& reference,
                                          const SceneAnalysis* analysis, const SceneMeasurements& measurements) {
-    const double noise = measurements.least_noise_scale().value_or(1.0) * reference.method_statistics.at("noise_per_sample") /
+    const double noise = measurements.least_noise_scale().value_or(FrameComparisons::kUncalibratedNoiseScale) *
+                         reference.method_statistics.at("noise_per_sample") /
                          std::max(1.0, knob(reference, "spp", 1.0));
     // A reference with fewer bounces than the frame counts the frame's extra light as error: left
     // in, which overstates the own error (the safe side for a promise).
