@@ -138,6 +138,24 @@ TEST(FrameComparisons, TheOwnErrorIsTheRelMseLessTheReferencesNoiseAndTheBounces
     EXPECT_NEAR(more[0].own_error, rel_mse - noise, 1e-6);
 }
 
+// A frame with more bounces than the reference: the light the reference lacks is not taken out, and
+// where it is not small beside the relMSE the comparison is left out, since a frame that lacks light
+// agrees better with a reference that lacks it too.
+TEST(FrameComparisons, AReferenceWithFewerBouncesMeasuresOnlyWhereTheLightItLacksIsSmall) {
+    const SceneAnalysis analysis = made_up_analysis();
+    SceneMeasurements measured;
+    FrameComparisons comparisons;
+    // Three bounces lack 0.0125 - 0.1 / 256 = 0.012 of eight's light: over half of 1.1's 0.0099.
+    comparisons.add(6, frame("cssm", "low", {{"bounces", 8}}, 1.1f), &analysis, measured);
+    EXPECT_TRUE(comparisons.add(6, reference(4096, 0.0, {{"bounces", 3}}), &analysis, measured).empty());
+    EXPECT_FALSE(measured.own_error("cssm", "low", 8));
+    // Beside 1.5's 0.2475 it is small: kept, and not taken out.
+    const auto made = comparisons.add(6, frame("cssm", "medium", {{"bounces", 8}}, 1.5f), &analysis, measured);
+    ASSERT_EQ(made.size(), 1u);
+    EXPECT_EQ(made[0].bounce_gap, 0.0);
+    EXPECT_NEAR(made[0].own_error, 0.25 / 1.01, 1e-6);
+}
+
 TEST(FrameComparisons, OnlyFramesOfOneViewAreCompared) {
     const SceneAnalysis analysis = made_up_analysis();
     SceneMeasurements measured;
