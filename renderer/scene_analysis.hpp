@@ -21,9 +21,10 @@ struct AnalysisSettings {
     // Of one seed, the frames of two bounce counts share their paths, and their difference, squared,
     // carries the later bounces' noise: stopped errors past a bounce or two read high (at 16 samples,
     // the atrium's at 4 bounces 0.025 where 1024 samples say 0.008; at 64, 0.013), and the first ones
-    // read low where a few paths carry much of the light (its 0.27 at no bounces against 0.32; at 64,
-    // 0.31). An unbiased form (the product of two independent halves' differences) reads lower still
-    // at 64 samples (0.27 and 0.006): its typical value misses those paths, not a promise to keep.
+    // read low where a few paths carry much of the light (0.27 at no bounces against 0.33; at 64,
+    // 0.31): `bounce_bench_planner --analysis-only --analysis-spp N`. An unbiased form (the product of
+    // two independent halves' differences) read lower still at 64 samples: its typical value misses
+    // those few paths, which is no promise to keep.
     int bounce_spp = 64;
     int max_bounces = 12;
     int surface_samples = 4096;  // thin walls

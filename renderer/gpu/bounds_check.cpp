@@ -3,10 +3,13 @@
 #include "renderer/base/error.hpp"
 #include "renderer/gpu/shader_program.hpp"
 
+#include <algorithm>
 #include <cctype>
+#include <cstdio>
 #include <cstdlib>
 #include <mutex>
 #include <set>
+#include <string_view>
 
 namespace bounce::gpu {
 namespace {
@@ -131,27 +134,7 @@ public:
     }
     bool has_arrays() const { return !arrays_.empty(); }
 
-    std::string rewrite() {
-        std::string out;
-        std::size_t copied = 0;
-        for (std::size_t t = 0; t < tokens_.size(); ++t) {
-            const Token& token = tokens_[t];
-            if (token.kind == Token::Kind::directive) {
-                out.append(text_, copied, token.begin - copied);
-                out += rewrite_directive(token);
-                copied = token.end;
-                continue;
-            }
-            std::size_t close = 0;
-            if (!checked_access(t, arrays_, close)) continue;
-            out.append(text_, copied, token.begin - copied);
-            out += checked(t, close, arrays_);
-            copied = tokens_[close].end;
-            t = close;
-        }
-        out.append(text_, copied, std::string::npos);
-        return out;
-    }
+    std::string rewrite() { return rewrite_span(0, tokens_.size(), 0, text_.size(), arrays_); }
 
 private:
     std::string word(std::size_t t) const { return text_.substr(tokens_[t].begin, tokens_[t].end - tokens_[t].begin); }
@@ -198,20 +181,35 @@ private:
     // accesses inside the index checked too.
     std::string checked(std::size_t t, std::size_t close, const std::set<std::string>& arrays) {
         const std::string name = word(t);
-        std::string index;
-        std::size_t copied = tokens_[t + 2].begin;
-        for (std::size_t i = t + 2; i < close; ++i) {
-            std::size_t inner_close = 0;
-            if (!checked_access(i, arrays, inner_close)) continue;
-            index.append(text_, copied, tokens_[i].begin - copied);
-            index += checked(i, inner_close, arrays);
-            copied = tokens_[inner_close].end;
-            i = inner_close;
-        }
-        index.append(text_, copied, tokens_[close].begin - copied);
+        const std::string index = rewrite_span(t + 2, close, tokens_[t + 2].begin, tokens_[close].begin, arrays);
         const std::string original = text_.substr(tokens_[t].begin, tokens_[close].end - tokens_[t].begin);
         const unsigned site = registry().add(fmt::format("{}: {}", lines_.where(offset_ + tokens_[t].begin), original));
         return fmt::format("{}[bounce_checked(uint({}), uint({}.length()), {}u)]", name, index, name, site);
+    }
+
+    // The text from offset `from` to `to`, which holds tokens [first, last), with every checked access
+    // among them rewritten, and every macro definition (rewrite_directive).
+    std::string rewrite_span(std::size_t first, std::size_t last, std::size_t from, std::size_t to,
+                             const std::set<std::string>& arrays) {
+        std::string out;
+        std::size_t copied = from;
+        for (std::size_t t = first; t < last; ++t) {
+            std::string replacement;
+            std::size_t end = t;
+            if (tokens_[t].kind == Token::Kind::directive) {
+                replacement = rewrite_directive(tokens_[t]);
+            } else if (checked_access(t, arrays, end)) {
+                replacement = checked(t, end, arrays);
+            } else {
+                continue;
+            }
+            out.append(text_, copied, tokens_[t].begin - copied);
+            out += replacement;
+            copied = tokens_[end].end;
+            t = end;
+        }
+        out.append(text_, copied, to - copied);
+        return out;
     }
 
     // A macro's body may index a parameter that stands for an array (`buffer[index]`, with the
@@ -232,18 +230,8 @@ private:
         }
         std::set<std::string> arrays = arrays_;
         arrays.insert(parameters.begin(), parameters.end());
-        std::string out;
-        std::size_t copied = 0;
-        for (; t < inner.tokens_.size(); ++t) {
-            std::size_t close = 0;
-            if (!inner.checked_access(t, arrays, close)) continue;
-            out.append(text, copied, inner.tokens_[t].begin - copied);
-            out += inner.checked(t, close, arrays);
-            copied = inner.tokens_[close].end;
-            t = close;
-        }
-        out.append(text, copied, std::string::npos);
-        return out;
+        const std::size_t from = t < inner.tokens_.size() ? inner.tokens_[t].begin : text.size();
+        return text.substr(0, from) + inner.rewrite_span(t, inner.tokens_.size(), from, text.size(), arrays);
     }
 
     std::string text_;

@@ -70,6 +70,19 @@ TEST(Shaders, BoundsCheckRewritesEveryIndexIntoADeclaredArrayAndNothingElse) {
     EXPECT_EQ(gpu::insert_bounds_checks(plain, 7).text, plain.text);
 }
 
+// GLSL wants #extension before any code: one an included file asks for (vct/leaf_data.glsl's float
+// atomics) moves up to just after #version, once, and its own line is left empty.
+TEST(Shaders, ExtensionsFromIncludedFilesComeRightAfterVersion) {
+    const auto source = gpu::expand_shader_source("vct/inject.comp", {"DENSE"});
+    EXPECT_EQ(source.text.rfind("#version 450 core\n#extension GL_NV_shader_atomic_float : enable\n#define DENSE\n", 0), 0u)
+        << source.text.substr(0, 200);
+    std::size_t count = 0;
+    for (std::size_t at = source.text.find("#extension"); at != std::string::npos; at = source.text.find("#extension", at + 1)) {
+        ++count;
+    }
+    EXPECT_EQ(count, 1u);
+}
+
 // flag_nodes.comp reads fragment `index` for every thread below u_fragment_count: told of two
 // fragments where the buffer holds one, the second thread reads past the end.
 TEST(Shaders, BoundsCheckedProgramsReportTheFirstOutOfBoundsAccess) {

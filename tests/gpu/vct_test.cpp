@@ -5,6 +5,9 @@
 #include "renderer/methods/vct/vct_method.hpp"
 #include "renderer/methods/reference/path_tracer.hpp"
 #include "renderer/scene/builtin.hpp"
+#include "renderer/gpu/shader_program.hpp"
+
+#include "vct/vct_layout.h"
 
 #include <gtest/gtest.h>
 
@@ -265,6 +268,44 @@ TEST(Vct, DynamicUpdatesLeaveTheStaticPartIntact) {
     const image::ErrorMetrics same = image::compare(away_again.frame, away.frame);
     EXPECT_LT(same.rel_mse, 1e-8);
     EXPECT_GT(image::compare(back.frame, away.frame).rel_mse, 1e-6);
+}
+
+// The lattice runs from point 0 to 2^(D+1), and leaf c owns points 2c and 2c+1: the last point has no
+// leaf. Subdivision reads only a cell's low D bits, so a fragment there would flag the node at the
+// grid's other side; it flags none. Here D = 1: a root with its eight children, and level 1 flagged
+// from a fragment at x = 2 (leaf cell 1: child 1) and one at x = 4 (leaf cell 2: none).
+TEST(Vct, AFragmentOnTheLatticesLastPointFlagsNoNode) {
+    shared_renderer();  // its context is current
+    gpu::ShaderCache shaders;
+    const gpu::ShaderProgram& flag = shaders.get(gpu::ProgramSource::compute_shader("vct/flag_nodes.comp"));
+    const auto fragment_at = [](std::uint32_t x) {
+        std::vector<std::uint32_t> words(VCT_FRAGMENT_WORDS, 0u);
+        words[0] = x;  // packed lattice point (x, 0, 0)
+        return words;
+    };
+    for (const std::uint32_t x : {2u, 4u}) {
+        SCOPED_TRACE(x);
+        std::vector<std::uint32_t> children(9, 0u);
+        children[0] = 1u;  // the root's children are nodes 1 to 8
+        const gpu::Buffer nodes = gpu::storage_of(children);
+        const gpu::Buffer counters = gpu::storage_of(std::vector<std::uint32_t>(VCT_COUNTERS, 0u));
+        const gpu::Buffer fragments = gpu::storage_of(fragment_at(x));
+        gpu::bind_storage(VCT_BINDING_NODES, nodes);
+        gpu::bind_storage(VCT_BINDING_COUNTERS, counters);
+        gpu::bind_storage(VCT_BINDING_FRAGMENTS, fragments);
+        flag.set("u_leaf_level", 1u);
+        flag.set("u_level", 1u);
+        flag.set("u_fragment_count", 1u);
+        flag.dispatch_threads(1);
+        gpu::storage_barrier();
+        std::vector<std::uint32_t> flagged(9), counted(VCT_COUNTERS);
+        glGetNamedBufferSubData(nodes.id(), 0, 9 * 4, flagged.data());
+        glGetNamedBufferSubData(counters.id(), 0, VCT_COUNTERS * 4, counted.data());
+        EXPECT_EQ(counted[VCT_COUNTER_FLAGGED], x == 2u ? 1u : 0u);
+        for (std::uint32_t node = 1; node <= 8; ++node) {
+            EXPECT_EQ(flagged[node], x == 2u && node == 2u ? VCT_NODE_FLAGGED : 0u) << "node " << node;
+        }
+    }
 }
 
 }  // namespace
