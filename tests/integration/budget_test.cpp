@@ -152,18 +152,19 @@ TEST(Budget, AStreamPlansItsInteractiveAndStillRungsForItsBudget) {
     }
 }
 
-// Where only a smaller frame fits the time, the planner renders it and the daemon upsamples it: the
-// reply is a frame of the size asked for, and its plan says at which scale it was rendered.
+// A plan at a smaller scale is rendered smaller and the daemon upsamples it: the reply is a frame of
+// the size asked for, and its plan says at which scale it was rendered. An error budget makes the
+// choice independent of frame times: at 48x48 only 24x24 is offered, and within one plan the scene's
+// measured frames scale both sizes alike (a scene line needs sizes 8x apart in pixels; these are
+// 4x), so each preset's half size is predicted a quarter of its full size's time whatever llvmpipe
+// measured, and with an error budget every plan meets, the cheapest is a half size. (Which scale a time budget buys is unit-tested with fixed costs in
+// comparisons_test.cpp: here frame times vary several-fold with load.)
 TEST(Budget, AFrameRenderedSmallerIsUpsampledToTheSizeAskedFor) {
     BudgetDaemon d(true);
-    // Where the full size fits, it is rendered at full size.
+    // With time for any plan, the full size: it loses nothing to upsampling.
     const json full = d.render({{"method", "direct"}, {"budget", {{"max_ms", 1e6}}}}).body["plan"];
     EXPECT_EQ(full["scale"], 1.0) << full.dump();
-    // Half of the full size's predicted time: only a smaller frame fits. The made-up device line
-    // prices 24x24 at about a quarter of 48x48 (6 ms against 23), and the scene's measured frames scale
-    // both alike (a scene line needs sizes 8x apart; these are 4x).
-    const double half_time = 0.5 * full["predicted_ms"].get<double>();
-    const auto reply = d.render({{"method", "direct"}, {"budget", {{"max_ms", half_time}}}});
+    const auto reply = d.render({{"method", "direct"}, {"budget", {{"max_error", 10.0}}}});
     const json& plan = reply.body["plan"];
     ASSERT_TRUE(plan["meets_budget"].get<bool>()) << plan.dump();
     EXPECT_EQ(plan["scale"], 0.5) << plan.dump();
