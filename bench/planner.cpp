@@ -94,7 +94,7 @@ Measured render_plan(Renderer& renderer, SceneResources& resources, const scene:
     const auto render_once = [&] {
         RenderResult once = frame_plan.site == FrameSite::cpu ? render_on_cpu(scene, request, frame_plan)
                                                                : renderer.render(resources, request);
-        planning::record_frame(costs, &analysis, device, once.stats, request.width, request.height);
+        planning::record_frame(costs, &analysis, device, once, request.width, request.height);
         return once;
     };
     if (frame_plan.site == FrameSite::gpu) renderer.render(resources, request);  // builds the structures

@@ -201,6 +201,15 @@ RenderResult render_on_cpu(const scene::Scene& scene, const RenderRequest& reque
     result.stats.knobs = plan.knobs;
     result.stats.method_statistics = method->statistics();
     result.stats.render_ms = ms_since(start);
+    for (methods::ByproductFrame& byproduct : method->take_byproducts()) {
+        auto made = std::make_shared<RenderResult>();
+        made->frame = std::move(byproduct.frame);
+        made->stats.method = request.method;
+        made->stats.preset = request.preset;
+        made->stats.knobs = std::move(byproduct.knobs);
+        made->stats.method_statistics = std::move(byproduct.statistics);
+        result.byproducts.push_back(std::move(made));
+    }
     return result;
 }
 

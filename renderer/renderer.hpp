@@ -21,6 +21,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <vector>
 #include <optional>
 #include <set>
 #include <string>
@@ -54,6 +55,10 @@ struct FrameStats {
 struct RenderResult {
     image::Frame frame;
     FrameStats stats;
+    // Frames the same work made on the way, each as if rendered alone with its stats' knobs: the
+    // reference's frames of each fewer bounce count (methods::CpuMethod::take_byproducts). Not
+    // delivered; the planner compares GPU frames with them and records their noise.
+    std::vector<std::shared_ptr<const RenderResult>> byproducts;
 };
 
 // Where a frame is made: on the render thread through the Renderer (GL), or on CPU threads.

@@ -227,7 +227,7 @@ void RequestHandlers::render_on_cpu(const std::shared_ptr<Request>& request, con
             auto result = std::make_shared<const RenderResult>(
                 bounce::render_on_cpu(*snapshot, frame, order.plan, request->cancelled.get()));
             if (device) {
-                planning::record_frame(*measurements, analysis ? &*analysis : nullptr, *device, result->stats, frame.width,
+                planning::record_frame(*measurements, analysis ? &*analysis : nullptr, *device, *result, frame.width,
                                        frame.height);
             }
             if (order.output_size) {
@@ -249,7 +249,7 @@ void RequestHandlers::render_on_cpu(const std::shared_ptr<Request>& request, con
                 auto result = std::make_shared<const RenderResult>(
                     bounce::render_on_cpu(*snapshot, probe, plan_frame(probe), request->cancelled.get()));
                 if (device) {
-                    planning::record_frame(*measurements, analysis ? &*analysis : nullptr, *device, result->stats,
+                    planning::record_frame(*measurements, analysis ? &*analysis : nullptr, *device, *result,
                                            probe.width, probe.height);
                 }
                 comparisons->add(view, result, analysis ? &*analysis : nullptr, *measurements);

@@ -11,6 +11,7 @@
 #include <map>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace bounce::methods {
 
@@ -25,6 +26,14 @@ struct CpuFrameContext {
     const std::atomic<bool>* cancelled = nullptr;
 };
 
+// A frame that a CPU method's work made on the way to the one asked for, as if rendered alone with
+// `knobs` (the reference: its paths stopped after fewer bounces).
+struct ByproductFrame {
+    image::Frame frame;
+    KnobValues knobs;
+    std::map<std::string, double> statistics;  // as statistics() would give for it alone
+};
+
 class CpuMethod {
 public:
     virtual ~CpuMethod() = default;
@@ -33,6 +42,8 @@ public:
     virtual image::Frame render(const CpuFrameContext& frame) = 0;
     // Counts that describe the last frame (rays traced, samples), reported with it.
     virtual std::map<std::string, double> statistics() const { return {}; }
+    // The last frame's byproducts, moved out (none by default).
+    virtual std::vector<ByproductFrame> take_byproducts() { return {}; }
 };
 
 }  // namespace bounce::methods

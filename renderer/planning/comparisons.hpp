@@ -5,7 +5,9 @@
 //
 // own error = relMSE(GPU frame, reference frame) - the reference's noise (its measured noise per
 // sample over its samples) - the light of the bounces the reference has and the GPU frame lacks
-// (stopped_error[k] - stopped_error[b] from the analysis). The noise is the reference's statistic
+// (stopped_error[k] - stopped_error[b] from the analysis) + where the reference is a bounce prefix
+// of a frame of more bounces, what the GPU frame's error adds to the later bounces' light beyond
+// their sum (Comparison::cross_term). The noise is the reference's statistic
 // scaled by what two reference frames of a view measured it to make (calibrate_noise). Left out: comparisons where those two
 // are over half of the relMSE (the own part would be mostly noise or missing light), references
 // that are denoised, without indirect visibility, with ambient occlusion or under 16 samples, and
@@ -34,7 +36,11 @@ struct Comparison {
     double rel_mse = 0.0;         // against the reference frame
     double reference_noise = 0.0;  // its expected share of rel_mse
     double bounce_gap = 0.0;       // the light of bounces the reference has and the frame lacks
-    double own_error = 0.0;        // what was recorded
+    // Where the reference is the bounce prefix of a frame of more bounces (RenderResult::byproducts):
+    // relMSE(frame, deeper) - relMSE(reference, deeper) - rel_mse, what the frame's error adds to the
+    // light of the later bounces beyond their sum (negative where the frame adds light where they do).
+    double cross_term = 0.0;
+    double own_error = 0.0;        // what was recorded: rel_mse - reference_noise - bounce_gap + cross_term
 };
 
 class FrameComparisons {
@@ -48,8 +54,10 @@ public:
     // per bounce count (the one with the most samples), and a GPU frame is compared with the one of
     // at least its bounces whose noise and missing bounces leave least of its relMSE unexplained: a
     // reference of the frame's own bounce count measures a frame whose own error the missing light
-    // would drown (`direct` against a multi-bounce reference). A new view drops the frames of the old one. Thread-safe: GPU frames come from the render thread, reference frames
-    // from the CPU pool. Returns the comparisons made.
+    // would drown (`direct` against a multi-bounce reference). A reference's byproducts (its frames
+    // of fewer bounces, RenderResult::byproducts) are added first, each a reference of its own bounce
+    // count. A new view drops the frames of the old one. Thread-safe: GPU frames come from the render
+    // thread, reference frames from the CPU pool. Returns the comparisons made.
     std::vector<Comparison> add(std::uint64_t view, std::shared_ptr<const RenderResult> frame, const SceneAnalysis* analysis,
                                 SceneMeasurements& measurements);
 
@@ -59,7 +67,8 @@ public:
 
     // One comparison, made and recorded (add() calls it; public for tests).
     static std::optional<Comparison> compare(const RenderResult& gpu_frame, const RenderResult& reference,
-                                             const SceneAnalysis* analysis, SceneMeasurements& measurements);
+                                             const SceneAnalysis* analysis, SceneMeasurements& measurements,
+                                             const RenderResult* deeper = nullptr);
 
     // Two reference frames of one view, the second with at least kCalibrationSpan times the samples:
     // relMSE between them, less the light of the bounces one has beyond the other, over what their noise
@@ -72,6 +81,10 @@ public:
                                                  const SceneAnalysis* analysis, SceneMeasurements& measurements);
     static constexpr double kCalibrationSpan = 2.0;
     static constexpr double kMaxCalibrationGap = 0.25;
+    // Pairs whose statistic is under this say nothing of the noise: frames with next to none (a
+    // sun's direct light alone is exact at one sample) measured a scale of 0. It is 1/2000 of the
+    // smallest error a budget on the bench asks for (0.02), and far above float rounding.
+    static constexpr double kMinCalibrationStatistic = 1e-5;
     // The noise scale a comparison takes before a pair of the scene's references has measured one:
     // the smallest that pairs measured on the bench corpus (0.54 to 0.93). The statistic as it is
     // (1.0) took out twice the noise there was in the furnished room, and promised cssm draft 0.044
@@ -79,6 +92,9 @@ public:
     static constexpr double kUncalibratedNoiseScale = 0.54;
 
 private:
+    // The kept reference of the most bounces whose byproduct `reference` is; null if none.
+    std::shared_ptr<const RenderResult> deeper_than(const RenderResult& reference) const;
+
     // Of the kept references with at least a GPU frame's bounces, the one whose noise and missing
     // bounces leave least of its relMSE unexplained (one of the frame's own bounce count has no bounce
     // gap); with none such, the one with the most bounces.

@@ -1,6 +1,7 @@
 #include "renderer/planning/planner.hpp"
 
 #include "renderer/base/error.hpp"
+#include "renderer/methods/reference/path_tracer.hpp"
 #include "renderer/methods/registry.hpp"
 #include "renderer/planning/comparisons.hpp"
 #include "renderer/planning/error_model.hpp"
@@ -237,12 +238,14 @@ Plan plan(const PlanningInputs& inputs, const Budget& budget) {
     }
     Plan chosen = choose(all, budget);
     chosen.ruled_out = std::move(ruled_out);
-    chosen.probes = probes(all, chosen.chosen, inputs.scene, &inputs.analysis);
+    chosen.probes = probes(all, chosen.chosen, inputs.scene, &inputs.analysis,
+                           methods::reference::Accumulator::prefixes_that_fit(
+                               inputs.width, inputs.height, modelled_bounces(chosen.chosen.method, chosen.chosen.knobs)));
     return chosen;
 }
 
 std::vector<Candidate> probes(const std::vector<Candidate>& all, const Candidate& chosen, const SceneMeasurements* scene,
-                              const SceneAnalysis* analysis) {
+                              const SceneAnalysis* analysis, int prefix_bounces) {
     // Only full-size frames are compared: an upsampled one's error is not its method's.
     if (chosen.method != "reference" || chosen.scale != 1.0) return {};
     const double share_ms = kProbeShare * chosen.predicted_ms;
@@ -279,13 +282,24 @@ std::vector<Candidate> probes(const std::vector<Candidate>& all, const Candidate
         }
         return companion;
     };
+    // The chosen reference's own frame of fewer bounces: as noisy per sample as a reference of
+    // that bounce count, at the chosen one's samples, with no bounce gap.
+    const auto prefix_noise = [&](int bounces) -> std::optional<double> {
+        if (!analysis || bounces >= std::min(chosen_bounces, prefix_bounces)) return std::nullopt;
+        if (methods::knob_or(chosen.knobs, "spp", 0.0) < FrameComparisons::kMinReferenceSpp) return std::nullopt;
+        methods::KnobValues knobs = chosen.knobs;
+        knobs["bounces"] = bounces;
+        return predict_error(*analysis, "reference", chosen.preset, knobs, scene).rel_mse - stopped(bounces);
+    };
     std::vector<Candidate> chosen_probes, companions;
     std::set<int> accompanied;  // bounce counts with a companion
     double total_ms = 0.0;
     for (const Candidate* c : cheapest) {
         const int bounces = modelled_bounces(c->method, c->knobs);
         const double own = c->predicted_error - stopped(bounces);
+        const auto own_prefix = prefix_noise(bounces);
         const bool needs_companion = analysis && bounces < chosen_bounces && !accompanied.contains(bounces) &&
+                                     !(own_prefix && *own_prefix < own) &&
                                      chosen_noise + stopped(bounces) - stopped(chosen_bounces) >= own;
         const Candidate* companion = needs_companion ? companion_for(bounces, own) : nullptr;
         if (needs_companion && !companion) continue;
@@ -302,12 +316,10 @@ std::vector<Candidate> probes(const std::vector<Candidate>& all, const Candidate
     return chosen_probes;
 }
 
-void record_frame(SceneMeasurements& measurements, const SceneAnalysis* analysis, const DeviceCosts& device,
-                  const FrameStats& stats, int width, int height) {
-    if (const auto baseline = baseline_ms(analysis, device, stats.method, stats.preset, stats.knobs, width, height)) {
-        measurements.record(stats.method, stats.preset, bounces_knob(stats.knobs).value_or(-1), stats.render_ms, *baseline,
-                            static_cast<double>(width) * height);
-    }
+namespace {
+
+// A reference frame's noise per sample, as a ratio to the analysis' at its bounce count.
+void record_reference_noise(SceneMeasurements& measurements, const SceneAnalysis* analysis, const FrameStats& stats) {
     const auto noise = stats.method_statistics.find("noise_per_sample");
     const auto spp = stats.knobs.find("spp");
     if (noise != stats.method_statistics.end() && spp != stats.knobs.end() && spp->second >= 4 && analysis) {
@@ -315,6 +327,23 @@ void record_frame(SceneMeasurements& measurements, const SceneAnalysis* analysis
         const double analysed = BounceEnergy::at(analysis->bounces.noise_per_sample, bounces);
         if (analysed > 0.0) measurements.record_noise(bounces, noise->second / analysed);
     }
+}
+
+}  // namespace
+
+void record_frame(SceneMeasurements& measurements, const SceneAnalysis* analysis, const DeviceCosts& device,
+                  const FrameStats& stats, int width, int height) {
+    if (const auto baseline = baseline_ms(analysis, device, stats.method, stats.preset, stats.knobs, width, height)) {
+        measurements.record(stats.method, stats.preset, bounces_knob(stats.knobs).value_or(-1), stats.render_ms, *baseline,
+                            static_cast<double>(width) * height);
+    }
+    record_reference_noise(measurements, analysis, stats);
+}
+
+void record_frame(SceneMeasurements& measurements, const SceneAnalysis* analysis, const DeviceCosts& device,
+                  const RenderResult& result, int width, int height) {
+    record_frame(measurements, analysis, device, result.stats, width, height);
+    for (const auto& byproduct : result.byproducts) record_reference_noise(measurements, analysis, byproduct->stats);
 }
 
 nlohmann::json plan_json(const Plan& plan) {

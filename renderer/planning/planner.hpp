@@ -62,10 +62,12 @@ struct Plan {
 // last: where a probe lacks bounces whose light, with the chosen reference's noise, would drown its
 // own error in the comparison, the cheapest reference of the probe's bounce count (at least 16
 // samples, its noise under half that own error); such a probe is taken with its companion within
-// the share, or not at all. Companions render on CPU threads after the frame is sent.
+// the share, or not at all. Companions render on CPU threads after the frame is sent. A probe needs
+// none where the chosen reference's own frame of the probe's bounce count (its bounce prefix, below
+// `prefix_bounces`: methods::reference::Accumulator) is predicted to leave it measurable.
 inline constexpr double kProbeShare = 1.0;
 std::vector<Candidate> probes(const std::vector<Candidate>& all, const Candidate& chosen, const SceneMeasurements* scene,
-                              const SceneAnalysis* analysis = nullptr);
+                              const SceneAnalysis* analysis = nullptr, int prefix_bounces = 0);
 
 // Chooses among predicted plans (a pure function: the planner's unit tests call it on tables).
 // Throws InputError when `candidates` is empty or the budget names neither limit.
@@ -104,6 +106,10 @@ std::optional<double> baseline_ms(const SceneAnalysis* analysis, const DeviceCos
 // reference frames of at least 4 samples, their noise per sample.
 void record_frame(SceneMeasurements& measurements, const SceneAnalysis* analysis, const DeviceCosts& device,
                   const FrameStats& stats, int width, int height);
+// The same for a whole result: also the noise of its byproducts (a reference's frames of fewer
+// bounces), whose time is the frame's own.
+void record_frame(SceneMeasurements& measurements, const SceneAnalysis* analysis, const DeviceCosts& device,
+                  const RenderResult& result, int width, int height);
 
 nlohmann::json plan_json(const Plan& plan);
 

@@ -210,6 +210,67 @@ TEST(FrameComparisons, AFrameIsComparedWithTheReferenceNearestItsOwnBounces) {
     EXPECT_TRUE(comparisons.add(5, reference(8 * 2, 0.0016, {{"bounces", 0}}), &analysis, measured).empty());
 }
 
+// A reference frame brings its frames of fewer bounces (RenderResult::byproducts, the path tracer's
+// bounce prefixes): each is a reference of its own bounce count, so `direct` is measured against the
+// one of no bounces without a reference traced for it.
+TEST(FrameComparisons, AReferencesFramesOfFewerBouncesAreReferencesOfTheirOwnBounceCounts) {
+    const SceneAnalysis analysis = made_up_analysis();
+    SceneMeasurements measured;
+    FrameComparisons comparisons;
+    comparisons.add(5, frame("direct", "high", {}, 1.1f), &analysis, measured);
+    auto four_bounces = std::make_shared<RenderResult>(*reference(64, 0.5));
+    four_bounces->byproducts = {reference(64, 0.0016, {{"bounces", 0}}), reference(64, 0.2, {{"bounces", 1}})};
+    const auto made = comparisons.add(5, four_bounces, &analysis, measured);
+    ASSERT_EQ(made.size(), 1u);
+    EXPECT_EQ(made[0].method, "direct");
+    EXPECT_EQ(made[0].bounce_gap, 0.0);
+    EXPECT_DOUBLE_EQ(made[0].reference_noise, FrameComparisons::kUncalibratedNoiseScale * 0.0016 / 64.0);
+    EXPECT_TRUE(measured.compared("direct", "high"));
+    // vct (one bounce) goes to the one-bounce prefix: no bounce gap to subtract.
+    const auto vct = comparisons.add(5, frame("vct", "high", {}, 1.5f), &analysis, measured);
+    ASSERT_EQ(vct.size(), 1u);
+    EXPECT_EQ(vct[0].bounce_gap, 0.0);
+    EXPECT_DOUBLE_EQ(vct[0].reference_noise, FrameComparisons::kUncalibratedNoiseScale * 0.2 / 64.0);
+    // Their noise is recorded beside the frame's, as a ratio to the analysis' (0.5 per sample).
+    record_frame(measured, &analysis, DeviceCosts("test"), *four_bounces, 8, 8);
+    EXPECT_DOUBLE_EQ(*measured.noise_ratio(0), 0.0016 / 0.5);
+    EXPECT_DOUBLE_EQ(*measured.noise_ratio(1), 0.2 / 0.5);
+    EXPECT_DOUBLE_EQ(*measured.noise_ratio(4), 1.0);
+}
+
+// Against a bounce prefix, a frame's own error also counts where it meets the later bounces' light:
+// `direct` at 0.4 where the frame of no bounces is 0.5 and the later bounces bring it to 1.0 lacks
+// light where they add it, and its error against the whole (0.36 / 1.01) is more than the parts apart
+// (0.01 / 0.26 against the prefix, 0.25 / 1.01 of bounces). Recorded is what the error model must add
+// to the bounces' light to reach the whole: 0.11 / 1.01, less the prefix's noise.
+TEST(FrameComparisons, AgainstABouncePrefixTheOwnErrorCountsWhereItMeetsTheLaterBouncesLight) {
+    const SceneAnalysis analysis = made_up_analysis();
+    SceneMeasurements measured;
+    FrameComparisons comparisons;
+    comparisons.add(5, frame("direct", "high", {}, 0.4f), &analysis, measured);
+    auto prefix = std::make_shared<RenderResult>(*reference(64, 0.0016, {{"bounces", 0}}));
+    for (std::size_t i = 0; i < prefix->frame.rgba.size(); i += 4) {
+        for (int c = 0; c < 3; ++c) prefix->frame.rgba[i + c] = 0.5f;
+    }
+    auto whole = std::make_shared<RenderResult>(*reference(64, 0.5));
+    whole->byproducts = {prefix};
+    const auto made = comparisons.add(5, whole, &analysis, measured);
+    ASSERT_EQ(made.size(), 1u);
+    const double noise = FrameComparisons::kUncalibratedNoiseScale * 0.0016 / 64.0;
+    EXPECT_NEAR(made[0].rel_mse, 0.01 / 0.26, 1e-6);
+    EXPECT_NEAR(made[0].cross_term, 0.36 / 1.01 - 0.25 / 1.01 - 0.01 / 0.26, 1e-6);
+    EXPECT_NEAR(made[0].own_error, 0.11 / 1.01 - noise, 1e-6);
+    EXPECT_NEAR(measured.own_error("direct", "high", 0)->rel_mse, 0.11 / 1.01 - noise, 1e-6);
+    // A reference of no bounces on its own (no deeper frame of its paths): the parts apart.
+    SceneMeasurements alone;
+    FrameComparisons other;
+    other.add(6, frame("direct", "high", {}, 0.4f), &analysis, alone);
+    const auto apart = other.add(6, prefix, &analysis, alone);
+    ASSERT_EQ(apart.size(), 1u);
+    EXPECT_EQ(apart[0].cross_term, 0.0);
+    EXPECT_NEAR(apart[0].own_error, 0.01 / 0.26 - noise, 1e-6);
+}
+
 // Two reference frames of one view tell how much relMSE the noise statistic makes on the scene: here
 // the fewer-sample frame is off by +-0.3 in a checkerboard (relMSE 0.09 / 1.01 against the converged
 // one) while its statistic claimed 0.18 / 16 x 16 samples = 0.18: the scene's scale is a half, and it
@@ -256,6 +317,9 @@ TEST(FrameComparisons, TwoReferenceFramesOfAViewMeasureWhatTheirNoiseStatisticMa
     // scale too far (one bounce lacks 0.05 - 0.00625 = 0.044, 0.49 of 0.089).
     fewer_bounces->stats.knobs["bounces"] = 1;
     EXPECT_FALSE(FrameComparisons::calibrate_noise(*fewer_bounces, *reference(4096, 0.0), &analysis, other));
+    // Nor frames with next to no noise (a sun's direct light alone): they measured a scale of 0.
+    EXPECT_FALSE(FrameComparisons::calibrate_noise(*reference(16, 1e-4, {{"bounces", 0}}),
+                                                   *reference(64, 1e-4, {{"bounces", 0}}), &analysis, other));
     EXPECT_FALSE(other.noise_scale().has_value());
     // The scale is the largest of the last five measured: a target error is a promise. What a
     // comparison takes out of a GPU frame's relMSE is the smallest, for the same reason.
@@ -372,6 +436,15 @@ TEST(Probes, AProbeTheMissingLightWouldDrownGetsAReferenceOfItsOwnBounces) {
     EXPECT_EQ(tight[2].knobs.at("bounces"), 0.0);
     // Without the analysis, no companion is looked for.
     EXPECT_EQ(probes(all, chosen, nullptr).size(), 3u);
+    // Where the chosen reference brings its own frames of 0..3 bounces, their noise at its 256
+    // samples (0.54 x 0.5 / 256 = 0.001) is under each probe's own error: no companion is traced.
+    const auto with_prefixes = probes(all, chosen, nullptr, &analysis, 4);
+    ASSERT_EQ(with_prefixes.size(), 3u);
+    for (const Candidate& probe : with_prefixes) EXPECT_NE(probe.method, "reference");
+    // Prefixes of no bounces only (a large frame): vct's one-bounce probe still needs its companion.
+    const auto zero_only = probes(all, chosen, nullptr, &analysis, 1);
+    ASSERT_EQ(zero_only.size(), 4u);
+    EXPECT_EQ(zero_only[3].knobs.at("bounces"), 1.0);
 }
 
 TEST(Resolution, BilinearUpsamplingBetweenPixelCentres) {

@@ -261,6 +261,63 @@ TEST(ReferenceSampling, DeterministicAndProgressive) {
     EXPECT_NE(other_seed.rgba, once.rgba);
 }
 
+// A frame's bounce prefixes are exactly the frames of fewer bounces of the same seed and samples
+// (with their noise statistics), at no further rays: the same random numbers make the same paths,
+// and a path's light of bounce k is all added before it goes on. Five bounces, so that Russian
+// roulette (from the fourth vertex) and the Cornell box's area light (MIS) are on the way.
+TEST(ReferenceSampling, BouncePrefixesAreExactlyTheFramesOfFewerBounces) {
+    const scene::Scene scene = scene::make_cornell_box();
+    PathTracer tracer(scene);
+    PathTracerSettings settings;
+    settings.max_bounces = 5;
+    settings.seed = 7;
+    Accumulator accumulator(12, 12, 5);
+    tracer.render(accumulator, scene.cameras[0], 16, settings);
+    for (int k = 0; k < 5; ++k) {
+        PathTracerSettings fewer = settings;
+        fewer.max_bounces = k;
+        Accumulator alone(12, 12);
+        tracer.render(alone, scene.cameras[0], 16, fewer);
+        EXPECT_EQ(accumulator.prefix_frame(k).rgba, alone.frame().rgba) << k << " bounces";
+        EXPECT_EQ(accumulator.prefix_noise_per_sample(k), noise_per_sample(alone)) << k << " bounces";
+        EXPECT_NE(accumulator.prefix_frame(k).rgba, accumulator.frame().rgba) << k << " bounces";
+    }
+    EXPECT_EQ(accumulator.frame().rgba, tracer.render(scene.cameras[0], 12, 12, 16, settings).rgba);
+    // More prefixes than bounces, or prefixes of ambient occlusion, are refused.
+    Accumulator too_many(12, 12, 6);
+    EXPECT_THROW(tracer.render(too_many, scene.cameras[0], 1, settings), Error);
+    PathTracerSettings occlusion = settings;
+    occlusion.ambient_occlusion = true;
+    EXPECT_THROW(tracer.render(accumulator, scene.cameras[0], 1, occlusion), Error);
+    // Memory caps them: every prefix of 32 bounces at 256x256, the first alone at 1920x1080.
+    EXPECT_EQ(Accumulator::prefixes_that_fit(256, 256, 64), 32);
+    EXPECT_EQ(Accumulator::prefixes_that_fit(128, 128, 8), 8);
+    EXPECT_EQ(Accumulator::prefixes_that_fit(1920, 1080, 8), 1);
+    EXPECT_THROW(Accumulator(1920, 1080, 2), Error);
+}
+
+// The reference method hands the prefixes on as byproducts, each with its own knobs and noise.
+TEST(ReferenceSampling, TheMethodsByproductsAreItsFramesOfFewerBounces) {
+    const scene::Scene scene = scene::make_cornell_box();
+    ReferenceMethod method;
+    auto knobs = methods::MethodRegistry::builtin().resolve("reference", "draft", {{"bounces", 2}, {"spp", 8}, {"seed", 3}});
+    method.render({scene, scene.cameras[0], 10, 10, knobs});
+    const auto byproducts = method.take_byproducts();
+    ASSERT_EQ(byproducts.size(), 2u);
+    for (int k = 0; k < 2; ++k) {
+        auto fewer = knobs;
+        fewer["bounces"] = k;
+        EXPECT_EQ(byproducts[k].knobs, fewer);
+        ReferenceMethod alone;
+        EXPECT_EQ(byproducts[k].frame.rgba, alone.render({scene, scene.cameras[0], 10, 10, fewer}).rgba);
+        EXPECT_EQ(byproducts[k].statistics.at("noise_per_sample"), alone.statistics().at("noise_per_sample"));
+    }
+    EXPECT_TRUE(method.take_byproducts().empty());  // moved out
+    knobs["ao"] = 1;
+    method.render({scene, scene.cameras[0], 10, 10, knobs});
+    EXPECT_TRUE(method.take_byproducts().empty());
+}
+
 TEST(ReferenceSampling, MovedObjectsMatchAFreshBuild) {
     scene::Scene scene = scene::make_cornell_box();
     PathTracer tracer(scene);

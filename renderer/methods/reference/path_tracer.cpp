@@ -43,6 +43,61 @@ float luminance(const glm::vec3& c) { return 0.2126f * c.r + 0.7152f * c.g + 0.0
 // Per pixel in Accumulator::feature_sums_: albedo RGB, normal XYZ, depth, hits, luminance^2.
 constexpr std::size_t kFeatureFloats = 9;
 
+// The variance of a pixel's mean luminance over `samples` samples (the samples' variance over their
+// count), from the sums of their RGB and of their luminance squared.
+float mean_luminance_variance(const double* rgb_sum, double luminance2_sum, int samples) {
+    if (samples <= 1) return 0.0f;
+    const double n = samples;
+    const double mean = luminance(glm::vec3(rgb_sum[0] / n, rgb_sum[1] / n, rgb_sum[2] / n));
+    return static_cast<float>(std::max(luminance2_sum / n - mean * mean, 0.0) / (n - 1.0));
+}
+
+// The mean of `samples` samples per pixel from their RGB sums.
+image::Frame mean_frame(const double* sums, int width, int height, int samples) {
+    image::Frame frame;
+    frame.width = width;
+    frame.height = height;
+    frame.rgba.resize(static_cast<std::size_t>(width) * height * 4);
+    const double scale = samples > 0 ? 1.0 / samples : 0.0;
+    for (std::size_t i = 0; i < static_cast<std::size_t>(width) * height; ++i) {
+        for (int c = 0; c < 3; ++c) frame.rgba[i * 4 + c] = static_cast<float>(sums[i * 3 + c] * scale);
+        frame.rgba[i * 4 + 3] = 1.0f;
+    }
+    return frame;
+}
+
+// noise_per_sample (path_tracer.hpp) of a frame of `samples` samples whose pixels' mean luminance
+// has the variances `variance`.
+double noise_per_sample_of(const image::Frame& frame, const std::vector<float>& variance, int samples) {
+    const int width = frame.width, height = frame.height;
+    if (variance.empty() || width == 0 || height == 0) return 0.0;
+    std::vector<float> lum(static_cast<std::size_t>(width) * height);
+    for (std::size_t i = 0; i < lum.size(); ++i) {
+        lum[i] = luminance(glm::vec3(frame.rgba[4 * i], frame.rgba[4 * i + 1], frame.rgba[4 * i + 2]));
+    }
+    // Each pixel's variance over its value squared, as relMSE weighs it; the value is the median of
+    // its 3x3 neighbourhood, not its own mean: a pixel that met a rare bright path is bright because
+    // of it, and its own mean would hide the very variance it shows.
+    double sum = 0.0;
+    float window[9];
+    for (int y = 0; y < height; ++y) {
+        for (int x = 0; x < width; ++x) {
+            int n = 0;
+            for (int dy = -1; dy <= 1; ++dy) {
+                for (int dx = -1; dx <= 1; ++dx) {
+                    const int sx = std::clamp(x + dx, 0, width - 1), sy = std::clamp(y + dy, 0, height - 1);
+                    window[n++] = lum[static_cast<std::size_t>(sy) * width + sx];
+                }
+            }
+            std::nth_element(window, window + 4, window + 9);
+            const double value = window[4];
+            const std::size_t i = static_cast<std::size_t>(y) * width + x;
+            sum += variance[i] * samples / (value * value + 0.01);
+        }
+    }
+    return sum / static_cast<double>(lum.size());
+}
+
 struct Emitter {
     std::uint32_t object, primitive, triangle;
     glm::vec3 p0, p1, p2;
@@ -358,11 +413,22 @@ struct PathTracer::Impl {
     }
 
     // `first`, when given, receives the first hit's albedo, normal, distance and 1 (8 floats added).
+    // `prefixes`, when given, receives the path's radiance after each of its first `prefix_count`
+    // bounce counts: prefixes[k] is exactly what trace() with max_bounces = k returns for the same
+    // random numbers, since the light of bounce k (next-event estimation at vertex k and the emission
+    // its BRDF-sampled ray finds) is all added before the path decides to go on.
     glm::vec3 trace(glm::vec3 origin, glm::vec3 direction, int max_bounces, bool indirect_visibility,
-                    Random& random, float* first = nullptr) const {
+                    Random& random, float* first = nullptr, glm::vec3* prefixes = nullptr, int prefix_count = 0) const {
         glm::vec3 radiance(0.0f), throughput(1.0f);
+        const int prefixes_wanted = prefixes ? prefix_count : 0;
+        int prefixes_done = 0;
+        // Where the path ends, the bounce counts not yet written have all of its light.
+        const auto finish = [&] {
+            for (; prefixes_done < prefixes_wanted; ++prefixes_done) prefixes[prefixes_done] = radiance;
+            return radiance;
+        };
         SurfaceHit hit;
-        if (!intersect_from_camera(origin, direction, hit)) return radiance;
+        if (!intersect_from_camera(origin, direction, hit)) return finish();
         if (first) {
             const float values[8] = {hit.material.base_color.r, hit.material.base_color.g, hit.material.base_color.b,
                                      hit.shading_normal.x,      hit.shading_normal.y,      hit.shading_normal.z,
@@ -392,6 +458,7 @@ struct PathTracer::Impl {
             if (glm::dot(next.emitted, glm::vec3(1.0f)) > 0.0f) {
                 radiance += throughput * next.emitted * emission_weight(hit, next, direction, sample.pdf);
             }
+            if (prefixes_done < prefixes_wanted) prefixes[prefixes_done++] = radiance;  // bounce `bounce` is complete
             if (bounce >= max_bounces) break;
             hit = next;
             if (bounce >= 2) {
@@ -401,14 +468,26 @@ struct PathTracer::Impl {
                 throughput /= keep;
             }
         }
-        return radiance;
+        return finish();
     }
 };
 
-Accumulator::Accumulator(int width, int height)
-    : width_(width), height_(height), sums_(static_cast<std::size_t>(width) * static_cast<std::size_t>(height) * 3, 0.0),
+Accumulator::Accumulator(int width, int height, int bounce_prefixes)
+    : width_(width), height_(height), bounce_prefixes_(bounce_prefixes),
+      sums_(static_cast<std::size_t>(width) * static_cast<std::size_t>(height) * 3, 0.0),
       feature_sums_(static_cast<std::size_t>(width) * static_cast<std::size_t>(height) * kFeatureFloats, 0.0f) {
     BOUNCE_CHECK(width > 0 && height > 0, "accumulator size {}x{}", width, height);
+    BOUNCE_CHECK(bounce_prefixes >= 0, "accumulator with {} bounce prefixes", bounce_prefixes);
+    const std::size_t values = static_cast<std::size_t>(width) * height * bounce_prefixes;
+    BOUNCE_CHECK(values <= kMaxPrefixValues, "{}x{} pixels with {} bounce prefixes: over {} pixel-prefixes", width,
+                 height, bounce_prefixes, kMaxPrefixValues);
+    prefix_sums_.assign(values * 3, 0.0);
+    prefix_luminance2_.assign(values, 0.0f);
+}
+
+int Accumulator::prefixes_that_fit(int width, int height, int max_bounces) {
+    const std::size_t pixels = static_cast<std::size_t>(std::max(width, 1)) * std::max(height, 1);
+    return static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(std::max(max_bounces, 0)), kMaxPrefixValues / pixels));
 }
 
 PixelFeatures Accumulator::features() const {
@@ -429,26 +508,36 @@ PixelFeatures Accumulator::features() const {
         features.normal[i] = glm::vec3(sum[3], sum[4], sum[5]) * per_hit;
         features.depth[i] = sum[6] * per_hit;
         features.coverage[i] = samples_ > 0 ? hits / static_cast<float>(samples_) : 0.0f;
-        if (samples_ > 1) {
-            const double n = samples_;
-            const double mean = luminance(glm::vec3(sums_[i * 3] / n, sums_[i * 3 + 1] / n, sums_[i * 3 + 2] / n));
-            features.variance[i] = static_cast<float>(std::max(sum[8] / n - mean * mean, 0.0) / (n - 1.0));
-        }
+        features.variance[i] = mean_luminance_variance(&sums_[i * 3], sum[8], samples_);
     }
     return features;
 }
 
-image::Frame Accumulator::frame() const {
-    image::Frame frame;
-    frame.width = width_;
-    frame.height = height_;
-    frame.rgba.resize(static_cast<std::size_t>(width_) * height_ * 4);
-    const double scale = samples_ > 0 ? 1.0 / samples_ : 0.0;
-    for (std::size_t i = 0; i < static_cast<std::size_t>(width_) * height_; ++i) {
-        for (int c = 0; c < 3; ++c) frame.rgba[i * 4 + c] = static_cast<float>(sums_[i * 3 + c] * scale);
-        frame.rgba[i * 4 + 3] = 1.0f;
+image::Frame Accumulator::frame() const { return mean_frame(sums_.data(), width_, height_, samples_); }
+
+std::vector<double> Accumulator::prefix_sums(int bounces) const {
+    BOUNCE_CHECK(bounces >= 0 && bounces < bounce_prefixes_, "bounce prefix {} of {}", bounces, bounce_prefixes_);
+    const std::size_t pixels = static_cast<std::size_t>(width_) * height_;
+    std::vector<double> sums(pixels * 3);
+    for (std::size_t i = 0; i < pixels; ++i) {
+        const double* from = &prefix_sums_[(i * bounce_prefixes_ + bounces) * 3];
+        std::copy(from, from + 3, &sums[i * 3]);
     }
-    return frame;
+    return sums;
+}
+
+image::Frame Accumulator::prefix_frame(int bounces) const {
+    return mean_frame(prefix_sums(bounces).data(), width_, height_, samples_);
+}
+
+double Accumulator::prefix_noise_per_sample(int bounces) const {
+    const std::vector<double> sums = prefix_sums(bounces);
+    const std::size_t pixels = static_cast<std::size_t>(width_) * height_;
+    std::vector<float> variance(pixels);
+    for (std::size_t i = 0; i < pixels; ++i) {
+        variance[i] = mean_luminance_variance(&sums[i * 3], prefix_luminance2_[i * bounce_prefixes_ + bounces], samples_);
+    }
+    return noise_per_sample_of(mean_frame(sums.data(), width_, height_, samples_), variance, samples_);
 }
 
 PathTracer::PathTracer(const scene::Scene& scene) : impl_(std::make_unique<Impl>(scene)) {}
@@ -467,14 +556,22 @@ void PathTracer::render(Accumulator& accumulator, const scene::Camera& camera, i
     const glm::mat4 inverse = glm::inverse(camera.projection(aspect, camera.far_plane_for(impl_->scene.world_bounds())) *
                                            camera.view());
     const int first_sample = accumulator.samples_;
+    const int prefix_count = accumulator.bounce_prefixes_;
+    BOUNCE_CHECK(prefix_count == 0 || (prefix_count <= settings.max_bounces && settings.indirect_visibility &&
+                                       !settings.ambient_occlusion),
+                 "{} bounce prefixes of a frame of {} bounces{}", prefix_count, settings.max_bounces,
+                 settings.ambient_occlusion ? " of ambient occlusion" : !settings.indirect_visibility ? " without indirect visibility" : "");
     impl_->arena.execute([&] {
         tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
+            std::vector<glm::vec3> prefixes(static_cast<std::size_t>(prefix_count));
+            std::vector<glm::dvec3> prefix_batch(static_cast<std::size_t>(prefix_count), glm::dvec3(0.0));
             for (int y = rows.begin(); y < rows.end(); ++y) {
                 for (int x = 0; x < width; ++x) {
                     if (cancelled && cancelled->load(std::memory_order_relaxed)) return;
                     const std::uint64_t pixel = static_cast<std::uint64_t>(y) * width + x;
                     glm::dvec3 sum(0.0);
                     float* first = &accumulator.feature_sums_[pixel * kFeatureFloats];
+                    float* prefix_luminance2 = accumulator.prefix_luminance2_.data() + pixel * prefix_count;
                     for (int s = first_sample; s < first_sample + count; ++s) {
                         Random random(settings.seed, pixel, static_cast<std::uint64_t>(s));
                         const float jx = random.next(), jy = random.next();
@@ -487,12 +584,29 @@ void PathTracer::render(Accumulator& accumulator, const scene::Camera& camera, i
                             settings.ambient_occlusion
                                 ? glm::vec3(impl_->ambient_occlusion(camera.position, direction, settings.ao_lambda, random))
                                 : impl_->trace(camera.position, direction, settings.max_bounces,
-                                               settings.indirect_visibility, random, first);
+                                               settings.indirect_visibility, random, first, prefixes.data(),
+                                               prefix_count);
                         // A non-finite sample would poison the pixel forever: it is dropped (counted as 0).
-                        if (std::isfinite(radiance.r) && std::isfinite(radiance.g) && std::isfinite(radiance.b)) {
+                        const auto finite = [](const glm::vec3& c) {
+                            return std::isfinite(c.r) && std::isfinite(c.g) && std::isfinite(c.b);
+                        };
+                        if (finite(radiance)) {
                             sum += glm::dvec3(radiance);
                             first[8] += luminance(radiance) * luminance(radiance);
                         }
+                        // Each prefix summed as its own frame would sum it, in the same order.
+                        for (int k = 0; k < prefix_count; ++k) {
+                            if (!finite(prefixes[k])) continue;
+                            prefix_batch[k] += glm::dvec3(prefixes[k]);
+                            prefix_luminance2[k] += luminance(prefixes[k]) * luminance(prefixes[k]);
+                        }
+                    }
+                    for (int k = 0; k < prefix_count; ++k) {
+                        double* prefix_sum = &accumulator.prefix_sums_[(pixel * prefix_count + k) * 3];
+                        prefix_sum[0] += prefix_batch[k].x;
+                        prefix_sum[1] += prefix_batch[k].y;
+                        prefix_sum[2] += prefix_batch[k].z;
+                        prefix_batch[k] = glm::dvec3(0.0);
                     }
                     double* out = &accumulator.sums_[pixel * 3];
                     out[0] += sum.x;
@@ -514,35 +628,7 @@ image::Frame PathTracer::render(const scene::Camera& camera, int width, int heig
 }
 
 double noise_per_sample(const Accumulator& accumulator) {
-    const PixelFeatures features = accumulator.features();
-    const image::Frame frame = accumulator.frame();
-    const int width = frame.width, height = frame.height;
-    if (features.variance.empty() || width == 0 || height == 0) return 0.0;
-    std::vector<float> lum(static_cast<std::size_t>(width) * height);
-    for (std::size_t i = 0; i < lum.size(); ++i) {
-        lum[i] = luminance(glm::vec3(frame.rgba[4 * i], frame.rgba[4 * i + 1], frame.rgba[4 * i + 2]));
-    }
-    // Each pixel's variance over its value squared, as relMSE weighs it; the value is the median of
-    // its 3x3 neighbourhood, not its own mean: a pixel that met a rare bright path is bright because
-    // of it, and its own mean would hide the very variance it shows.
-    double sum = 0.0;
-    float window[9];
-    for (int y = 0; y < height; ++y) {
-        for (int x = 0; x < width; ++x) {
-            int n = 0;
-            for (int dy = -1; dy <= 1; ++dy) {
-                for (int dx = -1; dx <= 1; ++dx) {
-                    const int sx = std::clamp(x + dx, 0, width - 1), sy = std::clamp(y + dy, 0, height - 1);
-                    window[n++] = lum[static_cast<std::size_t>(sy) * width + sx];
-                }
-            }
-            std::nth_element(window, window + 4, window + 9);
-            const double value = window[4];
-            const std::size_t i = static_cast<std::size_t>(y) * width + x;
-            sum += features.variance[i] * accumulator.samples() / (value * value + 0.01);
-        }
-    }
-    return sum / static_cast<double>(lum.size());
+    return noise_per_sample_of(accumulator.frame(), accumulator.features().variance, accumulator.samples());
 }
 
 }  // namespace bounce::methods::reference

@@ -6,6 +6,8 @@
 //   and combined with BRDF sampling by multiple importance sampling (power heuristic).
 // - max_bounces counts indirect bounces: 0 is direct light only (emission plus one reflection of
 //   every light), as `direct` renders; k adds k further reflections.
+// - Frames of fewer bounces come with a frame at no further rays (Accumulator's bounce prefixes):
+//   the planner compares GPU methods with the reference of their own bounce count.
 // - Russian roulette from the fourth vertex on; deterministic for a seed: sample s of pixel p uses
 //   random numbers derived from (seed, p, s) alone, so rendering samples 0..N and then N..M gives
 //   exactly the image of 0..M at once (progressive refinement).
@@ -21,6 +23,7 @@
 #include "renderer/scene/scene.hpp"
 
 #include <atomic>
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -61,23 +64,39 @@ struct PixelFeatures {
 };
 
 // Running sums of radiance samples per pixel; frame() gives their mean, features() the mean of
-// what the camera rays first met.
+// what the camera rays first met. With `bounce_prefixes` = P, also the sums of the same paths
+// stopped after each of 0..P-1 bounces: prefix_frame(k) is exactly the frame that the same seed and
+// samples give with max_bounces = k, at no further rays (path_tracer.cpp, trace()). P must not
+// exceed the frame's max_bounces; prefixes_that_fit() caps it by memory.
 class Accumulator {
 public:
-    Accumulator(int width, int height);
+    Accumulator(int width, int height, int bounce_prefixes = 0);
     int width() const { return width_; }
     int height() const { return height_; }
     int samples() const { return samples_; }
+    int bounce_prefixes() const { return bounce_prefixes_; }
     image::Frame frame() const;
     PixelFeatures features() const;
+    image::Frame prefix_frame(int bounces) const;
+    double prefix_noise_per_sample(int bounces) const;  // noise_per_sample() of prefix_frame(bounces)
+
+    // Pixels times prefixes kept at most: 28 bytes each, 56 MiB (every prefix of 32 bounces at
+    // 256x256; at 1920x1080, the frame without bounces alone).
+    static constexpr std::size_t kMaxPrefixValues = std::size_t{1} << 21;
+    // The prefixes of a frame of `max_bounces` bounces that fit kMaxPrefixValues, fewest bounces first.
+    static int prefixes_that_fit(int width, int height, int max_bounces);
 
 private:
     friend class PathTracer;
     int width_;
     int height_;
+    int bounce_prefixes_;
     int samples_ = 0;
     std::vector<double> sums_;  // RGB per pixel
     std::vector<float> feature_sums_;  // per pixel: albedo RGB, normal XYZ, depth, hits, luminance^2
+    std::vector<double> prefix_sums(int bounces) const;  // one prefix's RGB per pixel
+    std::vector<double> prefix_sums_;  // per pixel, per prefix: RGB
+    std::vector<float> prefix_luminance2_;  // per pixel, per prefix
 };
 
 // The mean over pixels of one sample's luminance variance over (luminance^2 + 0.01), the luminance

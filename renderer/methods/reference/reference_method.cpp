@@ -51,11 +51,24 @@ ReferenceRequest request_from_knobs(const methods::KnobValues& knobs) {
 image::Frame ReferenceMethod::render(const CpuFrameContext& frame) {
     const ReferenceRequest request = request_from_knobs(frame.knobs);
     const PathTracer tracer(frame.scene);
-    Accumulator accumulator(frame.width, frame.height);
+    const bool plain = !request.settings.ambient_occlusion && request.settings.indirect_visibility;
+    Accumulator accumulator(frame.width, frame.height,
+                            plain ? Accumulator::prefixes_that_fit(frame.width, frame.height, request.settings.max_bounces) : 0);
     tracer.render(accumulator, frame.camera, request.spp, request.settings, frame.cancelled);
     rays_traced_ = tracer.rays_traced();
     spp_ = request.spp;
     noise_per_sample_ = noise_per_sample(accumulator);
+    byproducts_.clear();
+    for (int bounces = 0; bounces < accumulator.bounce_prefixes(); ++bounces) {
+        methods::KnobValues knobs = frame.knobs;
+        knobs["bounces"] = bounces;
+        knobs["denoise"] = 0;  // the prefixes are never filtered
+        byproducts_.push_back({accumulator.prefix_frame(bounces), std::move(knobs),
+                               {{"rays_traced", 0.0},
+                                {"samples_per_pixel", static_cast<double>(spp_)},
+                                {"denoise_ms", 0.0},
+                                {"noise_per_sample", accumulator.prefix_noise_per_sample(bounces)}}});
+    }
     denoise_ms_ = 0.0;
     if (!request.denoise) return accumulator.frame();
     const auto start = std::chrono::steady_clock::now();
