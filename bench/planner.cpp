@@ -242,6 +242,7 @@ int main(int argc, char** argv) {
                 row.predicted_ms = plan.chosen.predicted_ms;
                 row.predicted_error = plan.chosen.predicted_error;
                 row.why = plan.why;
+                log::info("bench", "{} pass {}, {}: {}", bench_scene.name, pass, text, plan.why);
                 row.planned = render_plan(renderer, *resources, scene, analysis, device, costs, plan.chosen.method,
                                           plan.chosen.preset, plan.chosen.knobs, options.size, truth, &comparisons,
                                           plan.chosen.scale);
