@@ -40,7 +40,9 @@ struct Comparison {
     // relMSE(frame, deeper) - relMSE(reference, deeper) - rel_mse, what the frame's error adds to the
     // light of the later bounces beyond their sum (negative where the frame adds light where they do).
     double cross_term = 0.0;
-    double own_error = 0.0;        // what was recorded: rel_mse - reference_noise - bounce_gap + cross_term
+    // What was recorded: rel_mse - reference_noise - bounce_gap + cross_term; against a reference of
+    // fewer bounces than the frame, (sqrt of that + sqrt of the light the reference lacks)^2.
+    double own_error = 0.0;
 };
 
 class FrameComparisons {
@@ -90,6 +92,8 @@ public:
     // (1.0) took out twice the noise there was in the furnished room, and promised cssm draft 0.044
     // where it measures 0.052.
     static constexpr double kUncalibratedNoiseScale = 0.54;
+    // The most of a comparison's relMSE that the reference's expected noise may be (compare()).
+    static constexpr double kMaxNoiseShare = 0.25;
 
 private:
     // The kept reference of the most bounces whose byproduct `reference` is; null if none.
