@@ -260,7 +260,7 @@ std::optional<SceneMeasurements::OwnError> SceneMeasurements::own_error(const st
     }
     std::optional<OwnError> found;
     for (const auto& [key, kept] : own_errors_) {
-        if (std::get<0>(key) != method || std::get<1>(key) != preset || kept.empty()) continue;
+        if (std::get<0>(key) != method || std::get<1>(key) != preset || std::get<2>(key) < bounces || kept.empty()) continue;
         if (!found) found = OwnError{0.0, 0, false};
         found->rel_mse = std::max(found->rel_mse, *std::max_element(kept.begin(), kept.end()));
         found->frames += static_cast<int>(kept.size());
@@ -268,11 +268,11 @@ std::optional<SceneMeasurements::OwnError> SceneMeasurements::own_error(const st
     return found;
 }
 
-std::map<std::string, double> SceneMeasurements::own_errors(const std::string& method) const {
+std::map<std::string, double> SceneMeasurements::own_errors(const std::string& method, int at_least_bounces) const {
     const std::lock_guard lock(mutex_);
     std::map<std::string, double> largest;
     for (const auto& [key, kept] : own_errors_) {
-        if (std::get<0>(key) != method || kept.empty()) continue;
+        if (std::get<0>(key) != method || std::get<2>(key) < at_least_bounces || kept.empty()) continue;
         double& value = largest[std::get<1>(key)];
         value = std::max(value, *std::max_element(kept.begin(), kept.end()));
     }

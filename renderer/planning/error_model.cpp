@@ -52,7 +52,7 @@ std::pair<double, std::string> own_error(const std::string& method, const std::s
     }
     const auto& order = methods::preset_names();
     const auto rank = [&](const std::string& name) { return std::find(order.begin(), order.end(), name) - order.begin(); };
-    const std::map<std::string, double> measured_presets = measured->own_errors(method);
+    const std::map<std::string, double> measured_presets = measured->own_errors(method, bounces);
     const std::pair<const std::string, double>* cheaper = nullptr;
     std::vector<double> ratios;
     for (const auto& entry : measured_presets) {

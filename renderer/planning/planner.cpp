@@ -249,35 +249,26 @@ std::vector<Candidate> probes(const std::vector<Candidate>& all, const Candidate
     // Only full-size frames are compared: an upsampled one's error is not its method's.
     if (chosen.method != "reference" || chosen.scale != 1.0) return {};
     const double share_ms = kProbeShare * chosen.predicted_ms;
-    // Per preset, the most accurate plan that fits the share alone (for cssm, the most bounces): a
-    // comparison tells a frame's own error only where the bounces it lacks do not drown it.
-    std::vector<const Candidate*> cheapest;
-    for (const Candidate& c : all) {
-        if (c.method == "reference" || c.scale != 1.0 || c.predicted_ms > share_ms) continue;
-        if (scene && scene->compared(c.method, c.preset)) continue;  // probed, or compared otherwise
-        const auto same = std::find_if(cheapest.begin(), cheapest.end(), [&](const Candidate* other) {
-            return other->method == c.method && other->preset == c.preset;
-        });
-        if (same == cheapest.end()) cheapest.push_back(&c);
-        else if (more_accurate(c, **same)) *same = &c;
-    }
-    std::sort(cheapest.begin(), cheapest.end(), [](const Candidate* a, const Candidate* b) { return faster(*a, *b); });
     // Companions. A probe is compared only where the reference's noise and the light of the bounces
     // the probe lacks (both predicted) come to less than its own error (FrameComparisons::compare);
     // where they would not, a reference of the probe's own bounce count has no such light, and the
-    // cheapest one whose noise is under half that own error measures it. A probe that needs one goes
+    // cheapest one whose noise is at most a third of that own error (a quarter of the relMSE,
+    // FrameComparisons::kMaxNoiseShare) measures it. A probe that needs one goes
     // with it or not at all: alone, its comparison would be dropped.
     const auto stopped = [&](int bounces) {
         return analysis ? BounceEnergy::at(analysis->bounces.stopped_error, bounces) : 0.0;
     };
     const int chosen_bounces = modelled_bounces(chosen.method, chosen.knobs);
     const double chosen_noise = chosen.predicted_error - stopped(chosen_bounces);
+    const auto max_noise = [](double own) {
+        return own * FrameComparisons::kMaxNoiseShare / (1.0 - FrameComparisons::kMaxNoiseShare);
+    };
     const auto companion_for = [&](int bounces, double own) -> const Candidate* {
         const Candidate* companion = nullptr;
         for (const Candidate& c : all) {
             if (c.method != "reference" || c.scale != 1.0 || modelled_bounces(c.method, c.knobs) != bounces) continue;
             if (methods::knob_or(c.knobs, "spp", 0.0) < FrameComparisons::kMinReferenceSpp) continue;
-            if (c.predicted_error - stopped(bounces) >= 0.5 * own) continue;
+            if (c.predicted_error - stopped(bounces) > max_noise(own)) continue;
             if (!companion || c.predicted_ms < companion->predicted_ms) companion = &c;
         }
         return companion;
@@ -291,6 +282,29 @@ std::vector<Candidate> probes(const std::vector<Candidate>& all, const Candidate
         knobs["bounces"] = bounces;
         return predict_error(*analysis, "reference", chosen.preset, knobs, scene).rel_mse - stopped(bounces);
     };
+    const auto prefix_measures = [&](const Candidate& c) {
+        const int bounces = modelled_bounces(c.method, c.knobs);
+        const auto noise = prefix_noise(bounces);
+        return noise && *noise <= max_noise(c.predicted_error - stopped(bounces));
+    };
+    // Per preset, the most accurate plan that fits the share alone (for cssm, the most bounces): a
+    // comparison tells a frame's own error only where the bounces it lacks do not drown it.
+    std::vector<const Candidate*> cheapest;
+    for (const Candidate& c : all) {
+        if (c.method == "reference" || c.scale != 1.0 || c.predicted_ms > share_ms) continue;
+        // Probed, or compared otherwise; unless nothing was learned (the reference's noise drowned
+        // it) and this reference's own frame of its bounce count is quiet enough to measure it.
+        if (scene && scene->compared(c.method, c.preset) &&
+            (scene->own_errors(c.method).count(c.preset) > 0 || !prefix_measures(c))) {
+            continue;
+        }
+        const auto same = std::find_if(cheapest.begin(), cheapest.end(), [&](const Candidate* other) {
+            return other->method == c.method && other->preset == c.preset;
+        });
+        if (same == cheapest.end()) cheapest.push_back(&c);
+        else if (more_accurate(c, **same)) *same = &c;
+    }
+    std::sort(cheapest.begin(), cheapest.end(), [](const Candidate* a, const Candidate* b) { return faster(*a, *b); });
     std::vector<Candidate> chosen_probes, companions;
     std::set<int> accompanied;  // bounce counts with a companion
     double total_ms = 0.0;
@@ -298,9 +312,10 @@ std::vector<Candidate> probes(const std::vector<Candidate>& all, const Candidate
         const int bounces = modelled_bounces(c->method, c->knobs);
         const double own = c->predicted_error - stopped(bounces);
         const auto own_prefix = prefix_noise(bounces);
+        const bool whole_measures = chosen_noise <= max_noise(own) &&
+                                    chosen_noise + stopped(bounces) - stopped(chosen_bounces) < own;
         const bool needs_companion = analysis && bounces < chosen_bounces && !accompanied.contains(bounces) &&
-                                     !(own_prefix && *own_prefix < own) &&
-                                     chosen_noise + stopped(bounces) - stopped(chosen_bounces) >= own;
+                                     !(own_prefix && *own_prefix <= max_noise(own)) && !whole_measures;
         const Candidate* companion = needs_companion ? companion_for(bounces, own) : nullptr;
         if (needs_companion && !companion) continue;
         const double ms = c->predicted_ms + (companion ? companion->predicted_ms : 0.0);

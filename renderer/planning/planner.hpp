@@ -57,11 +57,14 @@ struct Plan {
 // as much as a reference frame, and a smaller share let none fit on the bench corpus, so a GPU
 // method's error there was never learned. A preset is probed once per scene, and each one that then
 // meets a later budget saves a reference frame on every such request: the probes may take as long as
-// the reference plan itself. None when the chosen plan is not the reference.
+// the reference plan itself. A preset compared without its error learned (the reference's noise
+// drowned it) is probed again beside a reference whose own frame of its bounce count is predicted
+// quiet enough to measure it. None when the chosen plan is not the reference.
 // With the scene's analysis, the probes also hold companions, reference plans (method "reference"),
 // last: where a probe lacks bounces whose light, with the chosen reference's noise, would drown its
 // own error in the comparison, the cheapest reference of the probe's bounce count (at least 16
-// samples, its noise under half that own error); such a probe is taken with its companion within
+// samples, its noise at most a third of that own error, FrameComparisons::kMaxNoiseShare of the
+// relMSE); such a probe is taken with its companion within
 // the share, or not at all. Companions render on CPU threads after the frame is sent. A probe needs
 // none where the chosen reference's own frame of the probe's bounce count (its bounce prefix, below
 // `prefix_bounces`: methods::reference::Accumulator) is predicted to leave it measurable.

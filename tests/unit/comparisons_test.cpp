@@ -51,7 +51,7 @@ std::shared_ptr<const RenderResult> reference(double spp, double noise_per_sampl
     return frame("reference", "medium", more, 1.0f, noise_per_sample);
 }
 
-TEST(OwnError, TheLargestOfTheLastComparisonsAtABounceCountElseAtThePresetsOthers) {
+TEST(OwnError, TheLargestOfTheLastComparisonsAtABounceCountElseAtThePresetsLargerOnes) {
     SceneMeasurements measured;
     measured.record_own_error("cssm", "low", 2, 0.03);
     measured.record_own_error("cssm", "low", 2, 0.05);
@@ -66,12 +66,19 @@ TEST(OwnError, TheLargestOfTheLastComparisonsAtABounceCountElseAtThePresetsOther
     const auto at_4 = measured.own_error("cssm", "low", 4);
     EXPECT_DOUBLE_EQ(at_4->rel_mse, 0.02);
     EXPECT_EQ(at_4->frames, 1);
-    const auto at_3 = measured.own_error("cssm", "low", 3);  // not measured: the preset's largest
-    EXPECT_DOUBLE_EQ(at_3->rel_mse, 0.05);
-    EXPECT_EQ(at_3->frames, 3);
+    // Not measured: the largest at the preset's larger bounce counts (each bounce adds its error).
+    const auto at_3 = measured.own_error("cssm", "low", 3);
+    EXPECT_DOUBLE_EQ(at_3->rel_mse, 0.02);
+    EXPECT_EQ(at_3->frames, 1);
     EXPECT_FALSE(at_3->exact);
+    const auto at_1 = measured.own_error("cssm", "low", 1);
+    EXPECT_DOUBLE_EQ(at_1->rel_mse, 0.05);
+    EXPECT_EQ(at_1->frames, 3);
+    EXPECT_FALSE(measured.own_error("cssm", "low", 5));  // fewer bounces do not tell more
     EXPECT_FALSE(measured.own_error("cssm", "high", 2));
     EXPECT_EQ(measured.own_errors("cssm"), (std::map<std::string, double>{{"low", 0.05}}));
+    EXPECT_EQ(measured.own_errors("cssm", 3), (std::map<std::string, double>{{"low", 0.02}}));
+    EXPECT_TRUE(measured.own_errors("cssm", 5).empty());
     // Only the last kKept are kept.
     for (std::size_t i = 0; i < SceneMeasurements::kKept; ++i) measured.record_own_error("cssm", "low", 2, 0.01);
     EXPECT_DOUBLE_EQ(measured.own_error("cssm", "low", 2)->rel_mse, 0.01);
@@ -85,9 +92,10 @@ TEST(OwnError, TheErrorModelUsesWhatTheSceneMeasuredAndNeverPredictsACostlierPre
     const ErrorPrediction low = predict_error(analysis, "cssm", "low", {{"bounces", 2}}, &measured);
     EXPECT_DOUBLE_EQ(low.rel_mse, 0.1 / 4.0 + 0.25 * prior_low);
     EXPECT_NE(low.basis.find("1 comparison with this scene's reference frames"), std::string::npos) << low.basis;
-    // Net of bounces: the same own error at another count.
-    EXPECT_DOUBLE_EQ(predict_error(analysis, "cssm", "low", {{"bounces", 6}}, &measured).rel_mse,
-                     0.1 / 64.0 + 0.25 * prior_low);
+    // Net of bounces: the same own error at fewer bounces; at more, not measured (the prior).
+    EXPECT_DOUBLE_EQ(predict_error(analysis, "cssm", "low", {{"bounces", 1}}, &measured).rel_mse,
+                     0.1 / 2.0 + 0.25 * prior_low);
+    EXPECT_DOUBLE_EQ(predict_error(analysis, "cssm", "low", {{"bounces", 6}}, &measured).rel_mse, 0.1 / 64.0 + prior_low);
     // A costlier preset of the method: no better than the cheaper one measured.
     const ErrorPrediction medium = predict_error(analysis, "cssm", "medium", {{"bounces", 2}}, &measured);
     EXPECT_DOUBLE_EQ(medium.rel_mse, 0.1 / 4.0 + 0.25 * prior_low);
@@ -442,8 +450,9 @@ TEST(Probes, AProbeTheMissingLightWouldDrownGetsAReferenceOfItsOwnBounces) {
     };
     for (const int bounces : {0, 1}) {
         for (const int spp : {8, 16, 32, 64}) {
-            // Noise 0.08 / spp: at no bounces, 16 spp (0.005) is under half of 0.012; at one, 16 spp
-            // (0.005) is under half of 0.03 too; 8 spp is never a companion (under 16 samples).
+            // Noise 0.08 / spp, at most a third of the own error: at no bounces 32 spp (0.0025; 16
+            // spp's 0.005 is over 0.012 / 3); at one, 16 spp (0.005, under 0.03 / 3); 8 spp is never
+            // a companion (under 16 samples).
             all.push_back(candidate("reference", "medium", {{"spp", spp}, {"bounces", bounces}}, 2.0 * spp * (bounces + 1),
                                     stopped(bounces) + 0.08 / spp));
         }
@@ -452,13 +461,13 @@ TEST(Probes, AProbeTheMissingLightWouldDrownGetsAReferenceOfItsOwnBounces) {
     ASSERT_EQ(chosen_probes.size(), 5u);
     EXPECT_EQ(chosen_probes[3].method, "reference");
     EXPECT_EQ(chosen_probes[3].knobs.at("bounces"), 0.0);
-    EXPECT_EQ(chosen_probes[3].knobs.at("spp"), 16.0);
+    EXPECT_EQ(chosen_probes[3].knobs.at("spp"), 32.0);
     EXPECT_EQ(chosen_probes[4].knobs.at("bounces"), 1.0);
     EXPECT_EQ(chosen_probes[4].knobs.at("spp"), 16.0);
     // A probe whose companion does not fit the share is not taken either: alone, its comparison would
-    // be dropped. In 95 ms: direct and its 32 ms companion, then cssm; vct with its 64 ms one would pass.
+    // be dropped. In 100 ms: direct and its 64 ms companion, then cssm; vct with its 64 ms one would pass.
     Candidate cheap_reference = chosen;
-    cheap_reference.predicted_ms = 5.0 + 20.0 + 30.0 + 40.0;
+    cheap_reference.predicted_ms = 5.0 + 64.0 + 30.0 + 1.0;
     const auto tight = probes(all, cheap_reference, nullptr, &analysis);
     ASSERT_EQ(tight.size(), 3u);
     EXPECT_EQ(tight[0].method, "direct");
@@ -471,6 +480,18 @@ TEST(Probes, AProbeTheMissingLightWouldDrownGetsAReferenceOfItsOwnBounces) {
     const auto with_prefixes = probes(all, chosen, nullptr, &analysis, 4);
     ASSERT_EQ(with_prefixes.size(), 3u);
     for (const Candidate& probe : with_prefixes) EXPECT_NE(probe.method, "reference");
+    // direct compared before without its error learned (noise drowned it): probed again beside this
+    // reference, whose frame of no bounces measures it; once learned, not again.
+    SceneMeasurements drowned;
+    drowned.record_compared("direct", "high");
+    const auto again = probes(all, chosen, &drowned, &analysis, 4);
+    EXPECT_TRUE(std::any_of(again.begin(), again.end(), [](const Candidate& c) { return c.method == "direct"; }));
+    const auto without_prefixes = probes(all, chosen, &drowned, &analysis, 0);
+    EXPECT_TRUE(std::none_of(without_prefixes.begin(), without_prefixes.end(),
+                             [](const Candidate& c) { return c.method == "direct"; }));
+    drowned.record_own_error("direct", "high", 0, 0.012);
+    const auto learned = probes(all, chosen, &drowned, &analysis, 4);
+    EXPECT_TRUE(std::none_of(learned.begin(), learned.end(), [](const Candidate& c) { return c.method == "direct"; }));
     // Prefixes of no bounces only (a large frame): vct's one-bounce probe still needs its companion.
     const auto zero_only = probes(all, chosen, nullptr, &analysis, 1);
     ASSERT_EQ(zero_only.size(), 4u);
