@@ -1,6 +1,7 @@
 // Tools for shader faults a driver may hide: the bounds-checked build (renderer/gpu/bounds_check.hpp)
 // and float additions from many threads (common/float_atomics.glsl), both ways the device may run them.
 #include "gpu_fixture.hpp"
+#include "vct_flag_pass.hpp"
 #include "renderer/gpu/bounds_check.hpp"
 #include "renderer/gpu/shader_program.hpp"
 
@@ -92,21 +93,11 @@ TEST(Shaders, BoundsCheckedProgramsReportTheFirstOutOfBoundsAccess) {
         shaders.get(gpu::ProgramSource::compute_shader("vct/flag_nodes.comp", {gpu::kBoundsCheckDefine}));
     gpu::BoundsCheckBuffer checks(BOUNCE_BINDING_BOUNDS_CHECK);
     checks.bind();
-    const gpu::Buffer fragments = gpu::storage_of(std::vector<std::uint32_t>(VCT_FRAGMENT_WORDS, 0u));
-    const gpu::Buffer nodes = gpu::storage_of(std::vector<std::uint32_t>{0u});
-    const gpu::Buffer counters = gpu::storage_of(std::vector<std::uint32_t>(VCT_COUNTERS, 0u));
-    gpu::bind_storage(VCT_BINDING_FRAGMENTS, fragments);
-    gpu::bind_storage(VCT_BINDING_NODES, nodes);
-    gpu::bind_storage(VCT_BINDING_COUNTERS, counters);
-    flag.set("u_level", 0u);
-    flag.set("u_leaf_level", 1u);
-
-    flag.set("u_fragment_count", 1u);
-    flag.dispatch_threads(1);
+    const FlagPassBuffers buffers({0u}, std::vector<std::uint32_t>(VCT_FRAGMENT_WORDS, 0u));
+    dispatch_flag_pass(flag, 0u, 1u, 1u);
     EXPECT_FALSE(checks.take().has_value()) << "one fragment in a buffer of one";
 
-    flag.set("u_fragment_count", 2u);
-    flag.dispatch_threads(2);
+    dispatch_flag_pass(flag, 0u, 1u, 2u);
     const auto violation = checks.take();
     ASSERT_TRUE(violation.has_value());
     EXPECT_EQ(violation->count, 1u);

@@ -1,6 +1,7 @@
 // Method `vct` against the path-traced reference with the bounce count it models (one), in radiance
 // and in ambient-occlusion mode; its octree kept while only lights change; its cone weights exact.
 #include "gpu_fixture.hpp"
+#include "vct_flag_pass.hpp"
 #include "renderer/image/metrics.hpp"
 #include "renderer/methods/vct/vct_method.hpp"
 #include "renderer/methods/reference/path_tracer.hpp"
@@ -287,20 +288,12 @@ TEST(Vct, AFragmentOnTheLatticesLastPointFlagsNoNode) {
         SCOPED_TRACE(x);
         std::vector<std::uint32_t> children(9, 0u);
         children[0] = 1u;  // the root's children are nodes 1 to 8
-        const gpu::Buffer nodes = gpu::storage_of(children);
-        const gpu::Buffer counters = gpu::storage_of(std::vector<std::uint32_t>(VCT_COUNTERS, 0u));
-        const gpu::Buffer fragments = gpu::storage_of(fragment_at(x));
-        gpu::bind_storage(VCT_BINDING_NODES, nodes);
-        gpu::bind_storage(VCT_BINDING_COUNTERS, counters);
-        gpu::bind_storage(VCT_BINDING_FRAGMENTS, fragments);
-        flag.set("u_leaf_level", 1u);
-        flag.set("u_level", 1u);
-        flag.set("u_fragment_count", 1u);
-        flag.dispatch_threads(1);
+        const FlagPassBuffers buffers(children, fragment_at(x));
+        dispatch_flag_pass(flag, 1u, 1u, 1u);
         gpu::storage_barrier();
         std::vector<std::uint32_t> flagged(9), counted(VCT_COUNTERS);
-        glGetNamedBufferSubData(nodes.id(), 0, 9 * 4, flagged.data());
-        glGetNamedBufferSubData(counters.id(), 0, VCT_COUNTERS * 4, counted.data());
+        glGetNamedBufferSubData(buffers.nodes.id(), 0, 9 * 4, flagged.data());
+        glGetNamedBufferSubData(buffers.counters.id(), 0, VCT_COUNTERS * 4, counted.data());
         EXPECT_EQ(counted[VCT_COUNTER_FLAGGED], x == 2u ? 1u : 0u);
         for (std::uint32_t node = 1; node <= 8; ++node) {
             EXPECT_EQ(flagged[node], x == 2u && node == 2u ? VCT_NODE_FLAGGED : 0u) << "node " << node;
