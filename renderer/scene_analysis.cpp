@@ -120,25 +120,49 @@ BounceEnergy bounce_energy(const scene::Scene& scene, const AnalysisSettings& se
     energy.tracer_build_ms = tracer_build_ms;
     std::vector<double> totals;  // the image's mean with 0, 1, ... bounces
     std::vector<image::Frame> frames;
-    const double samples = static_cast<double>(settings.bounce_image_size) * settings.bounce_image_size * settings.bounce_spp;
+    const int pixels = settings.bounce_image_size * settings.bounce_image_size;
     {
         // Untimed: the first render starts the worker threads, which is no sample's cost.
         methods::reference::Accumulator warm_up(4, 4);
         tracer.render(warm_up, camera, 1, {}, cancelled);
     }
-    for (int bounces = 0; bounces <= settings.max_bounces; ++bounces) {
-        methods::reference::PathTracerSettings trace;
-        trace.max_bounces = bounces;
-        trace.seed = settings.seed;
-        trace.pixel_jitter = false;
-        methods::reference::Accumulator accumulator(settings.bounce_image_size, settings.bounce_image_size);
+    methods::reference::PathTracerSettings trace;
+    trace.seed = settings.seed;
+    trace.pixel_jitter = false;
+    // Timed: a sample's cost with no bounces (its camera ray and one vertex), apart.
+    const auto timed_render = [&](methods::reference::Accumulator& accumulator, int spp) {
         const auto start = std::chrono::steady_clock::now();
-        tracer.render(accumulator, camera, settings.bounce_spp, trace, cancelled);
-        energy.sample_ns.push_back(
-            std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - start).count() / samples);
-        energy.noise_per_sample.push_back(methods::reference::noise_per_sample(accumulator));
-        frames.push_back(accumulator.frame());
+        tracer.render(accumulator, camera, spp, trace, cancelled);
+        return std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - start).count() /
+               (static_cast<double>(pixels) * spp);
+    };
+    trace.max_bounces = 0;
+    methods::reference::Accumulator direct(settings.bounce_image_size, settings.bounce_image_size);
+    const double direct_ns = timed_render(direct, settings.direct_timing_spp);
+    // Every bounce count from one trace: its bounce prefixes are, bit for bit, the frames of the same
+    // seed at fewer bounces (common random numbers: the differences between counts are not noise).
+    trace.max_bounces = settings.max_bounces;
+    methods::reference::Accumulator all(settings.bounce_image_size, settings.bounce_image_size, settings.max_bounces);
+    const double all_ns = timed_render(all, settings.bounce_spp);
+    for (int bounces = 0; bounces <= settings.max_bounces; ++bounces) {
+        const bool prefix = bounces < settings.max_bounces;
+        energy.noise_per_sample.push_back(prefix ? all.prefix_noise_per_sample(bounces)
+                                                 : methods::reference::noise_per_sample(all));
+        frames.push_back(prefix ? all.prefix_frame(bounces) : all.frame());
         totals.push_back(mean_radiance(frames.back()));
+    }
+    // A sample's time with k bounces: its camera ray, and the vertices its path shades after 0..k
+    // bounces, each alike. The two timed frames give the two costs; the trace counted the vertices.
+    const std::vector<std::uint64_t>& vertices = all.vertices_shaded();
+    const double samples = static_cast<double>(pixels) * settings.bounce_spp;
+    std::vector<double> vertices_by(vertices.size());  // per sample, with 0..k bounces
+    for (std::size_t k = 0; k < vertices.size(); ++k) {
+        vertices_by[k] = (k == 0 ? 0.0 : vertices_by[k - 1]) + static_cast<double>(vertices[k]) / samples;
+    }
+    const double later_vertices = vertices_by.back() - vertices_by.front();
+    const double vertex_ns = later_vertices > 0.0 ? std::max(0.0, all_ns - direct_ns) / later_vertices : 0.0;
+    for (std::size_t k = 0; k < vertices_by.size(); ++k) {
+        energy.sample_ns.push_back(direct_ns + vertex_ns * (vertices_by[k] - vertices_by.front()));
     }
     for (const image::Frame& frame : frames) energy.stopped_error.push_back(image::compare(frame, frames.back()).rel_mse);
     std::vector<double> added(totals.size());

@@ -14,18 +14,24 @@
 namespace bounce {
 
 struct AnalysisSettings {
-    // Bounce energies: the reference at this size and these samples, once per bounce count, with one
-    // seed so that the differences between counts are not noise (common random numbers). Camera
-    // rays go through pixel centres, as raster methods shade (and as the planner's reference plans do).
+    // Bounce energies: the reference at this size and these samples, traced once with max_bounces;
+    // its bounce prefixes are the frames of every fewer bounce count, of one seed, so that the
+    // differences between counts are not noise (common random numbers). Camera rays go through pixel
+    // centres, as raster methods shade (and as the planner's reference plans do).
     int bounce_image_size = 24;
     // Of one seed, the frames of two bounce counts share their paths, and their difference, squared,
-    // carries the later bounces' noise: stopped errors past a bounce or two read high (at 16 samples,
-    // the atrium's at 4 bounces 0.025 where 1024 samples say 0.008; at 64, 0.013), and the first ones
-    // read low where a few paths carry much of the light (0.27 at no bounces against 0.33; at 64,
-    // 0.31): `bounce_bench_planner --analysis-only --analysis-spp N`. An unbiased form (the product of
-    // two independent halves' differences) read lower still at 64 samples: its typical value misses
-    // those few paths, which is no promise to keep.
-    int bounce_spp = 64;
+    // carries the later bounces' noise: stopped errors past a bounce or two read high at few samples
+    // (the atrium's at 4 bounces: 0.025 at 16, 0.013 at 64, 0.0082 at 512, 0.0078 at 4096), and the
+    // first ones low where a few paths carry much of the light (the atrium's at no bounces: 0.31 at
+    // 64, 0.325 at 512, 0.328 at 4096): `bounce_bench_planner --analysis-only --analysis-spp N`. An
+    // unbiased form (the product of two independent halves' differences) read lower still at 64
+    // samples: its typical value misses those few paths, which is no promise to keep. One trace for
+    // every bounce count, not one per count, buys 512 samples in less time than 64 took (the
+    // furnished room: 464 ms, analysis whole, where 508 ms).
+    int bounce_spp = 512;
+    // Samples of the frame without bounces that is timed apart (sample_ns: its cost and the trace's
+    // give a vertex's).
+    int direct_timing_spp = 16;
     int max_bounces = 12;
     int surface_samples = 4096;  // thin walls
     int visibility_pairs = 2048;  // receiver-VPL pairs for indirect visibility
@@ -51,7 +57,9 @@ struct BounceEnergy {
     // noise_per_sample[k]: the mean over pixels of one path sample's luminance variance with k
     // bounces over (luminance^2 + 0.01): the reference's relMSE at s samples is about this over s.
     std::vector<double> noise_per_sample;
-    // sample_ns[k]: CPU time per pixel sample with k bounces on this machine's threads.
+    // sample_ns[k]: CPU time per pixel sample with k bounces on this machine's threads: the frame
+    // without bounces timed, and each vertex the full trace shaded after bounce 0 at the time the
+    // two frames' difference gives one.
     std::vector<double> sample_ns;
     double tracer_build_ms = 0.0;  // building the path tracer's acceleration structures, once a frame
 };

@@ -281,7 +281,20 @@ TEST(ReferenceSampling, BouncePrefixesAreExactlyTheFramesOfFewerBounces) {
         EXPECT_EQ(accumulator.prefix_frame(k).rgba, alone.frame().rgba) << k << " bounces";
         EXPECT_EQ(accumulator.prefix_noise_per_sample(k), noise_per_sample(alone)) << k << " bounces";
         EXPECT_NE(accumulator.prefix_frame(k).rgba, accumulator.frame().rgba) << k << " bounces";
+        // The same paths shade the same vertices: a frame of k bounces does the work of the deeper
+        // frame's first k + 1 counts (what the analysis' cost per bounce count stands on).
+        const auto& deeper = accumulator.vertices_shaded();
+        ASSERT_EQ(alone.vertices_shaded().size(), static_cast<std::size_t>(k) + 1);
+        EXPECT_TRUE(std::equal(alone.vertices_shaded().begin(), alone.vertices_shaded().end(), deeper.begin())) << k;
     }
+    // Paths only end: each count is at most the one before, and the camera rays (144 pixels x 16)
+    // bound the first.
+    const auto& vertices = accumulator.vertices_shaded();
+    ASSERT_EQ(vertices.size(), 6u);
+    EXPECT_LE(vertices[0], 12u * 12u * 16u);
+    EXPECT_GT(vertices[5], 0u);
+    for (std::size_t j = 1; j < vertices.size(); ++j) EXPECT_LE(vertices[j], vertices[j - 1]) << j;
+    EXPECT_LT(vertices[5], vertices[0]);
     EXPECT_EQ(accumulator.frame().rgba, tracer.render(scene.cameras[0], 12, 12, 16, settings).rgba);
     // More prefixes than bounces, or prefixes of ambient occlusion, are refused.
     Accumulator too_many(12, 12, 6);

@@ -64,6 +64,17 @@ TEST(SceneAnalysis, BounceSharesSumToOneAndDirectLightComesFirst) {
     for (double share : energy.share) EXPECT_GE(share, 0.0);
     EXPECT_GT(energy.share[0], energy.share[1]);
     EXPECT_EQ(energy.bounces_for(1.0), 0);
+    // Per bounce count, from one trace's prefixes: the frame of every bounce lacks nothing, and a
+    // sample costs more the further its path may go (the Cornell box's paths go on past the first
+    // vertex: each bounce count adds the vertices shaded after it, at a positive cost).
+    ASSERT_EQ(energy.stopped_error.size(), 13u);
+    ASSERT_EQ(energy.noise_per_sample.size(), 13u);
+    ASSERT_EQ(energy.sample_ns.size(), 13u);
+    EXPECT_EQ(energy.stopped_error[12], 0.0);
+    EXPECT_GT(energy.stopped_error[0], energy.stopped_error[1]);
+    EXPECT_GT(energy.sample_ns[0], 0.0);
+    for (std::size_t k = 1; k < energy.sample_ns.size(); ++k) EXPECT_GE(energy.sample_ns[k], energy.sample_ns[k - 1]) << k;
+    EXPECT_GT(energy.sample_ns[12], energy.sample_ns[0]);
 }
 
 // In a closed room every bounce lands on a wall, so each bounce carries about the walls' mean

@@ -10,6 +10,7 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <mutex>
 #include <optional>
 #include <cmath>
 #include <limits>
@@ -417,8 +418,10 @@ struct PathTracer::Impl {
     // bounce counts: prefixes[k] is exactly what trace() with max_bounces = k returns for the same
     // random numbers, since the light of bounce k (next-event estimation at vertex k and the emission
     // its BRDF-sampled ray finds) is all added before the path decides to go on.
+    // `vertices`, when given, counts the vertices shaded after each bounce count (max_bounces + 1).
     glm::vec3 trace(glm::vec3 origin, glm::vec3 direction, int max_bounces, bool indirect_visibility,
-                    Random& random, float* first = nullptr, glm::vec3* prefixes = nullptr, int prefix_count = 0) const {
+                    Random& random, float* first = nullptr, glm::vec3* prefixes = nullptr, int prefix_count = 0,
+                    std::uint64_t* vertices = nullptr) const {
         glm::vec3 radiance(0.0f), throughput(1.0f);
         const int prefixes_wanted = prefixes ? prefix_count : 0;
         int prefixes_done = 0;
@@ -438,6 +441,7 @@ struct PathTracer::Impl {
         radiance += hit.emitted;
         for (int bounce = 0;; ++bounce) {
             if (absorbs(hit)) break;
+            if (vertices) ++vertices[bounce];
             const glm::vec3 v = -direction;
             radiance += throughput * direct_light(hit, v, random);
             // The BRDF-sampled continuation: its emitter hit is weighted against light sampling.
@@ -561,10 +565,24 @@ void PathTracer::render(Accumulator& accumulator, const scene::Camera& camera, i
                                        !settings.ambient_occlusion),
                  "{} bounce prefixes of a frame of {} bounces{}", prefix_count, settings.max_bounces,
                  settings.ambient_occlusion ? " of ambient occlusion" : !settings.indirect_visibility ? " without indirect visibility" : "");
+    const std::size_t vertex_slots = settings.ambient_occlusion ? 0 : static_cast<std::size_t>(settings.max_bounces) + 1;
+    if (accumulator.vertices_shaded_.size() < vertex_slots) accumulator.vertices_shaded_.resize(vertex_slots, 0);
+    std::mutex vertices_mutex;
     impl_->arena.execute([&] {
         tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
             std::vector<glm::vec3> prefixes(static_cast<std::size_t>(prefix_count));
             std::vector<glm::dvec3> prefix_batch(static_cast<std::size_t>(prefix_count), glm::dvec3(0.0));
+            std::vector<std::uint64_t> vertices(vertex_slots, 0);
+            // Merged when the rows are done, or left, cancelled.
+            struct MergeVertices {
+                std::vector<std::uint64_t>& from;
+                std::vector<std::uint64_t>& into;
+                std::mutex& mutex;
+                ~MergeVertices() {
+                    const std::lock_guard lock(mutex);
+                    for (std::size_t j = 0; j < from.size(); ++j) into[j] += from[j];
+                }
+            } merge{vertices, accumulator.vertices_shaded_, vertices_mutex};
             for (int y = rows.begin(); y < rows.end(); ++y) {
                 for (int x = 0; x < width; ++x) {
                     if (cancelled && cancelled->load(std::memory_order_relaxed)) return;
@@ -585,7 +603,7 @@ void PathTracer::render(Accumulator& accumulator, const scene::Camera& camera, i
                                 ? glm::vec3(impl_->ambient_occlusion(camera.position, direction, settings.ao_lambda, random))
                                 : impl_->trace(camera.position, direction, settings.max_bounces,
                                                settings.indirect_visibility, random, first, prefixes.data(),
-                                               prefix_count);
+                                               prefix_count, vertices.data());
                         // A non-finite sample would poison the pixel forever: it is dropped (counted as 0).
                         const auto finite = [](const glm::vec3& c) {
                             return std::isfinite(c.r) && std::isfinite(c.g) && std::isfinite(c.b);

@@ -79,6 +79,11 @@ public:
     PixelFeatures features() const;
     image::Frame prefix_frame(int bounces) const;
     double prefix_noise_per_sample(int bounces) const;  // noise_per_sample() of prefix_frame(bounces)
+    // vertices_shaded()[j]: how many of the samples' paths shaded a vertex after j bounces (next-event
+    // estimation and the BRDF-sampled ray, the work of one loop of trace()), over every render into
+    // this accumulator; as long as the most bounces rendered plus one. A frame of k bounces does the
+    // work of entries 0..k: with the camera rays, what its time is made of.
+    const std::vector<std::uint64_t>& vertices_shaded() const { return vertices_shaded_; }
 
     // Pixels times prefixes kept at most: 28 bytes each, 56 MiB (every prefix of 32 bounces at
     // 256x256; at 1920x1080, the frame without bounces alone).
@@ -97,6 +102,7 @@ private:
     std::vector<double> prefix_sums(int bounces) const;  // one prefix's RGB per pixel
     std::vector<double> prefix_sums_;  // per pixel, per prefix: RGB
     std::vector<float> prefix_luminance2_;  // per pixel, per prefix
+    std::vector<std::uint64_t> vertices_shaded_;
 };
 
 // The mean over pixels of one sample's luminance variance over (luminance^2 + 0.01), the luminance
