@@ -45,6 +45,7 @@ struct Options {
     std::vector<double> budgets_ms = {50, 200, 1000};
     bool analysis_only = false;  // print each scene's analysis and stop
     int analysis_spp = AnalysisSettings{}.bounce_spp;  // with --analysis-only: the analysis' samples per pixel
+    int analysis_size = AnalysisSettings{}.bounce_image_size;  // with --analysis-only: its frames' side
     bool references_only = false;  // render (or read) each scene's reference and stop: fills the cache
     int passes = 2;
 };
@@ -143,13 +144,14 @@ int main(int argc, char** argv) {
         else if (flag == "--budgets-ms") options.budgets_ms = numbers(arguments.value());
         else if (flag == "--analysis-only") options.analysis_only = true;
         else if (flag == "--analysis-spp") options.analysis_spp = std::max(2, static_cast<int>(arguments.number()));
+        else if (flag == "--analysis-size") options.analysis_size = std::max(4, static_cast<int>(arguments.number()));
         else if (flag == "--references-only") options.references_only = true;
         else if (flag == "--passes") options.passes = arguments.number();
         else {
             std::fprintf(stderr,
                          "usage: bounce_bench_planner [--size N] [--reference-spp N] [--reference-bounces N] [--cache DIR] "
                          "[--scene NAME]... [--errors E,E] [--budgets-ms T,T] [--passes N] [--out DIR] [--markdown FILE] "
-                         "[--analysis-only [--analysis-spp N] | --references-only]\n");
+                         "[--analysis-only [--analysis-spp N] [--analysis-size N] | --references-only]\n");
             return 2;
         }
     }
@@ -158,6 +160,7 @@ int main(int argc, char** argv) {
             for (const bench::BenchScene& bench_scene : bench::corpus_scenes()) {
                 AnalysisSettings settings;
                 settings.bounce_spp = options.analysis_spp;
+                settings.bounce_image_size = options.analysis_size;
                 const SceneAnalysis a = analyze_scene(bench_scene.scene, settings);
                 std::string leaks;
                 for (const auto& [preset, walls] : a.thin_walls.presets) {

@@ -262,7 +262,8 @@ TEST(FrameComparisons, AReferencesFramesOfFewerBouncesAreReferencesOfTheirOwnBou
 // `direct` at 0.4 where the frame of no bounces is 0.5 and the later bounces bring it to 1.0 lacks
 // light where they add it, and its error against the whole (0.36 / 1.01) is more than the parts apart
 // (0.01 / 0.26 against the prefix, 0.25 / 1.01 of bounces). Recorded is what the error model must add
-// to the bounces' light to reach the whole: 0.11 / 1.01, less the prefix's noise.
+// to the bounces' light to reach the whole: 0.11 / 1.01, less the prefix's noise, and the same
+// beyond the whole's 4 bounces.
 TEST(FrameComparisons, AgainstABouncePrefixTheOwnErrorCountsWhereItMeetsTheLaterBouncesLight) {
     const SceneAnalysis analysis = made_up_analysis();
     SceneMeasurements measured;
@@ -278,9 +279,14 @@ TEST(FrameComparisons, AgainstABouncePrefixTheOwnErrorCountsWhereItMeetsTheLater
     ASSERT_EQ(made.size(), 1u);
     const double noise = FrameComparisons::kUncalibratedNoiseScale * 0.0016 / 64.0;
     EXPECT_NEAR(made[0].rel_mse, 0.01 / 0.26, 1e-6);
-    EXPECT_NEAR(made[0].cross_term, 0.36 / 1.01 - 0.25 / 1.01 - 0.01 / 0.26, 1e-6);
-    EXPECT_NEAR(made[0].own_error, 0.11 / 1.01 - noise, 1e-6);
-    EXPECT_NEAR(measured.own_error("direct", "high", 0)->rel_mse, 0.11 / 1.01 - noise, 1e-6);
+    const double cross = 0.36 / 1.01 - 0.25 / 1.01 - 0.01 / 0.26;
+    EXPECT_NEAR(made[0].cross_term, cross, 1e-6);
+    // Past the 4 bounces: the analysis says no bounces lack 0.1 and 4 lack 0.1 / 16, so the light the
+    // deeper frame adds is, parallel, sqrt(0.1) - sqrt(0.1 / 16) of the norm sqrt(0.1): the whole cross
+    // term is 4/3 of the one measured (under the bound 2 sqrt(own x 0.1)).
+    EXPECT_NEAR(made[0].cross_beyond, cross / 3.0, 1e-6);
+    EXPECT_NEAR(made[0].own_error, 0.11 / 1.01 - noise + cross / 3.0, 1e-6);
+    EXPECT_NEAR(measured.own_error("direct", "high", 0)->rel_mse, 0.11 / 1.01 - noise + cross / 3.0, 1e-6);
     // A reference of no bounces on its own (no deeper frame of its paths): the parts apart.
     SceneMeasurements alone;
     FrameComparisons other;
