@@ -144,10 +144,13 @@ BounceEnergy bounce_energy(const scene::Scene& scene, const AnalysisSettings& se
     trace.max_bounces = settings.max_bounces;
     methods::reference::Accumulator all(settings.bounce_image_size, settings.bounce_image_size, settings.max_bounces);
     const double all_ns = timed_render(all, settings.bounce_spp);
+    const image::Frame whole_frame = all.frame();
     for (int bounces = 0; bounces <= settings.max_bounces; ++bounces) {
         const bool prefix = bounces < settings.max_bounces;
         energy.noise_per_sample.push_back(prefix ? all.prefix_noise_per_sample(bounces)
                                                  : methods::reference::noise_per_sample(all));
+        energy.noise_against_whole.push_back(prefix ? all.prefix_noise_per_sample(bounces, whole_frame)
+                                                    : energy.noise_per_sample.back());
         frames.push_back(prefix ? all.prefix_frame(bounces) : all.frame());
         totals.push_back(mean_radiance(frames.back()));
     }

@@ -57,6 +57,12 @@ struct BounceEnergy {
     // noise_per_sample[k]: the mean over pixels of one path sample's luminance variance with k
     // bounces over (luminance^2 + 0.01): the reference's relMSE at s samples is about this over s.
     std::vector<double> noise_per_sample;
+    // noise_against_whole[k]: the same variance over the luminance of the frame with max_bounces, the
+    // relMSE per sample that the noise of a frame of k bounces makes against the reference with every
+    // bounce (what a target error is measured against). Lower than noise_per_sample[k] where the later
+    // bounces brighten the pixels: in the atrium 4 bounces at 64 samples measure 0.043 where their own
+    // statistic predicted 0.049.
+    std::vector<double> noise_against_whole;
     // sample_ns[k]: CPU time per pixel sample with k bounces on this machine's threads: the frame
     // without bounces timed, and each vertex the full trace shaded after bounce 0 at the time the
     // two frames' difference gives one.

@@ -20,6 +20,7 @@ json analysis_json(const SceneAnalysis& analysis) {
     const BounceEnergy& energy = analysis.bounces;
     return {{"bounces", {{"share", energy.share}, {"tail", energy.tail}, {"needed", needed},
                          {"stopped_error", energy.stopped_error}, {"noise_per_sample", energy.noise_per_sample},
+                         {"noise_against_whole", energy.noise_against_whole},
                          {"sample_ns", energy.sample_ns}, {"tracer_build_ms", energy.tracer_build_ms}}},
             {"thin_walls", {{"thinnest_separator_m", thinnest < 0.0 ? json() : json(thinnest)}, {"presets", presets}}},
             {"indirect_visibility", {{"pairs", analysis.visibility.pairs},

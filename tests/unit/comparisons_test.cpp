@@ -321,6 +321,12 @@ TEST(FrameComparisons, TwoReferenceFramesOfAViewMeasureWhatTheirNoiseStatisticMa
     const double analysed = analysis.bounces.noise_per_sample[4];
     EXPECT_NEAR(predict_error(analysis, "reference", "medium", {{"spp", 64}, {"bounces", 4}}, &measured).rel_mse,
                 analysis.bounces.stopped_error[4] + *measured.noise_scale() * analysed / 64.0, 1e-12);
+    // Where the analysis has it, the noise against the frame of every bounce: what a target is
+    // measured against.
+    SceneAnalysis against_whole = analysis;
+    against_whole.bounces.noise_against_whole.assign(13, 0.25);
+    EXPECT_NEAR(predict_error(against_whole, "reference", "medium", {{"spp", 64}, {"bounces", 4}}, &measured).rel_mse,
+                analysis.bounces.stopped_error[4] + *measured.noise_scale() * 0.25 / 64.0, 1e-12);
     const auto made = comparisons.add(3, frame("cssm", "low", {{"bounces", 4}}, 2.0f), &analysis, measured);
     ASSERT_EQ(made.size(), 1u);
     EXPECT_DOUBLE_EQ(made[0].reference_noise, 0.0);  // the kept reference's statistic is 0

@@ -281,6 +281,10 @@ TEST(ReferenceSampling, BouncePrefixesAreExactlyTheFramesOfFewerBounces) {
         EXPECT_EQ(accumulator.prefix_frame(k).rgba, alone.frame().rgba) << k << " bounces";
         EXPECT_EQ(accumulator.prefix_noise_per_sample(k), noise_per_sample(alone)) << k << " bounces";
         EXPECT_NE(accumulator.prefix_frame(k).rgba, accumulator.frame().rgba) << k << " bounces";
+        // Against the whole frame, brighter in every pixel (later bounces only add light), the same
+        // variance is a smaller share.
+        EXPECT_EQ(accumulator.prefix_noise_per_sample(k, accumulator.prefix_frame(k)), accumulator.prefix_noise_per_sample(k));
+        EXPECT_LT(accumulator.prefix_noise_per_sample(k, accumulator.frame()), accumulator.prefix_noise_per_sample(k)) << k;
         // The same paths shade the same vertices: a frame of k bounces does the work of the deeper
         // frame's first k + 1 counts (what the analysis' cost per bounce count stands on).
         const auto& deeper = accumulator.vertices_shaded();

@@ -71,6 +71,9 @@ TEST(SceneAnalysis, BounceSharesSumToOneAndDirectLightComesFirst) {
     ASSERT_EQ(energy.noise_per_sample.size(), 13u);
     ASSERT_EQ(energy.sample_ns.size(), 13u);
     EXPECT_EQ(energy.stopped_error[12], 0.0);
+    ASSERT_EQ(energy.noise_against_whole.size(), 13u);
+    EXPECT_EQ(energy.noise_against_whole[12], energy.noise_per_sample[12]);
+    for (std::size_t k = 0; k < 12; ++k) EXPECT_LE(energy.noise_against_whole[k], energy.noise_per_sample[k]) << k;
     EXPECT_GT(energy.stopped_error[0], energy.stopped_error[1]);
     EXPECT_GT(energy.sample_ns[0], 0.0);
     for (std::size_t k = 1; k < energy.sample_ns.size(); ++k) EXPECT_GE(energy.sample_ns[k], energy.sample_ns[k - 1]) << k;

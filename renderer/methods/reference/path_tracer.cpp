@@ -535,13 +535,19 @@ image::Frame Accumulator::prefix_frame(int bounces) const {
 }
 
 double Accumulator::prefix_noise_per_sample(int bounces) const {
+    return prefix_noise_per_sample(bounces, prefix_frame(bounces));
+}
+
+double Accumulator::prefix_noise_per_sample(int bounces, const image::Frame& against) const {
+    BOUNCE_CHECK(against.width == width_ && against.height == height_, "noise against a {}x{} frame of a {}x{} accumulator",
+                 against.width, against.height, width_, height_);
     const std::vector<double> sums = prefix_sums(bounces);
     const std::size_t pixels = static_cast<std::size_t>(width_) * height_;
     std::vector<float> variance(pixels);
     for (std::size_t i = 0; i < pixels; ++i) {
         variance[i] = mean_luminance_variance(&sums[i * 3], prefix_luminance2_[i * bounce_prefixes_ + bounces], samples_);
     }
-    return noise_per_sample_of(mean_frame(sums.data(), width_, height_, samples_), variance, samples_);
+    return noise_per_sample_of(against, variance, samples_);
 }
 
 PathTracer::PathTracer(const scene::Scene& scene) : impl_(std::make_unique<Impl>(scene)) {}

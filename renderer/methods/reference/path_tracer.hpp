@@ -79,6 +79,9 @@ public:
     PixelFeatures features() const;
     image::Frame prefix_frame(int bounces) const;
     double prefix_noise_per_sample(int bounces) const;  // noise_per_sample() of prefix_frame(bounces)
+    // The same, each pixel's variance over the luminance of `against` (same size) in place of the
+    // prefix's own: the relMSE per sample its noise makes against a brighter frame of more bounces.
+    double prefix_noise_per_sample(int bounces, const image::Frame& against) const;
     // vertices_shaded()[j]: how many of the samples' paths shaded a vertex after j bounces (next-event
     // estimation and the BRDF-sampled ray, the work of one loop of trace()), over every render into
     // this accumulator; as long as the most bounces rendered plus one. A frame of k bounces does the
