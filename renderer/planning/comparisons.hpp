@@ -41,10 +41,10 @@ struct Comparison {
     // light of the later bounces beyond their sum (negative where the frame adds light where they do).
     double cross_term = 0.0;
     double later_light = 0.0;  // relMSE(reference, deeper): the later bounces' light, with their noise
-    // The same beyond the deeper frame's bounces, where cross_term > 0: the light past them taken to
-    // lie where the deeper frame's later bounces do (late bounces are smooth and alike, so their light
-    // fields run parallel), cross_term x sqrt(s_b) / (sqrt(s_b) - sqrt(s_D)) in all, with s_k the
-    // analysis' stopped_error; never past the Cauchy-Schwarz bound 2 sqrt(own x s_b).
+    // The same past the deeper frame's D bounces: the term is linear in the later light, so bounce D's
+    // part of it (cross_term less the same against the frame of D - 1 bounces) goes on as the later
+    // bounces' light does, by the analysis' ratio r per bounce: x_D r / (1 - r), where x_D > 0, and
+    // never past the Cauchy-Schwarz bound 2 sqrt(own x stopped_error[b]) in all.
     double cross_beyond = 0.0;
     // What was recorded: rel_mse - reference_noise - bounce_gap + cross_term + cross_beyond; against a reference of
     // fewer bounces than the frame, (sqrt of that + sqrt of the light the reference lacks)^2.

@@ -281,12 +281,10 @@ TEST(FrameComparisons, AgainstABouncePrefixTheOwnErrorCountsWhereItMeetsTheLater
     EXPECT_NEAR(made[0].rel_mse, 0.01 / 0.26, 1e-6);
     const double cross = 0.36 / 1.01 - 0.25 / 1.01 - 0.01 / 0.26;
     EXPECT_NEAR(made[0].cross_term, cross, 1e-6);
-    // Past the 4 bounces: the analysis says no bounces lack 0.1 and 4 lack 0.1 / 16, so the light the
-    // deeper frame adds is, parallel, sqrt(0.1) - sqrt(0.1 / 16) of the norm sqrt(0.1): the whole cross
-    // term is 4/3 of the one measured (under the bound 2 sqrt(own x 0.1)).
-    EXPECT_NEAR(made[0].cross_beyond, cross / 3.0, 1e-6);
-    EXPECT_NEAR(made[0].own_error, 0.11 / 1.01 - noise + cross / 3.0, 1e-6);
-    EXPECT_NEAR(measured.own_error("direct", "high", 0)->rel_mse, 0.11 / 1.01 - noise + cross / 3.0, 1e-6);
+    // The analysis has no shares here: nothing is said of the light past the 4 bounces.
+    EXPECT_EQ(made[0].cross_beyond, 0.0);
+    EXPECT_NEAR(made[0].own_error, 0.11 / 1.01 - noise, 1e-6);
+    EXPECT_NEAR(measured.own_error("direct", "high", 0)->rel_mse, 0.11 / 1.01 - noise, 1e-6);
     // A reference of no bounces on its own (no deeper frame of its paths): the parts apart.
     SceneMeasurements alone;
     FrameComparisons other;
@@ -295,6 +293,43 @@ TEST(FrameComparisons, AgainstABouncePrefixTheOwnErrorCountsWhereItMeetsTheLater
     ASSERT_EQ(apart.size(), 1u);
     EXPECT_EQ(apart[0].cross_term, 0.0);
     EXPECT_NEAR(apart[0].own_error, 0.01 / 0.26 - noise, 1e-6);
+}
+
+// Past the deeper frame: the cross term is linear in the later light, so the part of it that the
+// deeper frame's last bounce brings (against 4 bounces less against 3) goes on as the analysis'
+// shares say each bounce's light does, here half the one before: x_4 (1/2) / (1 - 1/2) = x_4.
+TEST(FrameComparisons, TheLastBouncesPartOfTheCrossTermGoesOnAsTheLaterLightDoes) {
+    SceneAnalysis analysis = made_up_analysis();
+    for (int k = 0; k <= 12; ++k) analysis.bounces.share.push_back(std::pow(0.5, k));
+    const auto constant = [](std::shared_ptr<const RenderResult> result, float value) {
+        auto copy = std::make_shared<RenderResult>(*result);
+        for (std::size_t i = 0; i < copy->frame.rgba.size(); i += 4) {
+            for (int c = 0; c < 3; ++c) copy->frame.rgba[i + c] = value;
+        }
+        return copy;
+    };
+    const auto rel = [](double test, double ref) { return (test - ref) * (test - ref) / (ref * ref + 0.01); };
+    SceneMeasurements measured;
+    FrameComparisons comparisons;
+    comparisons.add(5, frame("direct", "high", {}, 0.4f), &analysis, measured);
+    auto whole = std::make_shared<RenderResult>(*reference(64, 0.5));
+    whole->byproducts = {constant(reference(64, 0.0016, {{"bounces", 0}}), 0.5f),
+                         constant(reference(64, 0.1, {{"bounces", 3}}), 0.7f)};
+    const auto made = comparisons.add(5, whole, &analysis, measured);
+    ASSERT_EQ(made.size(), 1u);
+    const double cross = rel(0.4, 1.0) - rel(0.5, 1.0) - rel(0.4, 0.5);
+    const double before_last = rel(0.4, 0.7) - rel(0.5, 0.7) - rel(0.4, 0.5);
+    EXPECT_NEAR(made[0].cross_term, cross, 1e-6);
+    EXPECT_NEAR(made[0].cross_beyond, cross - before_last, 1e-6);
+    // A part that lowers the error is not carried on.
+    SceneMeasurements other;
+    FrameComparisons lowering;
+    lowering.add(6, frame("direct", "high", {}, 0.4f), &analysis, other);
+    whole->byproducts[1] = constant(reference(64, 0.1, {{"bounces", 3}}), 0.9f);
+    const auto lowered = lowering.add(6, whole, &analysis, other);
+    ASSERT_EQ(lowered.size(), 1u);
+    EXPECT_LT(lowered[0].cross_term - (rel(0.4, 0.9) - rel(0.5, 0.9) - rel(0.4, 0.5)), 0.0);
+    EXPECT_EQ(lowered[0].cross_beyond, 0.0);
 }
 
 // Two reference frames of one view tell how much relMSE the noise statistic makes on the scene: here
