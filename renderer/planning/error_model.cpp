@@ -98,10 +98,8 @@ ErrorPrediction predict_error(const SceneAnalysis& analysis, const std::string& 
             energy.noise_against_whole.empty() ? energy.noise_per_sample : energy.noise_against_whole, bounces);
         // The statistic this scene's reference frames measured in the view, where they did, either way
         // from the analysis': a frame's samples meet rare bright paths that the analysis' miss (the
-        // glossy gallery's frames of no bounces measure 30 times its statistic), and its pixels are the
-        // view's, not the analysis' 24x24 (the atrium's at 4 bounces measure 0.9 of it; held at the
-        // analysis', 4 bounces at 64 samples were predicted 0.049 and measure 0.043, so 6 bounces were
-        // bought where they do worse).
+        // glossy gallery's frames at one bounce measure 26 times its statistic), and its pixels are the
+        // view's, not the analysis' 24x24 (the outdoor scene's frames of no bounces measure a tenth).
         const std::optional<double> measured_ratio = measured ? measured->noise_ratio(bounces) : std::nullopt;
         const double ratio = measured_ratio.value_or(1.0);
         const std::optional<double> scale = measured ? measured->noise_scale() : std::nullopt;
