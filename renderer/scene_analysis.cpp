@@ -151,7 +151,7 @@ BounceEnergy bounce_energy(const scene::Scene& scene, const AnalysisSettings& se
                                                  : methods::reference::noise_per_sample(all));
         energy.noise_against_whole.push_back(prefix ? all.prefix_noise_per_sample(bounces, whole_frame)
                                                     : energy.noise_per_sample.back());
-        frames.push_back(prefix ? all.prefix_frame(bounces) : all.frame());
+        frames.push_back(prefix ? all.prefix_frame(bounces) : whole_frame);
         totals.push_back(mean_radiance(frames.back()));
     }
     // A sample's time with k bounces: its camera ray, and the vertices its path shades after 0..k
@@ -403,6 +403,15 @@ IndirectVisibility indirect_visibility(const scene::Scene& scene, const raytrace
 double BounceEnergy::at(const std::vector<double>& values, int bounces) {
     if (values.empty()) return 0.0;
     return values[static_cast<std::size_t>(std::clamp(bounces, 0, static_cast<int>(values.size()) - 1))];
+}
+
+double BounceEnergy::light_ratio_past(int bounces) const {
+    double before = 0.0, after = 0.0;
+    for (int j = std::max(bounces, 0); j < bounces + 3 && j + 1 < static_cast<int>(share.size()); ++j) {
+        before += share[static_cast<std::size_t>(j)];
+        after += share[static_cast<std::size_t>(j) + 1];
+    }
+    return before > 0.0 ? std::clamp(after / before, 0.0, 0.95) : 0.0;
 }
 
 int BounceEnergy::bounces_for(double tolerance) const {

@@ -49,6 +49,10 @@ struct BounceEnergy {
     // values[k] of one of the per-count vectors below, k clamped to the counts measured; 0 for an
     // empty vector (a scene not analysed that far).
     static double at(const std::vector<double>& values, int bounces);
+    // How each bounce's light past `bounces` compares with the one before: the shares of bounces
+    // d+1..d+3 over those of d..d+2 (three, as one late bounce's share is noisy), at most 0.95; 0
+    // where the shares end at d.
+    double light_ratio_past(int bounces) const;
 
     // What the planner predicts from, per bounce count k = 0..max_bounces (renderer/planning/):
     // stopped_error[k]: relMSE (image::compare) of the frame with k bounces against the one with

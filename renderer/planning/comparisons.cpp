@@ -20,20 +20,6 @@ double stopped_at(const SceneAnalysis* analysis, int bounces) {
     return analysis ? BounceEnergy::at(analysis->bounces.stopped_error, bounces) : 0.0;
 }
 
-// How the light of each bounce past `bounces` compares with the one before, from the analysis'
-// shares: the ratio of bounces d+1..d+3 to d..d+2 (three, as one late bounce's share is noisy), at
-// most 0.95; 0 where the analysis has nothing past d.
-double later_light_ratio(const SceneAnalysis* analysis, int bounces) {
-    if (!analysis) return 0.0;
-    const std::vector<double>& share = analysis->bounces.share;
-    double before = 0.0, after = 0.0;
-    for (int j = bounces; j < bounces + 3 && j + 1 < static_cast<int>(share.size()); ++j) {
-        before += share[static_cast<std::size_t>(j)];
-        after += share[static_cast<std::size_t>(j) + 1];
-    }
-    return before > 0.0 ? std::clamp(after / before, 0.0, 0.95) : 0.0;
-}
-
 }  // namespace
 
 bool FrameComparisons::usable_reference(const FrameStats& stats) {
@@ -137,7 +123,7 @@ std::optional<Comparison> FrameComparisons::compare(const RenderResult& gpu_fram
                                             image::compare(reference.frame, byproduct->frame).rel_mse - c.rel_mse);
             }
         }
-        const double r = later_light_ratio(analysis, deeper_bounces);
+        const double r = analysis ? analysis->bounces.light_ratio_past(deeper_bounces) : 0.0;
         if (last_part > 0.0 && r > 0.0) {
             const double bound = 2.0 * std::sqrt(std::max(0.0, c.rel_mse - c.reference_noise) * stopped_at(analysis, c.bounces));
             c.cross_beyond = std::clamp(last_part * r / (1.0 - r), 0.0, std::max(0.0, bound - c.cross_term));

@@ -84,6 +84,23 @@ int modelled_bounces(const std::string& method, const methods::KnobValues& knobs
     return static_cast<int>(methods::knob_or(knobs, "bounces", 1.0));
 }
 
+ReferenceNoise reference_noise(const SceneAnalysis& analysis, int bounces, double spp, const SceneMeasurements* measured,
+                               NoiseAgainst against) {
+    const BounceEnergy& energy = analysis.bounces;
+    // Against every bounce: the analysis' statistic over its own frame's luminance where it has no such.
+    const bool whole = against == NoiseAgainst::every_bounce && !energy.noise_against_whole.empty();
+    const double analysed = BounceEnergy::at(whole ? energy.noise_against_whole : energy.noise_per_sample, bounces);
+    // The statistic this scene's reference frames measured in the view, where they did, either way
+    // from the analysis': a frame's samples meet rare bright paths that the analysis' miss (the
+    // glossy gallery's frames at one bounce measure 26 times its statistic), and its pixels are the
+    // view's, not the analysis' 24x24 (the outdoor scene's frames of no bounces measure a tenth).
+    ReferenceNoise noise;
+    noise.measured_ratio = measured ? measured->noise_ratio(bounces) : std::nullopt;
+    noise.scale = measured ? measured->noise_scale() : std::nullopt;
+    noise.rel_mse = noise.scale.value_or(1.0) * noise.measured_ratio.value_or(1.0) * analysed / std::max(1.0, spp);
+    return noise;
+}
+
 ErrorPrediction predict_error(const SceneAnalysis& analysis, const std::string& method, const std::string& preset,
                               const methods::KnobValues& knobs, const SceneMeasurements* measured) {
     const BounceEnergy& energy = analysis.bounces;
@@ -92,29 +109,20 @@ ErrorPrediction predict_error(const SceneAnalysis& analysis, const std::string& 
     ErrorPrediction prediction;
     if (method == "reference") {
         const double spp = std::max(1.0, methods::knob_or(knobs, "spp", 1.0));
-        // Against the whole: the relMSE a target is measured by (the analysis' statistic over its
-        // own frame's luminance where it has no such).
-        const double analysed = BounceEnergy::at(
-            energy.noise_against_whole.empty() ? energy.noise_per_sample : energy.noise_against_whole, bounces);
-        // The statistic this scene's reference frames measured in the view, where they did, either way
-        // from the analysis': a frame's samples meet rare bright paths that the analysis' miss (the
-        // glossy gallery's frames at one bounce measure 26 times its statistic), and its pixels are the
-        // view's, not the analysis' 24x24 (the outdoor scene's frames of no bounces measure a tenth).
-        const std::optional<double> measured_ratio = measured ? measured->noise_ratio(bounces) : std::nullopt;
-        const double ratio = measured_ratio.value_or(1.0);
-        const std::optional<double> scale = measured ? measured->noise_scale() : std::nullopt;
-        const double noise = scale.value_or(1.0) * ratio * analysed / spp;
+        const ReferenceNoise expected = reference_noise(analysis, bounces, spp, measured, NoiseAgainst::every_bounce);
+        const double noise = expected.rel_mse;
         prediction.rel_mse = stopped + noise;
         prediction.basis = fmt::format("{} bounces lack {:.3f}; noise {:.3f} at {:.0f} spp", bounces, stopped, noise, spp);
-        if (measured_ratio) {
-            prediction.basis += fmt::format(" ({:.2f}x the analysis' statistic, as this scene's reference frames measured it", ratio);
+        if (expected.measured_ratio) {
+            prediction.basis += fmt::format(" ({:.2f}x the analysis' statistic, as this scene's reference frames measured it",
+                                            *expected.measured_ratio);
         } else {
             prediction.basis += " (the analysis' statistic";
         }
-        prediction.basis += scale ? fmt::format(", x {:.2f}, the relMSE that statistic made between this scene's reference "
-                                                "frames)",
-                                                *scale)
-                                  : ")";
+        prediction.basis += expected.scale ? fmt::format(", x {:.2f}, the relMSE that statistic made between this scene's "
+                                                         "reference frames)",
+                                                         *expected.scale)
+                                           : ")";
         return prediction;
     }
     const auto [own, own_basis] = own_error(method, preset, bounces, measured);

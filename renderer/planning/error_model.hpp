@@ -39,6 +39,19 @@ std::optional<double> own_error_prior(const std::string& method, const std::stri
 // and the reference.
 int modelled_bounces(const std::string& method, const methods::KnobValues& knobs);
 
+// A reference frame's expected noise, as relMSE: the analysis' statistic at its bounce count over
+// its samples, times what this scene's reference frames measured of it in the view and the relMSE
+// that statistic makes on the scene (SceneMeasurements). Against every bounce (what a target error
+// is measured by: a frame of fewer bounces is darker than that, and its noise weighs less there) or
+// against its own frame (what a comparison with it takes out of a GPU frame's relMSE).
+enum class NoiseAgainst { every_bounce, own_frame };
+struct ReferenceNoise {
+    double rel_mse = 0.0;
+    std::optional<double> measured_ratio, scale;  // what it was scaled by, where measured
+};
+ReferenceNoise reference_noise(const SceneAnalysis& analysis, int bounces, double spp, const SceneMeasurements* measured,
+                               NoiseAgainst against);
+
 ErrorPrediction predict_error(const SceneAnalysis& analysis, const std::string& method, const std::string& preset,
                               const methods::KnobValues& knobs, const SceneMeasurements* measured = nullptr);
 

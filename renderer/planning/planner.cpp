@@ -278,16 +278,9 @@ std::vector<Candidate> probes(const std::vector<Candidate>& all, const Candidate
     const auto prefix_noise = [&](int bounces) -> std::optional<double> {
         if (!analysis || bounces >= std::min(chosen_bounces, prefix_bounces)) return std::nullopt;
         if (methods::knob_or(chosen.knobs, "spp", 0.0) < FrameComparisons::kMinReferenceSpp) return std::nullopt;
-        methods::KnobValues knobs = chosen.knobs;
-        knobs["bounces"] = bounces;
-        // The prediction is of the noise against the whole; a comparison with the prefix weighs it by
-        // the prefix's own, darker pixels.
-        const auto& own = analysis->bounces.noise_per_sample;
-        const auto& whole = analysis->bounces.noise_against_whole;
-        const double against_own = whole.empty() || !(BounceEnergy::at(whole, bounces) > 0.0)
-                                       ? 1.0
-                                       : BounceEnergy::at(own, bounces) / BounceEnergy::at(whole, bounces);
-        return against_own * (predict_error(*analysis, "reference", chosen.preset, knobs, scene).rel_mse - stopped(bounces));
+        // A comparison with the prefix weighs its noise by the prefix's own, darker pixels.
+        return reference_noise(*analysis, bounces, methods::knob_or(chosen.knobs, "spp", 1.0), scene, NoiseAgainst::own_frame)
+            .rel_mse;
     };
     const auto prefix_measures = [&](const Candidate& c) {
         const int bounces = modelled_bounces(c.method, c.knobs);

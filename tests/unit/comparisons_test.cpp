@@ -539,6 +539,16 @@ TEST(Probes, AProbeTheMissingLightWouldDrownGetsAReferenceOfItsOwnBounces) {
     drowned.record_own_error("direct", "high", 0, 0.012);
     const auto learned = probes(all, chosen, &drowned, &analysis, 4);
     EXPECT_TRUE(std::none_of(learned.begin(), learned.end(), [](const Candidate& c) { return c.method == "direct"; }));
+    // A prefix is judged by its noise against its own frame, as the comparison takes it out: where
+    // that is 4 per sample at no bounces (4 / 256 = 0.016, over a third of direct's 0.012), direct
+    // needs its companion, however little the same noise weighs against the frame of every bounce.
+    SceneAnalysis dark_prefix = analysis;
+    dark_prefix.bounces.noise_per_sample[0] = 4.0;
+    dark_prefix.bounces.noise_against_whole.assign(13, 0.5);
+    const auto judged_own = probes(all, chosen, nullptr, &dark_prefix, 4);
+    ASSERT_EQ(judged_own.size(), 4u);
+    EXPECT_EQ(judged_own[3].method, "reference");
+    EXPECT_EQ(judged_own[3].knobs.at("bounces"), 0.0);
     // Prefixes of no bounces only (a large frame): vct's one-bounce probe still needs its companion.
     const auto zero_only = probes(all, chosen, nullptr, &analysis, 1);
     ASSERT_EQ(zero_only.size(), 4u);

@@ -121,6 +121,19 @@ TEST(ErrorModel, TheReferenceLacksItsMissingBouncesPlusNoiseOverItsSamples) {
     measured.record_noise(4, 3.0);
     EXPECT_DOUBLE_EQ(predict_error(analysis, "reference", "medium", {{"spp", 64}, {"bounces", 3}}, &measured).rel_mse,
                      0.1 / 8.0 + 3.0 * 0.5 / 64.0);
+    // A measured ratio under 1 lowers it as much: the view's statistic replaces the analysis' either way.
+    SceneMeasurements quieter;
+    quieter.record_noise(3, 0.5);
+    EXPECT_DOUBLE_EQ(predict_error(analysis, "reference", "medium", {{"spp", 64}, {"bounces", 3}}, &quieter).rel_mse,
+                     0.1 / 8.0 + 0.5 * 0.5 / 64.0);
+    // Where the analysis has the noise against its frame of every bounce, a prediction (what a target
+    // is measured by) takes it; what a comparison with the frame itself takes out stays its own.
+    SceneAnalysis brighter = analysis;
+    brighter.bounces.noise_against_whole.assign(13, 0.2);
+    EXPECT_DOUBLE_EQ(predict_error(brighter, "reference", "medium", {{"spp", 64}, {"bounces", 3}}).rel_mse,
+                     0.1 / 8.0 + 0.2 / 64.0);
+    EXPECT_DOUBLE_EQ(reference_noise(brighter, 3, 64, &quieter, NoiseAgainst::every_bounce).rel_mse, 0.5 * 0.2 / 64.0);
+    EXPECT_DOUBLE_EQ(reference_noise(brighter, 3, 64, &quieter, NoiseAgainst::own_frame).rel_mse, 0.5 * 0.5 / 64.0);
 }
 
 TEST(ErrorModel, AGpuMethodAddsItsBenchPriorToTheBouncesItLacks) {

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <numeric>
 
 namespace bounce {
@@ -78,6 +79,19 @@ TEST(SceneAnalysis, BounceSharesSumToOneAndDirectLightComesFirst) {
     EXPECT_GT(energy.sample_ns[0], 0.0);
     for (std::size_t k = 1; k < energy.sample_ns.size(); ++k) EXPECT_GE(energy.sample_ns[k], energy.sample_ns[k - 1]) << k;
     EXPECT_GT(energy.sample_ns[12], energy.sample_ns[0]);
+}
+
+// Each bounce's light against the one before, past a bounce count: over three bounces, capped at
+// 0.95, and 0 where the shares end.
+TEST(SceneAnalysis, TheLightRatioPastABounceCountReadsTheShares) {
+    BounceEnergy energy;
+    for (int k = 0; k <= 12; ++k) energy.share.push_back(std::pow(0.5, k));
+    EXPECT_DOUBLE_EQ(energy.light_ratio_past(2), 0.5);
+    EXPECT_DOUBLE_EQ(energy.light_ratio_past(11), 0.5);  // one pair left
+    EXPECT_EQ(energy.light_ratio_past(12), 0.0);
+    energy.share.assign(13, 0.1);
+    EXPECT_DOUBLE_EQ(energy.light_ratio_past(3), 0.95);
+    EXPECT_EQ(BounceEnergy{}.light_ratio_past(0), 0.0);
 }
 
 // In a closed room every bounce lands on a wall, so each bounce carries about the walls' mean
