@@ -35,6 +35,10 @@ struct ExpandedSource {
     std::vector<std::string> files;
 };
 
+// Every GLSL file under shaders/, by its path there (defined in the source cmake/EmbedShaders.cmake
+// generates).
+const std::map<std::string, std::string_view>& embedded_shader_files();
+
 // Expands `path` from the embedded files (each include once). Throws Error naming the missing file
 // and who included it.
 ExpandedSource expand_shader_source(const std::string& path, const std::vector<std::string>& defines);

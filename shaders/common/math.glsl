@@ -10,6 +10,12 @@ vec3 safe_normalize(vec3 v, vec3 fallback) {
 
 float saturate(float x) { return clamp(x, 0.0, 1.0); }
 
+// Whether any component is positive (a photon or VPL that carries flux). Component-wise on purpose:
+// NVIDIA's driver 580.159 on an H200 evaluates max(x, max(y, z)) > 0.0 as false for positive values
+// under about 3e-8, `precise` or not, where each component's own comparison is exact; the photons
+// and VPLs of dim lights (a thousandth of the Cornell box's lamp) vanished.
+bool any_positive(vec3 v) { return any(greaterThan(v, vec3(0.0))); }
+
 // Replaces NaN and infinities so that no non-finite value can reach a frame.
 vec3 finite_or_zero(vec3 v) {
     return vec3(isnan(v.x) || isinf(v.x) ? 0.0 : v.x,

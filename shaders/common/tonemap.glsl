@@ -17,3 +17,9 @@ vec3 linear_to_srgb(vec3 c) {
     vec3 high = 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055;
     return mix(high, low, lessThanEqual(c, vec3(0.0031308)));
 }
+
+// The 8-bit code a display value takes, as the value that code stands for: rounded to nearest as the
+// CPU twin rounds (std::lround). A framebuffer write converts float to unorm with the device's own
+// rounding, which need not be to nearest (an H200 stored 2% of channels one code lower); the exact
+// centre of a code is stored as that code by any conversion within half a code.
+vec3 quantize_unorm8(vec3 c) { return floor(clamp(c, 0.0, 1.0) * 255.0 + 0.5) / 255.0; }

@@ -85,7 +85,7 @@ void main() {
             int node_level = int(entry >> 24);
             ivec2 cell = ivec2(entry & 0xFFFu, (entry >> 12) & 0xFFFu);
             VplNode node = nodes[node_index(view, node_level, cell)];
-            if (!(max_component(node.flux_far.rgb) > 0.0)) continue;
+            if (!any_positive(node.flux_far.rgb)) continue;
             if (node_level > u_finest_level) {
                 float d = max(distance(p, node.position_area.xyz) - node.normal_radius.w, 0.0);
                 float bound = max_component(node.flux_far.rgb) / (PI * d * d + node.bound_area.x);

@@ -36,7 +36,7 @@ void main() {
         normal_max = max(normal_max, children[c].normal_max_flag.xyz);
     }
     // Weights: flux luminance, or area where the cell reflects nothing (shadowed surfaces).
-    bool lit = max_component(flux) > 0.0;
+    bool lit = any_positive(flux);
     for (int c = 0; c < 4; ++c) {
         if (empty(children[c])) continue;
         float w = lit ? dot(children[c].flux_far.rgb, vec3(0.2126, 0.7152, 0.0722)) : children[c].position_area.w;

@@ -19,7 +19,7 @@ uniform int u_finest_level;
 uniform int u_mode;
 
 void emit(vec3 position, vec3 normal, vec3 flux, float area) {
-    if (!(max_component(flux) > 0.0)) return;
+    if (!any_positive(flux)) return;
     uint slot = atomicAdd(vpl_count, 1u);
     if (slot >= uint(vpls.length())) return;  // the cache is sized for the finest level: never
     vpls[slot] = Vpl(vec4(position, area), vec4(safe_normalize(normal, vec3(0.0, 0.0, 1.0)), 0.0), vec4(flux, 0.0));

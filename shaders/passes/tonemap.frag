@@ -13,5 +13,5 @@ out vec4 out_color;
 void main() {
     vec3 radiance = finite_or_zero(texelFetch(u_hdr, ivec2(gl_FragCoord.xy), 0).rgb);
     vec3 display = linear_to_srgb(tone_curve(radiance * u_exposure_scale, u_tone_curve));
-    out_color = vec4(display, 1.0);
+    out_color = vec4(quantize_unorm8(display), 1.0);
 }

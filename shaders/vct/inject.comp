@@ -33,7 +33,7 @@ void main() {
     PunctualLight light = PunctualLight(u_light_type, u_light_position, u_light_direction, u_light_radiant,
                                         u_light_cos_inner, u_light_cos_outer);
     vec3 flux = photon_flux(light, position.xyz, u_view_forward, u_texel_measure);
-    if (!(max(flux.r, max(flux.g, flux.b)) > 0.0)) return;
+    if (!any_positive(flux)) return;
     vec3 n = safe_normalize(normal, u_view_forward);
     SurfaceVoxels voxels = surface_voxels(position.xyz, n, dominant_axis(n));
     // Half the flux to each voxel of the pair, as voxelization gives each half the area.

@@ -22,7 +22,7 @@ void main() {
         vec3 emission = vec3(leaf_sum(slot, 7u), leaf_sum(slot, 8u), leaf_sum(slot, 9u)) / area;
         float world_area = area * u_lattice_spacing * u_lattice_spacing;
         radiance = finite_or_zero(albedo * INV_PI * flux / world_area + emission);
-    } else if (max(flux.r, max(flux.g, flux.b)) > 0.0) {
+    } else if (any_positive(flux)) {
         atomicAdd(counters[VCT_COUNTER_STRAY_SLOTS], 1u);
     }
     set_leaf_light(slot, radiance);

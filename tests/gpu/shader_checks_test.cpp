@@ -13,6 +13,8 @@
 #include <glm/gtc/packing.hpp>
 
 #include <cstring>
+#include <regex>
+#include <sstream>
 
 namespace bounce::test {
 namespace {
@@ -82,6 +84,29 @@ TEST(Shaders, ExtensionsFromIncludedFilesComeRightAfterVersion) {
         ++count;
     }
     EXPECT_EQ(count, 1u);
+}
+
+// Whether a photon or VPL carries flux is asked component by component (common/math.glsl's
+// any_positive): NVIDIA's driver 580.159 on an H200 evaluated max(x, max(y, z)) > 0.0 as false for
+// positive values under about 3e-8, so dim lights lost every photon (Stability.ZeroAndHugeIntensity...
+// failed there; a compute shader comparing the two forms on the same values showed it). No shader
+// may compare a maximum of components with zero again.
+TEST(Shaders, NoShaderComparesAMaximumOfComponentsWithZero) {
+    static const std::regex pattern(R"((max|max_component)\s*\(.*\)\s*(>|<=)\s*0\.0\b)");
+    std::size_t files = 0;
+    for (const auto& [path, text] : gpu::embedded_shader_files()) {
+        ++files;
+        std::istringstream lines{std::string(text)};
+        std::string line;
+        for (int number = 1; std::getline(lines, line); ++number) {
+            const std::string code = line.substr(0, line.find("//"));  // comments may name the pattern
+            EXPECT_FALSE(std::regex_search(code, pattern)) << path << ":" << number << ": " << line;
+        }
+    }
+    EXPECT_GT(files, 40u);
+    EXPECT_TRUE(std::regex_search(std::string("if (!(max(flux.r, max(flux.g, flux.b)) > 0.0)) return;"), pattern));
+    EXPECT_TRUE(std::regex_search(std::string("bool lit = max_component(flux) > 0.0;"), pattern));
+    EXPECT_FALSE(std::regex_search(std::string("if (!any_positive(flux)) return;"), pattern));
 }
 
 // flag_nodes.comp reads fragment `index` for every thread below u_fragment_count: told of two
