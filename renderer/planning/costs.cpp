@@ -144,6 +144,42 @@ std::optional<double> SceneMeasurements::ratio(const std::string& method, const 
     return std::nullopt;
 }
 
+std::optional<SceneMeasurements::AffineTime> SceneMeasurements::reference_time() const {
+    const std::lock_guard lock(mutex_);
+    // Weighted least squares with weights 1/measured^2: the residuals relative to each frame.
+    double s = 0.0, sx = 0.0, sy = 0.0, sxx = 0.0, sxy = 0.0, smallest = 0.0, largest = 0.0;
+    int frames = 0;
+    for (const auto& [key, by_size] : frames_) {
+        if (std::get<0>(key) != "reference") continue;
+        for (const auto& [pixels, kept] : by_size) {
+            for (const FrameTime& frame : kept) {
+                if (!(frame.baseline_ms > 0.0) || !(frame.measured_ms > 0.0)) continue;
+                const double w = 1.0 / (frame.measured_ms * frame.measured_ms);
+                const double x = frame.baseline_ms, y = frame.measured_ms;
+                s += w, sx += w * x, sy += w * y, sxx += w * x * x, sxy += w * x * y;
+                smallest = frames == 0 ? x : std::min(smallest, x);
+                largest = frames == 0 ? x : std::max(largest, x);
+                ++frames;
+            }
+        }
+    }
+    if (frames < 2 || largest < kReferenceSpan * smallest) return std::nullopt;
+    AffineTime fit;
+    fit.frames = frames;
+    const double determinant = s * sxx - sx * sx;
+    if (determinant > 0.0) {
+        fit.scale = (s * sxy - sx * sy) / determinant;
+        fit.fixed_ms = (sy - fit.scale * sx) / s;
+    }
+    if (!(determinant > 0.0) || fit.fixed_ms < 0.0 || !(fit.scale > 0.0)) {
+        // No fixed part the frames can see: proportional, through the origin.
+        fit.fixed_ms = 0.0;
+        fit.scale = sxy / sxx;
+    }
+    if (!(fit.scale > 0.0) || !std::isfinite(fit.scale) || !std::isfinite(fit.fixed_ms)) return std::nullopt;
+    return fit;
+}
+
 std::optional<double> SceneMeasurements::scene_ratio() const {
     const std::lock_guard lock(mutex_);
     std::vector<double> all;

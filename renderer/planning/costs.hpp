@@ -81,6 +81,21 @@ public:
     // `exact`, when given, says whether frames at this preset and bounce count were measured.
     std::optional<double> ratio(const std::string& method, const std::string& preset, int bounces = -1,
                                 bool* exact = nullptr) const;
+    // The reference's frame time on this scene as an affine function of the analysis' prediction:
+    // a fixed part per frame (dispatching tiles to the threads, merging them, keeping the frames of
+    // fewer bounces) and a part proportional to the samples. Through every reference frame measured
+    // here, by least squares on relative residuals (each frame counts as much as any other,
+    // whatever its length), where their predictions span kReferenceSpan or more; nullopt otherwise.
+    // One ratio prices a one-sample frame as a thousandth of a thousand-sample one, where on 16
+    // threads both carry the same few milliseconds of fixed cost.
+    struct AffineTime {
+        double fixed_ms = 0.0;
+        double scale = 1.0;  // measured ms per predicted ms of samples
+        int frames = 0;
+        double at(double baseline_ms) const { return fixed_ms + scale * baseline_ms; }
+    };
+    std::optional<AffineTime> reference_time() const;
+    static constexpr double kReferenceSpan = 4.0;
     // The median over every GPU method measured here: how much heavier the scene is than the
     // calibration scene, for GPU methods not yet measured on it. nullopt when none was.
     std::optional<double> scene_ratio() const;

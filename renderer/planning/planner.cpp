@@ -167,6 +167,16 @@ double predicted_ms(const PlanningInputs& inputs, const std::string& method, con
         const double pixels = static_cast<double>(inputs.width) * inputs.height;
         if (const auto ms = scene_line_ms(inputs, method, preset, knobs, pixels, basis)) return *ms;
     }
+    if (inputs.scene && method == "reference") {
+        if (const auto fit = inputs.scene->reference_time()) {
+            if (basis) {
+                *basis = fmt::format("the analysis' times as this scene's {} reference frames measured them: "
+                                     "{:.1f} ms + {:.2f}x",
+                                     fit->frames, fit->fixed_ms, fit->scale);
+            }
+            return fit->at(*base);
+        }
+    }
     std::optional<double> ratio, scene_ratio;
     bool exact = false;
     if (inputs.scene) {

@@ -311,6 +311,46 @@ TEST(Costs, OtherPresetsTakeTheShapeOfTheMethodsLineOnTheScene) {
                 1e-9);
 }
 
+// Reference frames cost a fixed part per frame and a part per sample. Frames measured at 3 ms +
+// 1.1x their predicted samples' time (an H200 host's 16 threads: the foliage's one-sample frame took
+// 2 to 3 ms where its samples were predicted at a fraction of one) price a one-sample frame at its
+// fixed part, where the median ratio of the long frames would price it at its samples alone.
+TEST(Costs, ReferenceFramesFitAFixedPartAndAPartPerSample) {
+    const SceneAnalysis analysis = made_up_analysis();
+    DeviceCosts device("test");
+    SceneMeasurements measured;
+    const PlanningInputs inputs{analysis, device, &measured, 64, 64, std::nullopt};
+    const auto at = [&](double spp) {
+        return predicted_ms(inputs, "reference", "medium", {{"spp", spp}, {"bounces", 0}});
+    };
+    const double one_sample = at(1.0);  // 2 ms of tracer build + 1000 ns x 4096 pixels
+    EXPECT_DOUBLE_EQ(one_sample, 2.0 + 1000.0 * 1e-6 * 64 * 64);
+    EXPECT_FALSE(measured.reference_time().has_value());
+    const double baseline_4 = 2.0 + 1000.0 * 1e-6 * 64 * 64 * 4, baseline_64 = 2.0 + 1000.0 * 1e-6 * 64 * 64 * 64;
+    // Frames of one length cannot tell a fixed part from a per-sample one: their ratio prices the rest.
+    for (int i = 0; i < 3; ++i) measured.record("reference", "medium", 0, 3.0 + 1.1 * baseline_64, baseline_64, 64 * 64);
+    EXPECT_FALSE(measured.reference_time().has_value());
+    EXPECT_NEAR(at(64.0), 3.0 + 1.1 * baseline_64, 1e-9);
+    EXPECT_NEAR(at(1.0), one_sample * (3.0 + 1.1 * baseline_64) / baseline_64, 1e-9);
+    measured.record("reference", "medium", 2, 3.0 + 1.1 * baseline_4, baseline_4, 64 * 64);
+    const auto fit = measured.reference_time();
+    ASSERT_TRUE(fit.has_value());
+    EXPECT_EQ(fit->frames, 4);
+    EXPECT_NEAR(fit->fixed_ms, 3.0, 1e-9);
+    EXPECT_NEAR(fit->scale, 1.1, 1e-12);
+    EXPECT_NEAR(at(1.0), 3.0 + 1.1 * one_sample, 1e-9);
+    EXPECT_NEAR(at(64.0), 3.0 + 1.1 * baseline_64, 1e-9);
+    // Frames that show no fixed part (a negative intercept) are priced in proportion.
+    SceneMeasurements proportional;
+    proportional.record("reference", "medium", 0, 9.0, 10.0, 64 * 64);
+    proportional.record("reference", "medium", 0, 100.0, 110.0, 64 * 64);
+    const auto through_origin = proportional.reference_time();
+    ASSERT_TRUE(through_origin.has_value());
+    EXPECT_DOUBLE_EQ(through_origin->fixed_ms, 0.0);
+    EXPECT_GT(through_origin->scale, 0.9);
+    EXPECT_LT(through_origin->scale, 1.0);
+}
+
 TEST(Costs, AReferenceFrameRecordsItsNoiseAgainstTheAnalysis) {
     const SceneAnalysis analysis = made_up_analysis();
     SceneMeasurements measured;
