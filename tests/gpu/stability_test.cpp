@@ -187,6 +187,38 @@ TEST_P(Stability, UniformScaleInvariance) {
     }
 }
 
+// The photons and VPLs a light sends do not depend on its intensity: a light at 1e-6 of the Cornell
+// lamp injects as many photons into vct's octree, and gives isr's fragments as many VPLs, as the lamp
+// itself. An H200's driver dropped every photon under about 3e-8 W (shaders now ask any_positive):
+// vct injected none at 1e-4 of the lamp and isr's fragments gathered no VPL at 1e-6. Photon counts
+// are exact; isr's traversal compares bounds linear in the intensity with a threshold linear in it,
+// so its decisions are the same but where float rounding meets a tie (1% allowed).
+TEST(StabilityDimLights, EveryPhotonAndVplOfADimLightIsKept) {
+    const auto statistic = [](const std::string& method, float scale, const std::string& name) {
+        scene::Scene scene = scene::make_cornell_box();
+        scene.lights[0].intensity *= scale;
+        RenderRequest request;
+        request.method = method;
+        request.preset = "draft";
+        request.width = request.height = 48;
+        const auto result = render_scene(scene, request);
+        const auto it = result.stats.method_statistics.find(name);
+        return it == result.stats.method_statistics.end() ? -1.0 : it->second;
+    };
+    const double photons = statistic("vct", 1.0f, "photons_injected");
+    const double vpls = statistic("isr", 1.0f, "vpls_per_fragment_mean");
+    ASSERT_GT(photons, 0.0);
+    ASSERT_GT(vpls, 0.0);
+    for (const float scale : {1e-3f, 1e-4f, 1e-6f}) {
+        const double dim_photons = statistic("vct", scale, "photons_injected");
+        const double dim_vpls = statistic("isr", scale, "vpls_per_fragment_mean");
+        std::printf("light at %g of the lamp: vct photons %.0f (lamp %.0f), isr VPLs per fragment %.1f (lamp %.1f)\n", scale,
+                    dim_photons, photons, dim_vpls, vpls);
+        EXPECT_EQ(dim_photons, photons) << "scale " << scale;
+        EXPECT_NEAR(dim_vpls, vpls, 0.01 * vpls) << "scale " << scale;
+    }
+}
+
 // cssm with its refinement oracle on, as its presets run it: the oracle compares tone-mapped bounds
 // with a threshold, the same at any scale, so the cut is the same but for rounding right at the
 // threshold; the frame's mean at scale 1e-3 and 1e4 agrees with scale 1's to 1e-3 (each flipped

@@ -6,11 +6,11 @@
 
 #include <glm/gtc/matrix_inverse.hpp>
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
-#include <mutex>
 #include <optional>
 #include <cmath>
 #include <limits>
@@ -573,22 +573,13 @@ void PathTracer::render(Accumulator& accumulator, const scene::Camera& camera, i
                  settings.ambient_occlusion ? " of ambient occlusion" : !settings.indirect_visibility ? " without indirect visibility" : "");
     const std::size_t vertex_slots = settings.ambient_occlusion ? 0 : static_cast<std::size_t>(settings.max_bounces) + 1;
     if (accumulator.vertices_shaded_.size() < vertex_slots) accumulator.vertices_shaded_.resize(vertex_slots, 0);
-    std::mutex vertices_mutex;
+    // Per thread, summed once the rows are done (or left, cancelled).
+    tbb::enumerable_thread_specific<std::vector<std::uint64_t>> vertices_per_thread(std::vector<std::uint64_t>(vertex_slots, 0));
     impl_->arena.execute([&] {
         tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
             std::vector<glm::vec3> prefixes(static_cast<std::size_t>(prefix_count));
             std::vector<glm::dvec3> prefix_batch(static_cast<std::size_t>(prefix_count), glm::dvec3(0.0));
-            std::vector<std::uint64_t> vertices(vertex_slots, 0);
-            // Merged when the rows are done, or left, cancelled.
-            struct MergeVertices {
-                std::vector<std::uint64_t>& from;
-                std::vector<std::uint64_t>& into;
-                std::mutex& mutex;
-                ~MergeVertices() {
-                    const std::lock_guard lock(mutex);
-                    for (std::size_t j = 0; j < from.size(); ++j) into[j] += from[j];
-                }
-            } merge{vertices, accumulator.vertices_shaded_, vertices_mutex};
+            std::vector<std::uint64_t>& vertices = vertices_per_thread.local();
             for (int y = rows.begin(); y < rows.end(); ++y) {
                 for (int x = 0; x < width; ++x) {
                     if (cancelled && cancelled->load(std::memory_order_relaxed)) return;
@@ -639,6 +630,9 @@ void PathTracer::render(Accumulator& accumulator, const scene::Camera& camera, i
                 }
             }
         });
+    });
+    vertices_per_thread.combine_each([&](const std::vector<std::uint64_t>& counted) {
+        for (std::size_t j = 0; j < counted.size(); ++j) accumulator.vertices_shaded_[j] += counted[j];
     });
     if (cancelled && cancelled->load()) throw Cancelled("reference: the trace was cancelled");
     accumulator.samples_ += count;
