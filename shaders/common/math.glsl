@@ -33,3 +33,9 @@ uint pcg_hash(uint v) {
 
 // A uniform number in [0, 1) from a hash.
 float unit_float(uint h) { return float(h >> 8u) * (1.0 / 16777216.0); }
+
+// An orthonormal frame whose third axis is the unit vector `n` (cone axes, paraboloid maps).
+mat3 tangent_frame(vec3 n) {
+    vec3 tangent = normalize(abs(n.x) < 0.9 ? cross(n, vec3(1.0, 0.0, 0.0)) : cross(n, vec3(0.0, 1.0, 0.0)));
+    return mat3(tangent, cross(n, tangent), n);
+}

@@ -3,6 +3,8 @@
 // at its patch's centre pixel, the irradiance of the VPLs: the VPL cache (naive or basic image-space
 // radiosity), or a walk of the VPL tree from the top patches that opens a patch while the bound on
 // what it can contribute exceeds the threshold (hierarchical, §3.5.1).
+// With INDIRECT_VISIBILITY (hierarchical only), each VPL's light is shadowed by its patch's imperfect
+// shadow map (isr/ism.glsl); the paper gathers without visibility.
 // A draw gathers one batch (a range of the cache, or of the top patches over every view) and adds
 // it with blending, so no draw runs unbounded work per fragment. Alpha counts the VPLs gathered,
 // plus one on the first batch: texels that gathered hold alpha >= 1 (isr/pull.comp).
@@ -11,6 +13,10 @@
 layout(early_fragment_tests) in;
 #include "isr/multires.glsl"
 #include "isr/vpl_tree.glsl"
+#ifdef INDIRECT_VISIBILITY
+#define ISM_READ
+#include "isr/ism.glsl"
+#endif
 
 layout(binding = BOUNCE_UNIT_GBUFFER_POSITION) uniform sampler2D u_gbuffer_position;
 layout(binding = BOUNCE_UNIT_GBUFFER_NORMAL) uniform sampler2D u_gbuffer_normal;
@@ -94,8 +100,12 @@ void main() {
                     continue;
                 }
             }
-            irradiance += vpl_irradiance(p, n, node.position_area.xyz, safe_normalize(node.normal_radius.xyz, n),
-                                         node.position_area.w, node.flux_far.rgb);
+            vec3 light = vpl_irradiance(p, n, node.position_area.xyz, safe_normalize(node.normal_radius.xyz, n),
+                                        node.position_area.w, node.flux_far.rgb);
+#ifdef INDIRECT_VISIBILITY
+            if (any_positive(light)) light *= ism_visibility(view, node_level, cell, p, n);
+#endif
+            irradiance += light;
             gathered += 1.0;
         }
     }

@@ -19,6 +19,11 @@
 #define ISR_BINDING_CACHE 1     // VPL cache: uint count, 3 pad, then Vpl[]
 #define ISR_BINDING_COUNTERS 2  // uint[ISR_COUNTERS]
 #define ISR_BINDING_TREE_INFO 3 // float[4]: largest flux channel summed over every VPL, 3 pad
+// Imperfect shadow maps (isr/ism.glsl): per map, u_ism_size^2 texels of distances from its patch.
+#define ISR_BINDING_ISM_DEPTH 4       // uint[]: the splatted distances' bits, 0xFFFFFFFF where no point fell
+#define ISR_BINDING_ISM_FILLED 5      // float[]: the same with holes filled (what the gather reads)
+#define ISR_BINDING_ISM_POINTS 6      // vec4[]: the point cloud, object-space position and object index
+#define ISR_BINDING_ISM_TRANSFORMS 7  // mat4[]: every object's world transform
 
 #define ISR_COUNTER_LEVEL_FRAGMENTS 0  // ISR_MAX_LEVELS counters: multiresolution fragments per level
 #define ISR_COUNTER_VPLS_LOW 8         // VPLs gathered over every fragment, low and high words

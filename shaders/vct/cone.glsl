@@ -104,7 +104,4 @@ ConeResult trace_cone(vec3 p, vec3 n, vec3 direction, float cone_tan) {
 }
 
 // The tangent frame of the cone axes (z along `n`).
-mat3 cone_frame(vec3 n) {
-    vec3 tangent = normalize(abs(n.x) < 0.9 ? cross(n, vec3(1.0, 0.0, 0.0)) : cross(n, vec3(0.0, 1.0, 0.0)));
-    return mat3(tangent, cross(n, tangent), n);
-}
+mat3 cone_frame(vec3 n) { return tangent_frame(n); }

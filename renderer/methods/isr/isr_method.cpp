@@ -1,6 +1,7 @@
 #include "renderer/methods/isr/isr_method.hpp"
 
 #include "renderer/gpu/counter_buffer.hpp"
+#include "renderer/methods/isr/imperfect_shadow_maps.hpp"
 #include "renderer/methods/isr/multires_buffer.hpp"
 #include "renderer/methods/isr/vpl_tree.hpp"
 #include "renderer/passes/direct_light_pass.hpp"
@@ -49,6 +50,9 @@ public:
                                             {static_cast<float>(frame.knob("depth_threshold")),
                                              static_cast<float>(frame.knob("normal_threshold"))});
         finest_level_ = std::max(0, tree_.top_level() - frame.knob_int("max_depth"));
+        const IsmSettings ism{frame.knob_int("ism_size"), frame.knob_int("ism_points"), frame.knob_int("ism_levels_below_top")};
+        visibility_ = ism.size > 0 && mode_ == ISR_MODE_HIERARCHICAL;
+        if (visibility_) ism_.build(frame, tree_, ism, [&frame] { frame.interruption_point(); });
         if (mode_ != ISR_MODE_HIERARCHICAL && (tree_built || mode_ != cache_mode_ || finest_level_ != cache_level_)) {
             tree_.select(frame, mode_, finest_level_);
             cache_mode_ = mode_;
@@ -80,7 +84,10 @@ public:
              fmt::format("{}: {} patches from each texel up to {}^2 per view, and the VPL cache", mode_name(mode_),
                          tree_.nodes(), ISR_TOP_PATCHES)},
             {"multires_atlas", multires_.bytes(),
-             fmt::format("{} eye-space levels: irradiance, min-max depth and normals, stencil", multires_.levels())}};
+             fmt::format("{} eye-space levels: irradiance, min-max depth and normals, stencil", multires_.levels())},
+            {"imperfect_shadow_maps", ism_.bytes(),
+             visibility_ ? fmt::format("indirect visibility: {} maps on the VPL patches of level {}", ism_.maps(), ism_.level())
+                         : std::string("none: the gather has no indirect visibility")}};
     }
 
     std::map<std::string, double> statistics() const override {
@@ -98,8 +105,11 @@ public:
             {"gathered_texels", static_cast<double>(gathered_texels_)},
             {"vpls_per_fragment_mean", fragments_ > 0 ? static_cast<double>(vpls_gathered_) / fragments_ : 0.0},
             {"vpls_per_fragment_max", static_cast<double>(vpls_max_)},
+            {"indirect_visibility", visibility_ ? 1.0 : 0.0},
+            {"ism_maps", visibility_ ? static_cast<double>(ism_.maps()) : 0.0},
+            {"ism_builds", static_cast<double>(ism_.builds())},
             {"resident_bytes", static_cast<double>(gbuffer_.bytes() + shadows_.bytes() + light_views_.bytes() +
-                                                   tree_.bytes() + multires_.bytes())}};
+                                                   tree_.bytes() + multires_.bytes() + ism_.bytes())}};
         if (mode_ != ISR_MODE_HIERARCHICAL) stats["vpl_cache"] = static_cast<double>(cached_vpls_);
         for (int level = 0; level < multires_.levels(); ++level) {
             stats[fmt::format("multires_fragments_level_{}", level)] = static_cast<double>(level_fragments_[level]);
@@ -115,12 +125,14 @@ private:
         gpu::GpuTimers::Scope timing(frame.timers, "isr_gather");
         constexpr std::size_t kVplsPerDraw = 16384;
         const bool hierarchical = mode_ == ISR_MODE_HIERARCHICAL;
-        const gpu::ShaderProgram& program = frame.shaders.get(
-            {"common/fullscreen.vert", "isr/gather.frag", hierarchical ? std::vector<std::string>{}
-                                                                       : std::vector<std::string>{"VPL_CACHE"}});
+        std::vector<std::string> defines;
+        if (!hierarchical) defines.push_back("VPL_CACHE");
+        if (visibility_) defines.push_back("INDIRECT_VISIBILITY");
+        const gpu::ShaderProgram& program = frame.shaders.get({"common/fullscreen.vert", "isr/gather.frag", defines});
         program.use();
         multires_.set_layout(program);
         tree_.bind(program);
+        if (visibility_) ism_.bind(program);
         program.set("u_finest_level", finest_level_);
         program.set("u_tau", static_cast<float>(frame.knob("tau")));
         program.set("u_scene_radius", std::max(0.5f * glm::length(frame.scene.world_bounds().extent()), 1e-30f));
@@ -174,6 +186,8 @@ private:
     passes::LightViewMaps light_views_;
     VplTree tree_;
     MultiresolutionBuffer multires_;
+    ImperfectShadowMaps ism_;
+    bool visibility_ = false;
     passes::FullscreenTriangle triangle_;
     gpu::CounterBuffer counters_;
     int mode_ = ISR_MODE_HIERARCHICAL;
@@ -190,7 +204,8 @@ MethodInfo method_info() {
     MethodInfo info;
     info.name = "isr";
     info.description = "hierarchical image-space radiosity: direct light plus one diffuse bounce gathered from "
-                       "reflective-shadow-map VPLs at multiresolution eye-space patches (no indirect visibility)";
+                       "reflective-shadow-map VPLs at multiresolution eye-space patches (indirect visibility from imperfect "
+                       "shadow maps where ism_size is set)";
     info.indirect_bounces = 1;
     info.knobs = {
         {"rsm_size", 16, 2048, true, "texels per side of each reflective shadow map (rounded down to a power of two)"},
@@ -205,11 +220,19 @@ MethodInfo method_info() {
         {"max_depth", 0, ISR_MAX_TREE_LEVELS - 1, true,
          "light-patch levels below the 16^2 top patches that traversal (or basic clustering, or naive sampling) may "
          "reach"},
-        {"shadow_map_size", 16, 8192, true, "texels per side of each shadow map (direct light)"}};
+        {"shadow_map_size", 16, 8192, true, "texels per side of each shadow map (direct light)"},
+        {"ism_size", 0, 64, true,
+         "indirect visibility (hierarchical mode): texels per side of each VPL patch's imperfect shadow map; 0: none, "
+         "as in the paper"},
+        {"ism_points", 16, 16384, true, "indirect visibility: points of the scene's point cloud splatted into each map"},
+        {"ism_levels_below_top", 0, 3, true,
+         "indirect visibility: maps on the VPL patches this many levels below the 16^2 top patches per view (each "
+         "level 4x the maps)"}};
     auto preset = [](double rsm, double levels, double depth, double normal, double tau, double max_depth) {
         return KnobValues{{"rsm_size", rsm},     {"levels", levels}, {"depth_threshold", depth},
                           {"normal_threshold", normal}, {"mode", ISR_MODE_HIERARCHICAL}, {"tau", tau},
-                          {"max_depth", max_depth}, {"shadow_map_size", 2048}};
+                          {"max_depth", max_depth}, {"shadow_map_size", 2048},
+                          {"ism_size", 0}, {"ism_points", 1024}, {"ism_levels_below_top", 1}};
     };
     info.presets = {{"draft", preset(64, 5, 0.1, 0.5, 0.05, 2)},
                     {"low", preset(128, 5, 0.05, 0.4, 0.02, 3)},
@@ -223,6 +246,12 @@ MethodInfo method_info() {
         estimate.push_back({"reflective_shadow_maps", passes::LightViewMaps::bytes_for(input.scene, rsm_size), "rsm_size"});
         estimate.push_back({"vpl_tree", VplTree::bytes_for(passes::light_views_with_power(input.scene), rsm_size), "rsm_size"});
         estimate.push_back({"multires_atlas", MultiresolutionBuffer::bytes_for(input.width, input.height), "frame size"});
+        const IsmSettings ism{input.knob_int("ism_size"), input.knob_int("ism_points"), input.knob_int("ism_levels_below_top")};
+        if (ism.size > 0 && input.knob_int("mode") == ISR_MODE_HIERARCHICAL) {
+            estimate.push_back({"imperfect_shadow_maps",
+                                ImperfectShadowMaps::bytes_for(passes::light_views_with_power(input.scene), rsm_size, ism),
+                                "ism_size"});
+        }
         return estimate;
     };
     return info;

@@ -1,0 +1,101 @@
+// Imperfect shadow maps (Ritschel et al. 2008, [ism] in docs/references.md): isr's optional
+// indirect visibility. The VPL tree's patches of one level each carry a small paraboloid depth map
+// of the hemisphere above them, splatted from a few points of a random point cloud of the scene's
+// surfaces (isr/ism_splat.comp) with its holes filled (isr/ism_fill.comp). A VPL gathered from the
+// tree is shadowed by the map of its patch at that level: its ancestor, or for a coarser patch its
+// brightest descendant. Needs isr/vpl_tree.glsl.
+
+uniform int u_ism_size;   // texels per side of one map
+uniform int u_ism_level;  // the tree level whose patches carry maps
+// The angle one texel spans at a map's centre (the paraboloid's disk is tan(theta / 2)): 4 / size.
+uniform float u_ism_texel_angle;
+uniform float u_ism_bias_absolute;  // metres, against rounding
+
+struct IsmFrame {
+    vec3 centre;
+    mat3 frame;  // third axis: the hemisphere's pole, the patch's mean normal
+    bool valid;  // false where the patch carries no flux (its map is empty)
+};
+
+int ism_side() { return u_rsm_size >> u_ism_level; }
+uint ism_count_per_view() { return uint(ism_side() * ism_side()); }
+
+IsmFrame ism_frame(uint ism) {
+    uint per_view = ism_count_per_view();
+    int view = int(ism / per_view);
+    int index = int(ism % per_view);
+    VplNode node = nodes[node_index(view, u_ism_level, ivec2(index % ism_side(), index / ism_side()))];
+    IsmFrame f;
+    f.valid = any_positive(node.flux_far.rgb) && dot(node.normal_radius.xyz, node.normal_radius.xyz) > 1e-12;
+    f.centre = node.position_area.xyz;
+    f.frame = tangent_frame(safe_normalize(node.normal_radius.xyz, vec3(0.0, 0.0, 1.0)));
+    return f;
+}
+
+// The map a tree node is shadowed by: its ancestor's, or for a coarser node its brightest
+// descendant's at the maps' level (a geometric choice, such as the centre, can fall on an empty
+// patch at an edge of the lit surface, whose map is empty).
+uint ism_of_node(int view, int level, ivec2 cell) {
+    ivec2 at = level <= u_ism_level ? cell >> (u_ism_level - level) : cell;
+    for (int l = level; l > u_ism_level; --l) {
+        ivec2 brightest = at * 2;
+        float most = -1.0;
+        for (int c = 0; c < 4; ++c) {
+            ivec2 child = at * 2 + ivec2(c & 1, c >> 1);
+            float flux = dot(nodes[node_index(view, l - 1, child)].flux_far.rgb, vec3(1.0));
+            if (flux > most) {
+                most = flux;
+                brightest = child;
+            }
+        }
+        at = brightest;
+    }
+    return uint(view) * ism_count_per_view() + uint(at.y * ism_side() + at.x);
+}
+
+// The paraboloid projection of direction w (unit) about the frame's pole, in texels of one map;
+// false for directions below the hemisphere.
+bool ism_project(IsmFrame f, vec3 w, out vec2 texel) {
+    float up = dot(w, f.frame[2]);
+    if (up <= 0.0) return false;
+    vec2 disk = vec2(dot(w, f.frame[0]), dot(w, f.frame[1])) / (1.0 + up);
+    texel = (disk * 0.5 + 0.5) * float(u_ism_size);
+    return true;
+}
+
+uint ism_texel_index(uint ism, ivec2 texel) {
+    ivec2 clamped = clamp(texel, ivec2(0), ivec2(u_ism_size - 1));
+    return ism * uint(u_ism_size * u_ism_size) + uint(clamped.y * u_ism_size + clamped.x);
+}
+
+#ifdef ISM_READ
+layout(std430, binding = ISR_BINDING_ISM_FILLED) readonly buffer Filled { float depth_filled[]; };
+
+// How much of the light from the tree node (view, level, cell) reaches p, on a surface of normal n:
+// the bilinear weights of the four texels around p's direction in the node's map whose stored depth
+// does not occlude p. A texel holds the nearest of the samples over its angle, and where p's own
+// surface is seen at a grazing angle those lie nearer than p by up to d * angle / cos_i per texel of
+// angle: a sample is an occluder only when nearer than that over two texels (the taps reach one
+// texel from p's direction, the fill one more): the slope-scaled bias of shadow maps.
+float ism_visibility(int view, int level, ivec2 cell, vec3 p, vec3 n) {
+    uint map = ism_of_node(view, level, cell);
+    IsmFrame f = ism_frame(map);
+    if (!f.valid) return 1.0;
+    vec3 offset = p - f.centre;
+    float d = length(offset);
+    vec2 texel;
+    if (!(d > 0.0) || !ism_project(f, offset / d, texel)) return 1.0;
+    float cos_i = max(-dot(n, offset / d), 0.1);
+    float unoccluded_from = d * (1.0 - 2.0 * u_ism_texel_angle / cos_i) - u_ism_bias_absolute;
+    vec2 base = texel - 0.5;
+    ivec2 corner = ivec2(floor(base));
+    vec2 weight = base - vec2(corner);
+    float lit = 0.0;
+    for (int k = 0; k < 4; ++k) {
+        ivec2 o = ivec2(k & 1, k >> 1);
+        float w = (o.x == 1 ? weight.x : 1.0 - weight.x) * (o.y == 1 ? weight.y : 1.0 - weight.y);
+        if (depth_filled[ism_texel_index(map, corner + o)] >= unoccluded_from) lit += w;
+    }
+    return lit;
+}
+#endif
