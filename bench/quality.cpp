@@ -39,6 +39,9 @@ struct Options {
     int size = 128;
     int reference_spp = 1024;
     bool corpus = false;  // bench/corpus.hpp's scenes
+    // Over every preset of each method that declares them (--knob NAME=VALUE): `isr` with indirect
+    // visibility, say.
+    methods::KnobValues knobs;
     // The reference's camera rays through pixel centres, as raster methods shade: the error is then
     // the lighting's alone, not also the antialiasing the reference's jittered pixels add.
     bool pixel_centre = false;
@@ -148,6 +151,11 @@ void write_markdown(const fs::path& path, const std::vector<Row>& rows, const Op
        << "- GPU: " << gpu << "\n"
        << fmt::format("- Frames {0}x{0}; reference: {1} spp, {2} indirect bounces (cached in {3}).\n", options.size,
                       options.reference_spp, options.reference_bounces, options.cache.string())
+       << [&] {
+              std::string knobs;
+              for (const auto& [name, value] : options.knobs) knobs += fmt::format("{}`{}` = {:g}", knobs.empty() ? "" : ", ", name, value);
+              return knobs.empty() ? std::string() : "- Knobs over every preset of the methods that have them: " + knobs + ".\n";
+          }()
        << "- Error: relMSE = mean over pixels and RGB of (t−r)²/(r²+0.01) on linear HDR, against the full\n"
        << "  reference (`rel_mse`) and against the reference at the bounce count the method models\n"
        << "  (`rel_mse_same_bounces`, which isolates the method's own approximations).\n"
@@ -215,10 +223,21 @@ int main(int argc, char** argv) {
         else if (flag == "--previews") options.previews = arguments.value();
         else if (flag == "--detail") options.detail = std::max(1, arguments.number());
         else if (flag == "--method") options.methods.push_back(arguments.value());
-        else {
+        else if (flag == "--knob") {
+            const std::string assignment = arguments.value();
+            const auto equals = assignment.find('=');
+            char* end = nullptr;
+            const double value = equals == std::string::npos ? 0.0 : std::strtod(assignment.c_str() + equals + 1, &end);
+            if (equals == std::string::npos || equals == 0 || end == assignment.c_str() + equals + 1 || *end != '\0') {
+                std::fprintf(stderr, "quality: --knob takes NAME=VALUE, not '%s'\n", assignment.c_str());
+                return 2;
+            }
+            options.knobs[assignment.substr(0, equals)] = value;
+        } else {
             std::fprintf(stderr,
                          "usage: quality [--size N] [--reference-spp N] [--reference-bounces N] [--repeats N]\n"
-                         "               [--scene NAME ...] [--method NAME ...] [--corpus [--detail N]] [--pixel-centre]\n"
+                         "               [--scene NAME ...] [--method NAME ...] [--knob NAME=VALUE ...]\n"
+                         "               [--corpus [--detail N]] [--pixel-centre]\n"
                          "               [--previews DIR]\n"
                          "               [--out DIR]\n"
                          "               [--cache DIR]\n"
@@ -271,8 +290,15 @@ int main(int argc, char** argv) {
                     continue;  // CPU methods (the reference) are measured below
                 }
                 if (!measured(method)) continue;
+                methods::KnobValues knobs;
+                for (const auto& [name, value] : options.knobs) {
+                    const auto& declared = registry.find(method).knobs;
+                    if (std::any_of(declared.begin(), declared.end(), [&](const auto& knob) { return knob.name == name; })) {
+                        knobs[name] = value;
+                    }
+                }
                 for (const auto& preset : methods::preset_names()) {
-                    const RenderRequest request = linear_request(method, preset, {}, options.size);
+                    const RenderRequest request = linear_request(method, preset, knobs, options.size);
                     const RenderResult cold = renderer.render(*resources, request);  // warm-up: shaders, structures
                     std::vector<RenderResult> results;
                     for (int r = 0; r < options.repeats; ++r) results.push_back(renderer.render(*resources, request));

@@ -1,7 +1,8 @@
 // Imperfect shadow maps (Ritschel et al. 2008, [ism] in docs/references.md): isr's optional
 // indirect visibility. The VPL tree's patches of one level each carry a small paraboloid depth map
 // of the hemisphere above them, splatted from a few points of a random point cloud of the scene's
-// surfaces (isr/ism_splat.comp) with its holes filled (isr/ism_fill.comp). A VPL gathered from the
+// surfaces (isr/ism_splat.comp) with its holes filled by pull-push (isr/ism_pull.comp, ism_push.comp).
+// A VPL gathered from the
 // tree is shadowed by the map of its patch at that level: its ancestor, or for a coarser patch its
 // brightest descendant. Needs isr/vpl_tree.glsl.
 
@@ -68,15 +69,35 @@ uint ism_texel_index(uint ism, ivec2 texel) {
     return ism * uint(u_ism_size * u_ism_size) + uint(clamped.y * u_ism_size + clamped.x);
 }
 
+// The filled maps' pyramid (isr/ism_pull.comp, isr/ism_push.comp): level k holds every map at
+// (size >> k)^2 texels, maps one after another, levels one after another; level 0 is what the
+// gather reads. A texel no sample reached holds ISM_EMPTY.
+const float ISM_EMPTY = 3.0e38;
+// Samples within this relative depth of the nearest among them are one surface: the others, behind
+// it, fell through gaps between its samples.
+const float ISM_SAME_SURFACE = 0.2;
+uniform uint u_ism_maps;  // over every view
+
+uint ism_level_offset(int level) {
+    uint offset = 0u;
+    for (int l = 0; l < level; ++l) offset += u_ism_maps * uint((u_ism_size >> l) * (u_ism_size >> l));
+    return offset;
+}
+uint ism_pyramid_index(int level, uint map, ivec2 texel) {
+    int side = u_ism_size >> level;
+    return ism_level_offset(level) + map * uint(side * side) + uint(texel.y * side + texel.x);
+}
+
 #ifdef ISM_READ
-layout(std430, binding = ISR_BINDING_ISM_FILLED) readonly buffer Filled { float depth_filled[]; };
+layout(std430, binding = ISR_BINDING_ISM_FILLED) readonly buffer Filled { float depth_pyramid[]; };
 
 // How much of the light from the tree node (view, level, cell) reaches p, on a surface of normal n:
 // the bilinear weights of the four texels around p's direction in the node's map whose stored depth
 // does not occlude p. A texel holds the nearest of the samples over its angle, and where p's own
 // surface is seen at a grazing angle those lie nearer than p by up to d * angle / cos_i per texel of
 // angle: a sample is an occluder only when nearer than that over two texels (the taps reach one
-// texel from p's direction, the fill one more): the slope-scaled bias of shadow maps.
+// texel from p's direction, a push from the level above one more): the slope-scaled bias of
+// shadow maps.
 float ism_visibility(int view, int level, ivec2 cell, vec3 p, vec3 n) {
     uint map = ism_of_node(view, level, cell);
     IsmFrame f = ism_frame(map);
@@ -94,7 +115,7 @@ float ism_visibility(int view, int level, ivec2 cell, vec3 p, vec3 n) {
     for (int k = 0; k < 4; ++k) {
         ivec2 o = ivec2(k & 1, k >> 1);
         float w = (o.x == 1 ? weight.x : 1.0 - weight.x) * (o.y == 1 ? weight.y : 1.0 - weight.y);
-        if (depth_filled[ism_texel_index(map, corner + o)] >= unoccluded_from) lit += w;
+        if (depth_pyramid[ism_texel_index(map, corner + o)] >= unoccluded_from) lit += w;
     }
     return lit;
 }

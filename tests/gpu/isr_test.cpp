@@ -2,6 +2,7 @@
 // visibility (the truth) and without it (what the paper's method computes: every directly lit
 // surface lights every point it faces), per preset, per light type and at the thresholds' limits;
 // its upsampling, its VPL selection modes, and what it keeps between frames.
+#include "bench/extremes.hpp"
 #include "gpu_fixture.hpp"
 #include "renderer/image/metrics.hpp"
 #include "renderer/methods/reference/path_tracer.hpp"
@@ -12,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 
 namespace bounce::test {
 namespace {
@@ -323,9 +325,9 @@ double floor_mean(const scene::Scene& scene, const image::Frame& frame, float x0
 // 0.8 of the way, so what still reaches it comes through the maps' gaps, where a map holds a sample
 // of the floor behind the divider and none of the divider near it: fewer with more points per map.
 // The requirements: at least three quarters of the hidden light gone at 1024 points, less left at
-// 4096, and at least 90% of the open half's kept (the slope-scaled bias lets a receiver's own
-// surface pass). Measured on llvmpipe (64x64): 16% and 12% of the hidden light left, 96% of the
-// open half's kept.
+// 4096, and at least 85% of the open half's kept (the slope-scaled bias lets a receiver's own
+// surface pass; the pull-push fill darkens near the divider's foot). Measured on llvmpipe (64x64):
+// 16% and 11% of the hidden light left, 92% of the open half's kept.
 TEST(Isr, ImperfectShadowMapsDarkenWhatADividerHides) {
     const scene::Scene scene = divided_floor();
     // Every pixel gathers (levels 1): seen from straight above the divider covers no pixel, and isr's
@@ -350,14 +352,14 @@ TEST(Isr, ImperfectShadowMapsDarkenWhatADividerHides) {
     EXPECT_GT(hidden_open, 0.2 * lit_open);  // the scene does hide light that isr alone would gather
     EXPECT_LE(hidden_shadowed, 0.25 * hidden_open);
     EXPECT_LT(hidden_denser, hidden_shadowed);
-    EXPECT_GE(lit_shadowed, 0.9 * lit_open);
+    EXPECT_GE(lit_shadowed, 0.85 * lit_open);
 }
 
 // The Cornell box against the reference with indirect visibility: CornellAgainstReferencePerPreset
 // shows that nearly all of isr's error there is the visibility it lacks (relMSE 0.108 to 0.111 at
 // every preset). With the maps at least three quarters of it must go, and the mean come nearer the
-// reference's. Measured on llvmpipe (64x64): relMSE 0.0149 (draft) and 0.0099 (medium), means 1.5%
-// under the reference's where they were 3.5% over.
+// reference's. Measured on llvmpipe (64x64): relMSE 0.0155 (draft) and 0.0110 (medium), means 2.7%
+// and 3.0% under the reference's where they were 3.5% over.
 TEST(Isr, ImperfectShadowMapsBringTheCornellBoxToTheOccludedReference) {
     const scene::Scene scene = scene::make_cornell_box();
     const image::Frame& truth = cornell_reference(true);
@@ -391,6 +393,41 @@ TEST(Isr, ImperfectShadowMapsKeptWhileOnlyTheCameraMoves) {
     EXPECT_EQ(stat(shared_renderer().render(*resources, request), "ism_builds"), 2.0);
     request.knobs["ism_size"] = 16;
     EXPECT_EQ(stat(shared_renderer().render(*resources, request), "ism_builds"), 3.0);
+}
+
+// The extremes matrix's case of a light inside a closed block (bench/extremes.cpp): the reference's
+// room is dark, and isr without visibility lights it through the block's walls (its documented
+// exception there, relMSE about 12). The hard case for a point cloud: the block's walls are a small
+// part of the scene's area but fill most of each map's hemisphere, so their samples are sparse
+// there, while the room behind them is sampled densely. The requirements: at least
+// two thirds of the light gone at 1024 points per map, and less left at 4096. Measured on llvmpipe
+// (32x32): 26% and 16% left.
+TEST(Isr, ImperfectShadowMapsKeepALightInsideAClosedBlock) {
+    std::optional<bench::ExtremeCase> closed;
+    for (bench::ExtremeCase& extreme : bench::extreme_cases()) {
+        if (extreme.name == "geometry/light_inside_closed") closed = std::move(extreme);
+    }
+    ASSERT_TRUE(closed.has_value());
+    const bench::ExtremeTruth truth = bench::extreme_truth(*closed, bench::kExtremeReferenceBounces);
+    const auto request = [&](methods::KnobValues knobs) {
+        RenderRequest r = method_request("isr", "high", closed->width, std::move(knobs));
+        r.height = closed->height;
+        return r;
+    };
+    const auto open = render_scene(closed->scene, request({}));
+    const auto shadowed = render_scene(closed->scene, request(kVisibility));
+    methods::KnobValues denser = kVisibility;
+    denser["ism_points"] = 4096;
+    const auto shadowed_denser = render_scene(closed->scene, request(denser));
+    const image::ErrorMetrics without = image::compare(open.frame, truth.frame);
+    const image::ErrorMetrics with = image::compare(shadowed.frame, truth.frame);
+    const image::ErrorMetrics with_denser = image::compare(shadowed_denser.frame, truth.frame);
+    std::printf("light inside a closed block: relMSE %.4f without visibility, %.4f with, %.4f with 4096 points; means "
+                "%.5f, %.5f, %.5f (reference %.5f +- %.5f)\n",
+                without.rel_mse, with.rel_mse, with_denser.rel_mse, without.mean_test, with.mean_test,
+                with_denser.mean_test, truth.mean, truth.mean_error);
+    EXPECT_LE(with.mean_test - truth.mean, (without.mean_test - truth.mean) / 3.0 + 3.0 * truth.mean_error);
+    EXPECT_LT(with_denser.mean_test, with.mean_test);
 }
 
 }  // namespace

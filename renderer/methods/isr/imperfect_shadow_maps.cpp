@@ -13,13 +13,27 @@ namespace bounce::methods::isr {
 namespace {
 
 constexpr std::size_t kPointBytes = 16;   // vec4
-constexpr std::size_t kTexelBytes = 4 + 4;  // splatted bits and filled depth
+constexpr std::size_t kTexelBytes = 4;  // the splatted bits; the filled pyramid, pyramid_texels()
 // Threads per splat dispatch: bounded work per dispatch (GPU watchdogs), a cancel seen between.
 constexpr std::uint64_t kSplatsPerDispatch = std::uint64_t{1} << 22;
 
 std::uint64_t map_count(std::uint64_t views, int rsm_size, int level) {
     const auto side = static_cast<std::uint64_t>(rsm_size >> level);
     return views * side * side;
+}
+
+// Levels of a map's pull-push pyramid, down to one texel, and the texels of all of them.
+int pyramid_levels(int size) {
+    int levels = 1;
+    while ((size >> levels) >= 1) ++levels;
+    return levels;
+}
+std::uint64_t pyramid_texels(int size) {
+    std::uint64_t texels = 0;
+    for (int level = 0; level < pyramid_levels(size); ++level) {
+        texels += static_cast<std::uint64_t>(size >> level) * static_cast<std::uint64_t>(size >> level);
+    }
+    return texels;
 }
 
 int top_level_of(int rsm_size) {
@@ -37,7 +51,8 @@ int ImperfectShadowMaps::map_level(int tree_top_level, const IsmSettings& settin
 std::uint64_t ImperfectShadowMaps::bytes_for(std::uint64_t views, int rsm_size, const IsmSettings& settings) {
     if (settings.size <= 0) return 0;
     const std::uint64_t maps = map_count(views, rsm_size, map_level(top_level_of(rsm_size), settings));
-    return maps * static_cast<std::uint64_t>(settings.size) * static_cast<std::uint64_t>(settings.size) * kTexelBytes +
+    return maps * (static_cast<std::uint64_t>(settings.size) * static_cast<std::uint64_t>(settings.size) +
+                   pyramid_texels(settings.size)) * kTexelBytes +
            std::uint64_t{kCloudPoints} * kPointBytes;
 }
 
@@ -107,10 +122,10 @@ bool ImperfectShadowMaps::build(const passes::PassContext& context, const VplTre
 
     const std::uint64_t texels = maps_ * static_cast<std::uint64_t>(settings.size) * static_cast<std::uint64_t>(settings.size);
     const std::size_t texel_bytes = std::max<std::size_t>(static_cast<std::size_t>(texels), 1) * 4;
-    if (depth_.bytes() != texel_bytes) {
-        depth_ = gpu::Buffer(texel_bytes, nullptr);
-        filled_ = gpu::Buffer(texel_bytes, nullptr);
-    }
+    const std::size_t pyramid_bytes =
+        std::max<std::size_t>(static_cast<std::size_t>(maps_ * pyramid_texels(settings.size)), 1) * 4;
+    if (depth_.bytes() != texel_bytes) depth_ = gpu::Buffer(texel_bytes, nullptr);
+    if (filled_.bytes() != pyramid_bytes) filled_ = gpu::Buffer(pyramid_bytes, nullptr);
     const GLuint empty = 0xFFFFFFFFu;
     glClearNamedBufferData(depth_.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &empty);
     if (maps_ == 0 || cloud_points_ == 0) {
@@ -138,17 +153,34 @@ bool ImperfectShadowMaps::build(const passes::PassContext& context, const VplTre
     }
     gpu::storage_barrier();
 
-    const gpu::ShaderProgram& fill = context.shaders.get(gpu::ProgramSource::compute_shader("isr/ism_fill.comp"));
-    tree.bind(fill);
-    set_uniforms(fill);
-    fill.set("u_map_count", static_cast<unsigned>(maps_));
-    fill.dispatch_threads(texels);
-    gpu::storage_barrier();
+    // Pull-push: the pyramid's levels up from the splat, then back down.
+    const gpu::ShaderProgram& pull = context.shaders.get(gpu::ProgramSource::compute_shader("isr/ism_pull.comp"));
+    const gpu::ShaderProgram& push = context.shaders.get(gpu::ProgramSource::compute_shader("isr/ism_push.comp"));
+    for (const gpu::ShaderProgram* program : {&pull, &push}) {
+        tree.bind(*program);
+        set_uniforms(*program);
+    }
+    const auto level_texels = [&](int level) {
+        const auto side = static_cast<std::uint64_t>(settings.size >> level);
+        return maps_ * side * side;
+    };
+    const int top = pyramid_levels(settings.size) - 1;
+    for (int level = 0; level <= top; ++level) {
+        pull.set("u_level", level);
+        pull.dispatch_threads(level_texels(level));
+        gpu::storage_barrier();
+    }
+    for (int level = top - 1; level >= 0; --level) {
+        push.set("u_level", level);
+        push.dispatch_threads(level_texels(level));
+        gpu::storage_barrier();
+    }
     return true;
 }
 
 void ImperfectShadowMaps::set_uniforms(const gpu::ShaderProgram& program) const {
     program.set("u_ism_size", settings_.size);
+    program.set("u_ism_maps", static_cast<unsigned>(maps_));
     program.set("u_ism_level", level_);
     // A texel covers 4 / size radians at a map's centre (the paraboloid's disk is tan(theta / 2)).
     program.set("u_ism_texel_angle", 4.0f / static_cast<float>(std::max(settings_.size, 1)));

@@ -1,0 +1,30 @@
+#version 450 core
+// Pull-push hole filling, the push: from coarse to fine, a texel takes the value of the texel above
+// it where it caught no sample, or where its own lies behind that surface within a few texels (a far
+// sample seen through a gap in a nearer surface's samples).
+layout(local_size_x = 64) in;
+#include "common/compute.glsl"
+#include "isr/vpl_tree.glsl"
+#include "isr/ism.glsl"
+
+layout(std430, binding = ISR_BINDING_ISM_FILLED) buffer Pyramid { float depth_pyramid[]; };
+
+uniform int u_level;  // the level written, from the one above it
+
+// A sample is replaced by a nearer surface's only from the levels this near (2x2 and 4x4 texels): a
+// coarse texel holds the nearest surface of a wide region, which is not what every texel of it sees.
+const int ISM_LOCAL_LEVELS = 2;
+
+void main() {
+    int side = u_ism_size >> u_level;
+    uint texels = uint(side * side);
+    uint thread = thread_index();
+    if (thread >= u_ism_maps * texels) return;
+    uint map = thread / texels;
+    ivec2 texel = ivec2(int(thread % texels) % side, int(thread % texels) / side);
+    uint at = ism_pyramid_index(u_level, map, texel);
+    float own = depth_pyramid[at];
+    float above = depth_pyramid[ism_pyramid_index(u_level + 1, map, texel / 2)];
+    bool behind = own > above * (1.0 + ISM_SAME_SURFACE) && u_level + 1 <= ISM_LOCAL_LEVELS;
+    if (above < ISM_EMPTY && (own >= ISM_EMPTY || behind)) depth_pyramid[at] = above;
+}
