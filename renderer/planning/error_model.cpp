@@ -135,7 +135,8 @@ ErrorPrediction predict_error(const SceneAnalysis& analysis, const std::string& 
                                            analysis.thin_walls.presets.at(preset).voxel_size);
     }
     if (method == "isr" && analysis.visibility.isr_unsuitable()) {
-        prediction.ruled_out = fmt::format("{:.0f}% of the indirect light is occluded, which isr does not model",
+        prediction.ruled_out = fmt::format("{:.0f}% of the indirect light is occluded, which isr's presets do not model "
+                                           "(its ism_size knob adds imperfect shadow maps, not planned)",
                                            100.0 * analysis.visibility.occluded_fraction);
     }
     return prediction;

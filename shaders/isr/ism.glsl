@@ -21,36 +21,28 @@ struct IsmFrame {
 int ism_side() { return u_rsm_size >> u_ism_level; }
 uint ism_count_per_view() { return uint(ism_side() * ism_side()); }
 
+// Per map, made when the maps are (isr/ism_frames.comp): its centre with w = 1 where its patch
+// carries flux (an empty patch's map is empty), and its pole; and per tree node above the maps'
+// level, the map it is shadowed by. Read once per gathered VPL, they spare the gather the node loads
+// and the search below.
+layout(std430, binding = ISR_BINDING_ISM_FRAMES) buffer Frames { vec4 ism_frames[]; };
+layout(std430, binding = ISR_BINDING_ISM_COARSE) buffer Coarse { uint ism_coarse_maps[]; };
+
 IsmFrame ism_frame(uint ism) {
-    uint per_view = ism_count_per_view();
-    int view = int(ism / per_view);
-    int index = int(ism % per_view);
-    VplNode node = nodes[node_index(view, u_ism_level, ivec2(index % ism_side(), index / ism_side()))];
+    vec4 centre = ism_frames[2u * ism];
     IsmFrame f;
-    f.valid = any_positive(node.flux_far.rgb) && dot(node.normal_radius.xyz, node.normal_radius.xyz) > 1e-12;
-    f.centre = node.position_area.xyz;
-    f.frame = tangent_frame(safe_normalize(node.normal_radius.xyz, vec3(0.0, 0.0, 1.0)));
+    f.valid = centre.w > 0.0;
+    f.centre = centre.xyz;
+    f.frame = tangent_frame(ism_frames[2u * ism + 1u].xyz);
     return f;
 }
 
 // The map a tree node is shadowed by: its ancestor's, or for a coarser node its brightest
 // descendant's at the maps' level (a geometric choice, such as the centre, can fall on an empty
-// patch at an edge of the lit surface, whose map is empty).
+// patch at an edge of the lit surface, whose map is empty): ism_coarse_maps.
 uint ism_of_node(int view, int level, ivec2 cell) {
-    ivec2 at = level <= u_ism_level ? cell >> (u_ism_level - level) : cell;
-    for (int l = level; l > u_ism_level; --l) {
-        ivec2 brightest = at * 2;
-        float most = -1.0;
-        for (int c = 0; c < 4; ++c) {
-            ivec2 child = at * 2 + ivec2(c & 1, c >> 1);
-            float flux = dot(nodes[node_index(view, l - 1, child)].flux_far.rgb, vec3(1.0));
-            if (flux > most) {
-                most = flux;
-                brightest = child;
-            }
-        }
-        at = brightest;
-    }
+    if (level > u_ism_level) return ism_coarse_maps[node_index(view, level, cell)];
+    ivec2 at = cell >> (u_ism_level - level);
     return uint(view) * ism_count_per_view() + uint(at.y * ism_side() + at.x);
 }
 

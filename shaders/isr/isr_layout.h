@@ -24,6 +24,8 @@
 #define ISR_BINDING_ISM_FILLED 5      // float[]: the same with holes filled (what the gather reads)
 #define ISR_BINDING_ISM_POINTS 6      // vec4[]: the point cloud, object-space position and object index
 #define ISR_BINDING_ISM_TRANSFORMS 7  // mat4[]: every object's world transform
+#define ISR_BINDING_ISM_FRAMES 8      // vec4[2 per map]: centre (w: 1 where the patch carries flux), pole
+#define ISR_BINDING_ISM_COARSE 9      // uint per tree node: the map a node above the maps' level uses
 
 #define ISR_COUNTER_LEVEL_FRAGMENTS 0  // ISR_MAX_LEVELS counters: multiresolution fragments per level
 #define ISR_COUNTER_VPLS_LOW 8         // VPLs gathered over every fragment, low and high words

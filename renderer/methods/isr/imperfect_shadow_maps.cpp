@@ -13,6 +13,7 @@ namespace bounce::methods::isr {
 namespace {
 
 constexpr std::size_t kPointBytes = 16;   // vec4
+constexpr std::size_t kFrameBytes = 32;   // a map's centre and pole
 constexpr std::size_t kTexelBytes = 4;  // the splatted bits; the filled pyramid, pyramid_texels()
 // Threads per splat dispatch: bounded work per dispatch (GPU watchdogs), a cancel seen between.
 constexpr std::uint64_t kSplatsPerDispatch = std::uint64_t{1} << 22;
@@ -51,9 +52,11 @@ int ImperfectShadowMaps::map_level(int tree_top_level, const IsmSettings& settin
 std::uint64_t ImperfectShadowMaps::bytes_for(std::uint64_t views, int rsm_size, const IsmSettings& settings) {
     if (settings.size <= 0) return 0;
     const std::uint64_t maps = map_count(views, rsm_size, map_level(top_level_of(rsm_size), settings));
+    std::uint64_t tree_nodes = 0;  // the coarse-map index has one entry per node of the VPL tree
+    for (int level = 0; level <= top_level_of(rsm_size); ++level) tree_nodes += map_count(views, rsm_size, level);
     return maps * (static_cast<std::uint64_t>(settings.size) * static_cast<std::uint64_t>(settings.size) +
                    pyramid_texels(settings.size)) * kTexelBytes +
-           std::uint64_t{kCloudPoints} * kPointBytes;
+           maps * kFrameBytes + tree_nodes * 4 + std::uint64_t{kCloudPoints} * kPointBytes;
 }
 
 // kCloudPoints points spread over the scene's surfaces by world area, each kept in its object's
@@ -132,6 +135,26 @@ bool ImperfectShadowMaps::build(const passes::PassContext& context, const VplTre
         glClearNamedBufferData(filled_.id(), GL_R32F, GL_RED, GL_FLOAT, nullptr);
         return true;
     }
+    const std::size_t frame_bytes = std::max<std::size_t>(static_cast<std::size_t>(maps_), 1) * kFrameBytes;
+    if (frames_.bytes() != frame_bytes) frames_ = gpu::Buffer(frame_bytes, nullptr);
+    const std::size_t coarse_bytes = std::max<std::size_t>(tree.nodes(), 1) * 4;
+    if (coarse_.bytes() != coarse_bytes) coarse_ = gpu::Buffer(coarse_bytes, nullptr);
+    gpu::bind_storage(ISR_BINDING_ISM_FRAMES, frames_);
+    gpu::bind_storage(ISR_BINDING_ISM_COARSE, coarse_);
+    const gpu::ShaderProgram& frames = context.shaders.get(gpu::ProgramSource::compute_shader("isr/ism_frames.comp"));
+    tree.bind(frames);
+    set_uniforms(frames);
+    frames.set("u_views", tree.views());
+    frames.set("u_pass", 0);
+    frames.dispatch_threads(maps_);
+    frames.set("u_pass", 1);
+    for (int level = level_ + 1; level <= tree.top_level(); ++level) {
+        const auto side = static_cast<std::size_t>(tree.size() >> level);
+        frames.set("u_level", level);
+        frames.dispatch_threads(static_cast<std::size_t>(tree.views()) * side * side);
+    }
+    gpu::storage_barrier();
+
     gpu::bind_storage(ISR_BINDING_ISM_POINTS, cloud_);
     gpu::bind_storage(ISR_BINDING_ISM_TRANSFORMS, transforms_);
     gpu::bind_storage(ISR_BINDING_ISM_DEPTH, depth_);
@@ -189,6 +212,8 @@ void ImperfectShadowMaps::set_uniforms(const gpu::ShaderProgram& program) const 
 
 void ImperfectShadowMaps::bind(const gpu::ShaderProgram& program) const {
     gpu::bind_storage(ISR_BINDING_ISM_FILLED, filled_);
+    gpu::bind_storage(ISR_BINDING_ISM_FRAMES, frames_);
+    gpu::bind_storage(ISR_BINDING_ISM_COARSE, coarse_);
     set_uniforms(program);
 }
 

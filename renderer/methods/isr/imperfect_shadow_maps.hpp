@@ -38,7 +38,9 @@ public:
     std::uint64_t maps() const { return maps_; }
     int level() const { return level_; }
     std::size_t builds() const { return builds_; }
-    std::size_t bytes() const { return cloud_.bytes() + transforms_.bytes() + depth_.bytes() + filled_.bytes(); }
+    std::size_t bytes() const {
+        return cloud_.bytes() + transforms_.bytes() + depth_.bytes() + filled_.bytes() + frames_.bytes() + coarse_.bytes();
+    }
 
 private:
     void make_cloud(const scene::Scene& scene);
@@ -50,7 +52,7 @@ private:
     std::uint64_t maps_ = 0;
     float scene_radius_ = 1.0f;
     std::uint32_t cloud_points_ = 0;
-    gpu::Buffer cloud_, transforms_, depth_, filled_;
+    gpu::Buffer cloud_, transforms_, depth_, filled_, frames_, coarse_;
     std::size_t builds_ = 0;
 };
 
