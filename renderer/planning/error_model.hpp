@@ -32,8 +32,10 @@ struct ErrorPrediction {
     std::optional<std::string> ruled_out;  // why the plan cannot be trusted on this scene
 };
 
-// The bench's measured own error of a GPU method at a preset; nullopt for methods without one.
-std::optional<double> own_error_prior(const std::string& method, const std::string& preset);
+// The bench's measured own error of a GPU method at a preset, at `bounces` where the bench measured
+// the method apart at that count (vct's second bounce), else at the preset's own; nullopt for
+// methods without one.
+std::optional<double> own_error_prior(const std::string& method, const std::string& preset, int bounces = 1);
 
 // The indirect bounces a plan models: 0 for direct, 1 for vct and isr, the `bounces` knob for cssm
 // and the reference.

@@ -21,6 +21,8 @@ constexpr int kReferenceSpp[] = {1,  2,  3,  4,   6,   8,   12,  16,  24,  32,  
 constexpr int kReferenceBounces[] = {0, 1, 2, 3, 4, 6, 8, 12};
 // cssm's bounce counts (its `bounces` knob).
 constexpr int kCssmBounces[] = {1, 2, 3, 4, 6, 8};
+// vct's: its second bounce gathers at the octree's leaves before the pixels gather from them.
+constexpr int kVctBounces[] = {1, 2};
 
 std::string describe(const Candidate& candidate) {
     std::string text = candidate.method == "reference" ? "reference" : candidate.method + " " + candidate.preset;
@@ -200,7 +202,10 @@ std::vector<Candidate> candidates(const PlanningInputs& inputs, std::vector<std:
     const auto add = [&](const std::string& method, const std::string& preset, const methods::KnobValues& knobs) {
         const ErrorPrediction error = predict_error(inputs.analysis, method, preset, knobs, inputs.scene);
         if (error.ruled_out) {
-            if (ruled_out) ruled_out->push_back(fmt::format("{} {}: {}", method, preset, *error.ruled_out));
+            const std::string reason = fmt::format("{} {}: {}", method, preset, *error.ruled_out);
+            if (ruled_out && std::find(ruled_out->begin(), ruled_out->end(), reason) == ruled_out->end()) {
+                ruled_out->push_back(reason);  // once per preset, whatever its knobs
+            }
             return;
         }
         std::map<double, double> scales;
@@ -231,6 +236,8 @@ std::vector<Candidate> candidates(const PlanningInputs& inputs, std::vector<std:
         for (const std::string& preset : methods::preset_names()) {
             if (method == "cssm") {
                 for (const int bounces : kCssmBounces) add(method, preset, {{"bounces", bounces}});
+            } else if (method == "vct") {
+                for (const int bounces : kVctBounces) add(method, preset, {{"bounces", bounces}});
             } else {
                 add(method, preset, {});
             }
@@ -297,7 +304,7 @@ std::vector<Candidate> probes(const std::vector<Candidate>& all, const Candidate
         const auto noise = prefix_noise(bounces);
         return noise && *noise <= max_noise(c.predicted_error - stopped(bounces));
     };
-    // Per preset, the most accurate plan that fits the share alone (for cssm, the most bounces): a
+    // Per preset, the most accurate plan that fits the share alone (for cssm and vct, the most bounces): a
     // comparison tells a frame's own error only where the bounces it lacks do not drown it.
     std::vector<const Candidate*> cheapest;
     for (const Candidate& c : all) {

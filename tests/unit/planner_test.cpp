@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -164,6 +165,30 @@ TEST(ErrorModel, LeakingVctAndOccludedIsrAreRuledOutWithTheirReason) {
     }
     EXPECT_EQ(ruled_out.size(), 6u);  // vct draft and isr's five presets
     EXPECT_NE(ruled_out.front().find("thinner than vct draft"), std::string::npos) << ruled_out.front();
+}
+
+// Where a scene needs more than one bounce, vct is offered with its second (the leaves gather the
+// first bounce before the pixels gather from them): half the missing light, with the bench's own
+// error of vct at two bounces, priced as repeating the first bounce until such frames are measured
+// on the scene.
+TEST(Planner, VctIsOfferedWithItsSecondBounce) {
+    const SceneAnalysis analysis = made_up_analysis();
+    DeviceCosts device("test");
+    device.set("vct", "medium", {8.0, 0.0});
+    const auto all = candidates({analysis, device, nullptr, 64, 64, std::string("vct")});
+    const auto find = [&](int bounces) {
+        return std::find_if(all.begin(), all.end(), [&](const Candidate& c) {
+            return c.method == "vct" && c.preset == "medium" && c.scale == 1.0 &&
+                   methods::knob_or(c.knobs, "bounces", 0.0) == bounces;
+        });
+    };
+    ASSERT_NE(find(1), all.end());
+    ASSERT_NE(find(2), all.end());
+    EXPECT_DOUBLE_EQ(find(1)->predicted_error, 0.1 / 2.0 + *own_error_prior("vct", "medium", 1));
+    EXPECT_DOUBLE_EQ(find(2)->predicted_error, 0.1 / 4.0 + *own_error_prior("vct", "medium", 2));
+    EXPECT_GT(*own_error_prior("vct", "medium", 2), *own_error_prior("vct", "medium", 1));
+    EXPECT_DOUBLE_EQ(find(1)->predicted_ms, 8.0);
+    EXPECT_DOUBLE_EQ(find(2)->predicted_ms, 16.0);
 }
 
 TEST(Costs, ALineThroughTwoFramesAndItsClamps) {
