@@ -295,7 +295,9 @@ TEST(Costs, AScenesOwnLineThroughTwoSizesPricesEverySize) {
 
 // Another preset of the method takes the shape of the scene's line for the preset measured at
 // several sizes (the draft frames that measure upsampling), scaled by the device's ratio between the
-// two presets at each size, and by its own frames where it has any.
+// two presets at each size, and by its own frames where it has any: at their size, by their ratio to
+// the shape; at another size, raised by the larger of that ratio and their difference from the shape
+// (per pixel or fixed: the frames do not say which), never lowered.
 TEST(Costs, OtherPresetsTakeTheShapeOfTheMethodsLineOnTheScene) {
     const SceneAnalysis analysis = made_up_analysis();
     DeviceCosts device("test");
@@ -316,8 +318,17 @@ TEST(Costs, OtherPresetsTakeTheShapeOfTheMethodsLineOnTheScene) {
     EXPECT_NEAR(predicted_ms(at_16, "cssm", "draft", {{"bounces", 4}}), 4.0 * draft_here.at(quarter), 1e-9);
     scene.record("cssm", "medium", 1, 1.5 * model(full), 99.0, full);  // medium measured 1.5x the shape at full size
     std::string basis;
-    EXPECT_NEAR(predicted_ms(at_16, "cssm", "medium", {{"bounces", 1}}, &basis), 1.5 * model(quarter), 1e-9);
+    const double as_fixed = model(quarter) + 0.5 * model(full);
+    ASSERT_GT(as_fixed, 1.5 * model(quarter));  // the difference, read as fixed, weighs more at the smaller size
+    EXPECT_NEAR(predicted_ms(at_16, "cssm", "medium", {{"bounces", 1}}, &basis), as_fixed, 1e-9);
     EXPECT_NE(basis.find("cssm draft"), std::string::npos) << basis;
+    const PlanningInputs at_64{analysis, device, &scene, 64, 64, std::nullopt};
+    EXPECT_NEAR(predicted_ms(at_64, "cssm", "medium", {{"bounces", 1}}), 1.5 * model(full), 1e-9);  // at its size
+    // Measured cheaper than the shape at full size: not assumed cheaper at another.
+    scene.record("cssm", "high", 1, 0.5 * model(full), 99.0, full);
+    device.set("cssm", "high", {4.0, 8000.0});
+    EXPECT_NEAR(predicted_ms(at_16, "cssm", "high", {{"bounces", 1}}), model(quarter), 1e-9);
+    EXPECT_NEAR(predicted_ms(at_64, "cssm", "high", {{"bounces", 1}}), 0.5 * model(full), 1e-9);
     // A plan that names no bounce count has its preset's: vct medium's frames, recorded under its
     // resolved knobs (one bounce), scale the shape of vct draft's line.
     device.set("vct", "draft", {1.0, 1000.0});
@@ -329,7 +340,9 @@ TEST(Costs, OtherPresetsTakeTheShapeOfTheMethodsLineOnTheScene) {
         return vct_draft.at(pixels) * device.line("vct", "medium")->at(pixels) / device.line("vct", "draft")->at(pixels);
     };
     scene.record("vct", "medium", 1, 2.0 * vct_model(full), 99.0, full);
-    EXPECT_NEAR(predicted_ms(at_16, "vct", "medium", {}), 2.0 * vct_model(quarter), 1e-9);
+    EXPECT_NEAR(predicted_ms(at_16, "vct", "medium", {}),
+                std::max(2.0 * vct_model(quarter), vct_model(quarter) + vct_model(full)), 1e-9);
+    EXPECT_NEAR(predicted_ms(at_64, "vct", "medium", {}), 2.0 * vct_model(full), 1e-9);
     // Another method's line says nothing of this one's.
     device.set("isr", "draft", {1.0, 1000.0});
     EXPECT_NEAR(predicted_ms(at_16, "isr", "draft", {}), device.line("isr", "draft")->at(quarter) * scene.scene_ratio().value(),
