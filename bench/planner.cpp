@@ -2,7 +2,7 @@
 // plan (each GPU method at each preset, the reference at 4 to 256 samples), measures each against
 // the reference, then plans and renders a frame for each target error and each time budget, and
 // compares: a target error E must be met, at no more than 1.5 times the time of the cheapest fixed
-// plan that meets it; a budget of T ms must be kept within 1.2 T, with error no worse than the best
+// plan that meets it (timed again right after the planned frame); a budget of T ms must be kept within 1.2 T, with error no worse than the best
 // fixed plan within T by more than two frames of one plan differ by chance (Measured::rel_mse_spread).
 // The fixed plans' frames are recorded as the daemon records frames, so the planner predicts from
 // this scene's measured costs (and from the device's calibration for what it has not measured).
@@ -64,6 +64,14 @@ struct Measured {
     // chance (the floor under which one plan is not worse than another); GPU frames differ only where
     // float atomics add in another order (vct).
     double rel_mse_spread = 0.0;
+    std::string method, preset;  // what to render it again with
+    methods::KnobValues knobs;
+    // A target error's comparator, timed again right after the planned frame (fixed plans are timed
+    // first, minutes earlier, and a frame of a few milliseconds on two loaded cores varies between
+    // such moments by more than the 1.5x it is judged by: the foliage's `direct high` took 2.2 ms as
+    // a fixed plan and 4.0 ms as the planned frame, the same plan). 0 where not timed again.
+    double ms_again = 0.0;
+    double comparator_ms() const { return ms_again > 0.0 ? ms_again : ms; }
 };
 
 struct BudgetRow {
@@ -160,7 +168,7 @@ Measured render_plan(Renderer& renderer, SceneResources& resources, const scene:
     const std::string name = label(method, preset, knobs) + (scale != 1.0 ? fmt::format(" at 1/{:g} size", 1.0 / scale) : "");
     log::info("bench", "{}: {:.1f} ms, relMSE {:.4f}{}", name, result.stats.render_ms, error,
               errors.size() > 1 && *most > *least ? fmt::format(" ({} frames, {:.4f} to {:.4f})", errors.size(), *least, *most) : "");
-    Measured measured{name, result.stats.render_ms, error, *most - *least};
+    Measured measured{name, result.stats.render_ms, error, *most - *least, method, preset, knobs};
     if (comparisons && scale == 1.0) {
         comparisons->add(1, std::make_shared<const RenderResult>(std::move(result)), &analysis, costs);
     }
@@ -310,7 +318,15 @@ int main(int argc, char** argv) {
                 for (const Measured& m : fixed) {
                     if (m.rel_mse <= error && (!row.fixed || m.ms < row.fixed->ms)) row.fixed = m;
                 }
-                row.holds = row.met && (!row.fixed || row.planned.ms <= 1.5 * row.fixed->ms);
+                if (row.fixed) {
+                    // Not recorded in the scene's measurements: a daemon would not render it.
+                    planning::SceneMeasurements untouched;
+                    row.fixed->ms_again = render_plan(renderer, *resources, scene, analysis, device, untouched,
+                                                      row.fixed->method, row.fixed->preset, row.fixed->knobs, options.size,
+                                                      truth)
+                                              .ms;
+                }
+                row.holds = row.met && (!row.fixed || row.planned.ms <= 1.5 * row.fixed->comparator_ms());
                 row.holds_strictly = row.holds;
                 rows.push_back(row);
             }
@@ -338,20 +354,21 @@ int main(int argc, char** argv) {
         }
         std::ofstream csv(options.out / "planner.csv");
         csv << "pass,scene,budget,plan,predicted_ms,predicted_rel_mse,measured_ms,measured_rel_mse,met,fixed_plan,fixed_ms,"
-               "fixed_rel_mse,holds,holds_strictly,measured_rel_mse_spread,fixed_rel_mse_spread\n";
+               "fixed_rel_mse,holds,holds_strictly,measured_rel_mse_spread,fixed_rel_mse_spread,fixed_ms_again\n";
         std::string table = "| pass | scene | budget | plan | predicted ms / relMSE | measured ms / relMSE | met | comparator: fixed plan, ms / relMSE | holds |\n"
                             "|---|---|---|---|---|---|---|---|---|\n";
         std::map<int, std::tuple<int, int, int>> holding;  // per pass: holds, holds strictly, rows
         for (const BudgetRow& r : rows) {
-            csv << fmt::format("{},{},\"{}\",\"{}\",{:.2f},{:.5f},{:.2f},{:.5f},{},\"{}\",{:.2f},{:.5f},{},{},{:.5f},{:.5f}\n",
+            csv << fmt::format("{},{},\"{}\",\"{}\",{:.2f},{:.5f},{:.2f},{:.5f},{},\"{}\",{:.2f},{:.5f},{},{},{:.5f},{:.5f},{:.2f}\n",
                                r.pass, r.scene, r.budget, r.plan, r.predicted_ms, r.predicted_error, r.planned.ms,
                                r.planned.rel_mse, r.met, r.fixed ? r.fixed->label : "", r.fixed ? r.fixed->ms : 0.0,
                                r.fixed ? r.fixed->rel_mse : 0.0, r.holds, r.holds_strictly, r.planned.rel_mse_spread,
-                               r.fixed ? r.fixed->rel_mse_spread : 0.0);
+                               r.fixed ? r.fixed->rel_mse_spread : 0.0, r.fixed ? r.fixed->ms_again : 0.0);
             table += fmt::format("| {} | {} | {} | {} | {:.0f} / {:.3f} | {:.0f} / {} | {} | {} | {} |\n", r.pass, r.scene,
                                  r.budget, r.plan, r.predicted_ms, r.predicted_error, r.planned.ms, error_text(r.planned),
                                  r.met ? "yes" : "**no**",
-                                 r.fixed ? fmt::format("{}, {:.0f} / {}", r.fixed->label, r.fixed->ms, error_text(*r.fixed))
+                                 r.fixed ? fmt::format("{}, {:.0f} / {}", r.fixed->label, r.fixed->comparator_ms(),
+                                                       error_text(*r.fixed))
                                          : "none meets it",
                                  r.holds ? (r.holds_strictly ? "yes" : "yes, within the noise floor") : "**no**");
             auto& [holds, strictly, count] = holding[r.pass];
@@ -373,7 +390,8 @@ int main(int argc, char** argv) {
                           "device costs calibrated in {3:.0f} ms (or read from the cache).\n",
                           options.size, options.reference_spp, options.reference_bounces, device.calibration_ms)
            << "- A target error holds when it is met at no more than 1.5x the time of the cheapest fixed plan "
-              "(a method at a preset, or the reference at 4 to 256 spp) that meets it; a time budget T holds when "
+              "(a method at a preset, or the reference at 4 to 256 spp) that meets it, that plan timed again right "
+              "after the planned frame (the time shown; `fixed_ms` in planner.csv is its first); a time budget T holds when "
               "the frame takes at most 1.2 T with error no worse than the best fixed plan within T, by more than the "
               "noise floor: the spread of the relMSEs of one plan's frames (the reference's traced with other seeds, "
               "twice or more under 5 s, its relMSE the mean; `a ± b` is the mean and half the spread, shown from a spread of 0.001).\n"

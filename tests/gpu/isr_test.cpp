@@ -8,6 +8,7 @@
 #include "renderer/methods/reference/path_tracer.hpp"
 #include "renderer/scene/builtin.hpp"
 
+#include <glm/gtc/matrix_transform.hpp>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -379,7 +380,8 @@ TEST(Isr, ImperfectShadowMapsBringTheCornellBoxToTheOccludedReference) {
     }
 }
 
-// The maps are made with the VPL tree: kept while only the camera moves, remade when a light moves.
+// The maps are made with the VPL tree: kept while only the camera moves, remade when a light or an
+// object moves, or their knobs change.
 TEST(Isr, ImperfectShadowMapsKeptWhileOnlyTheCameraMoves) {
     scene::Scene scene = scene::make_cornell_box();
     auto resources = shared_renderer().upload(scene);
@@ -391,8 +393,11 @@ TEST(Isr, ImperfectShadowMapsKeptWhileOnlyTheCameraMoves) {
     EXPECT_EQ(stat(shared_renderer().render(*resources, request), "ism_builds"), 1.0);
     scene.lights[0].position += glm::vec3(0.02f, 0.0f, 0.0f);
     EXPECT_EQ(stat(shared_renderer().render(*resources, request), "ism_builds"), 2.0);
-    request.knobs["ism_size"] = 16;
+    // A moved object: its points move with it (the cloud is kept in object space).
+    scene.objects[1].transform = glm::translate(glm::mat4(1.0f), glm::vec3(0.03f, 0.0f, 0.0f)) * scene.objects[1].transform;
     EXPECT_EQ(stat(shared_renderer().render(*resources, request), "ism_builds"), 3.0);
+    request.knobs["ism_size"] = 16;
+    EXPECT_EQ(stat(shared_renderer().render(*resources, request), "ism_builds"), 4.0);
 }
 
 // The extremes matrix's case of a light inside a closed block (bench/extremes.cpp): the reference's
