@@ -51,31 +51,12 @@ struct SurfacePoint {
 // proportional to their area, points uniform within them).
 class SurfaceSampler {
 public:
-    explicit SurfaceSampler(const scene::Scene& scene) {
-        for (std::size_t o = 0; o < scene.objects.size(); ++o) {
-            const scene::Object& object = scene.objects[o];
-            if (object.mesh < 0) continue;
-            const auto& primitives = scene.meshes[static_cast<std::size_t>(object.mesh)].primitives;
-            for (std::size_t p = 0; p < primitives.size(); ++p) {
-                for (std::size_t t = 0; t < primitives[p].triangle_count(); ++t) {
-                    const double area = scene::world_triangle_area(object.transform, primitives[p], t);
-                    if (!(area > 0.0)) continue;
-                    triangles_.push_back(world_triangle(scene, static_cast<std::uint32_t>(o), static_cast<std::uint32_t>(p),
-                                                        static_cast<std::uint32_t>(t)));
-                    total_ += area;
-                    cumulative_.push_back(total_);
-                }
-            }
-        }
-    }
+    explicit SurfaceSampler(const scene::Scene& scene) : scene_(scene), triangles_(scene) {}
     bool empty() const { return triangles_.empty(); }
 
     SurfacePoint sample(Random& random) const {
-        const double pick = uniform(random) * total_;
-        const auto index = static_cast<std::size_t>(
-            std::min<std::ptrdiff_t>(std::lower_bound(cumulative_.begin(), cumulative_.end(), pick) - cumulative_.begin(),
-                                     static_cast<std::ptrdiff_t>(triangles_.size()) - 1));
-        const WorldTriangle& t = triangles_[index];
+        const scene::AreaWeightedTriangles::Triangle& picked = triangles_.pick(uniform(random));
+        const WorldTriangle t = world_triangle(scene_, picked.object, picked.primitive, picked.triangle);
         double u = uniform(random), v = uniform(random);
         if (u + v > 1.0) u = 1.0 - u, v = 1.0 - v;
         const glm::vec3 position = t.a + static_cast<float>(u) * (t.b - t.a) + static_cast<float>(v) * (t.c - t.a);
@@ -83,9 +64,8 @@ public:
     }
 
 private:
-    std::vector<WorldTriangle> triangles_;
-    std::vector<double> cumulative_;
-    double total_ = 0.0;
+    const scene::Scene& scene_;
+    scene::AreaWeightedTriangles triangles_;
 };
 
 struct Hit {

@@ -1,5 +1,7 @@
 #include "renderer/scene/mesh_utils.hpp"
 
+#include <algorithm>
+
 namespace bounce::scene {
 
 // The cross product's length is twice the triangle's area, so summing unnormalized face normals
@@ -89,6 +91,29 @@ double surface_area(const Scene& scene) {
             }
     }
     return area;
+}
+
+AreaWeightedTriangles::AreaWeightedTriangles(const Scene& scene) {
+    for (std::size_t o = 0; o < scene.objects.size(); ++o) {
+        const Object& object = scene.objects[o];
+        if (object.mesh < 0) continue;
+        const auto& primitives = scene.meshes[static_cast<std::size_t>(object.mesh)].primitives;
+        for (std::size_t p = 0; p < primitives.size(); ++p) {
+            for (std::size_t t = 0; t < primitives[p].triangle_count(); ++t) {
+                const double area = world_triangle_area(object.transform, primitives[p], t);
+                if (!(area > 0.0) || !std::isfinite(area)) continue;
+                triangles_.push_back({static_cast<std::uint32_t>(o), static_cast<std::uint32_t>(p), static_cast<std::uint32_t>(t)});
+                total_ += area;
+                cumulative_.push_back(total_);
+            }
+        }
+    }
+}
+
+const AreaWeightedTriangles::Triangle& AreaWeightedTriangles::pick(double u) const {
+    const auto found = std::lower_bound(cumulative_.begin(), cumulative_.end(), u * total_);
+    return triangles_[static_cast<std::size_t>(
+        std::min<std::ptrdiff_t>(found - cumulative_.begin(), static_cast<std::ptrdiff_t>(triangles_.size()) - 1))];
 }
 
 }  // namespace bounce::scene

@@ -5,6 +5,7 @@
 #include "renderer/scene/scene.hpp"
 
 #include <cmath>
+#include <cstdint>
 #include <span>
 #include <vector>
 
@@ -31,5 +32,23 @@ float world_triangle_area(const glm::mat4& transform, const Primitive& primitive
 
 // The world-space area of every object's triangles (a mesh placed twice counts twice).
 double surface_area(const Scene& scene);
+
+// Picks the scene's triangles with probability proportional to their world area (point clouds,
+// surface samples). Triangles of zero or non-finite area are never picked.
+class AreaWeightedTriangles {
+public:
+    struct Triangle {
+        std::uint32_t object = 0, primitive = 0, triangle = 0;
+    };
+    explicit AreaWeightedTriangles(const Scene& scene);
+    bool empty() const { return triangles_.empty(); }
+    // The triangle that `u` (uniform in [0, 1)) falls on along the cumulative area.
+    const Triangle& pick(double u) const;
+
+private:
+    std::vector<Triangle> triangles_;
+    std::vector<double> cumulative_;
+    double total_ = 0.0;
+};
 
 }  // namespace bounce::scene

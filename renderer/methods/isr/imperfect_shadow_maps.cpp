@@ -63,35 +63,14 @@ std::uint64_t ImperfectShadowMaps::bytes_for(std::uint64_t views, int rsm_size, 
 // space (so that a moved object carries its points), in random order: a map's strided subset of
 // them is a random sample.
 void ImperfectShadowMaps::make_cloud(const scene::Scene& scene) {
-    struct Triangle {
-        std::uint32_t object, primitive, triangle;
-    };
-    std::vector<Triangle> triangles;
-    std::vector<double> cumulative;
-    double total = 0.0;
-    for (std::size_t o = 0; o < scene.objects.size(); ++o) {
-        const scene::Object& object = scene.objects[o];
-        if (object.mesh < 0) continue;
-        const auto& primitives = scene.meshes[static_cast<std::size_t>(object.mesh)].primitives;
-        for (std::size_t p = 0; p < primitives.size(); ++p) {
-            for (std::size_t t = 0; t < primitives[p].triangle_count(); ++t) {
-                const double area = scene::world_triangle_area(object.transform, primitives[p], t);
-                if (!(area > 0.0)) continue;
-                total += area;
-                triangles.push_back({static_cast<std::uint32_t>(o), static_cast<std::uint32_t>(p), static_cast<std::uint32_t>(t)});
-                cumulative.push_back(total);
-            }
-        }
-    }
+    const scene::AreaWeightedTriangles triangles(scene);
     std::vector<glm::vec4> cloud;
     if (!triangles.empty()) {
         cloud.reserve(kCloudPoints);
         std::mt19937 random(0x15Eu);
         std::uniform_real_distribution<double> uniform(0.0, 1.0);
         for (std::uint32_t i = 0; i < kCloudPoints; ++i) {
-            const auto found = std::lower_bound(cumulative.begin(), cumulative.end(), uniform(random) * total);
-            const Triangle& t = triangles[static_cast<std::size_t>(
-                std::min<std::ptrdiff_t>(found - cumulative.begin(), static_cast<std::ptrdiff_t>(triangles.size()) - 1))];
+            const scene::AreaWeightedTriangles::Triangle& t = triangles.pick(uniform(random));
             const scene::Primitive& primitive =
                 scene.meshes[static_cast<std::size_t>(scene.objects[t.object].mesh)].primitives[t.primitive];
             const std::uint32_t* corner = &primitive.indices[3 * static_cast<std::size_t>(t.triangle)];
