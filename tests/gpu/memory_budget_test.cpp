@@ -56,6 +56,7 @@ TEST(MemoryBudget, ClosedFormEstimatesMatchWhatMethodsHold) {
     const struct {
         std::string method;
         std::vector<std::pair<std::string, std::string>> exact;  // estimate name, resident name
+        methods::KnobValues knobs = {};
     } cases[] = {
         {"direct", {{"gbuffer", "gbuffer"}, {"shadow_maps", "shadow_maps"}}},
         {"vct", {{"gbuffer", "gbuffer"}, {"shadow_maps", "shadow_maps"}, {"light_view_maps", "light_view_maps"}}},
@@ -66,10 +67,11 @@ TEST(MemoryBudget, ClosedFormEstimatesMatchWhatMethodsHold) {
           {"vpl_tree", "vpl_tree"},
           {"multires_atlas", "multires_atlas"}}},
         {"cssm", {{"gbuffer", "gbuffer"}, {"shadow_maps", "shadow_maps"}}},
+        {"isr", {{"imperfect_shadow_maps", "imperfect_shadow_maps"}}, {{"ism_size", 16}}},
     };
     for (const auto& c : cases) {
         SCOPED_TRACE(c.method);
-        const RenderRequest request = method_request(c.method, "draft", 40, {});
+        const RenderRequest request = method_request(c.method, "draft", 40, c.knobs);
         const FramePlan plan = plan_frame(request);
         const auto& info = methods::MethodRegistry::builtin().find(c.method);
         const methods::MemoryEstimate estimate = info.estimate({scene, plan.knobs, 40, 40});
@@ -113,6 +115,36 @@ TEST(MemoryBudget, ShadowMapsPastTheBudgetAreRefusedWithASizeThatFits) {
     EXPECT_THROW(renderer.render(*resources, method_request("direct", "medium", 32, {{"shadow_map_size", fits + 1}})),
                  ResourceExhausted)
         << "the advice must be the largest size that fits";
+}
+
+// isr's imperfect shadow maps at their extremes (a map of 64^2 texels on every texel of a 128^2
+// light view: 98304 maps, about 3.7 GB) are refused before anything is allocated, with an
+// `ism_size` that fits, and that size renders.
+TEST(MemoryBudget, ImperfectShadowMapsPastTheBudgetAreRefusedWithASizeThatFits) {
+    Renderer& renderer = shared_renderer();
+    const scene::Scene scene = cornell_with_point_lights(1);
+    auto resources = renderer.upload(scene);
+    const std::uint64_t geometry = resources->resident_bytes();
+    const BudgetScope budget(renderer, 256ull << 20);
+    const methods::KnobValues extreme = {{"ism_size", 64}, {"ism_points", 16384}, {"ism_levels_below_top", 3}};
+    std::string message;
+    try {
+        renderer.render(*resources, method_request("isr", "low", 32, extreme));
+        FAIL() << "3.7 GB of imperfect shadow maps under a 256 MiB budget were rendered";
+    } catch (const ResourceExhausted& error) {
+        message = error.what();
+    }
+    EXPECT_EQ(resources->resident_bytes(), geometry) << "nothing may be allocated for a refused frame";
+    EXPECT_NE(message.find("'imperfect_shadow_maps'"), std::string::npos) << message;
+    std::smatch match;
+    ASSERT_TRUE(std::regex_search(message, match, std::regex("ism_size=([0-9]+) would fit"))) << message;
+    methods::KnobValues fitting = extreme;
+    fitting["ism_size"] = std::stoi(match[1]);
+    ASSERT_GT(fitting["ism_size"], 0.0) << message;
+    fitting["ism_points"] = 16;  // memory does not depend on it; time on a software rasterizer does
+    const RenderResult result = renderer.render(*resources, method_request("isr", "low", 32, fitting));
+    EXPECT_EQ(result.frame.non_finite_count(), 0u);
+    EXPECT_LE(renderer.resident_bytes(), 256ull << 20);
 }
 
 TEST(MemoryBudget, WhatOtherScenesHoldCountsAndAFrameSizeIsAdvised) {

@@ -49,14 +49,16 @@ int ImperfectShadowMaps::map_level(int tree_top_level, const IsmSettings& settin
     return std::max(0, tree_top_level - settings.levels_below_top);
 }
 
-std::uint64_t ImperfectShadowMaps::bytes_for(std::uint64_t views, int rsm_size, const IsmSettings& settings) {
+std::uint64_t ImperfectShadowMaps::bytes_for(std::uint64_t views, int rsm_size, const IsmSettings& settings,
+                                             std::uint64_t objects) {
     if (settings.size <= 0) return 0;
     const std::uint64_t maps = map_count(views, rsm_size, map_level(top_level_of(rsm_size), settings));
     std::uint64_t tree_nodes = 0;  // the coarse-map index has one entry per node of the VPL tree
     for (int level = 0; level <= top_level_of(rsm_size); ++level) tree_nodes += map_count(views, rsm_size, level);
     return maps * (static_cast<std::uint64_t>(settings.size) * static_cast<std::uint64_t>(settings.size) +
                    pyramid_texels(settings.size)) * kTexelBytes +
-           maps * kFrameBytes + tree_nodes * 4 + std::uint64_t{kCloudPoints} * kPointBytes;
+           maps * kFrameBytes + tree_nodes * 4 + std::uint64_t{kCloudPoints} * kPointBytes +
+           std::max<std::uint64_t>(objects, 1) * sizeof(glm::mat4);
 }
 
 // kCloudPoints points spread over the scene's surfaces by world area, each kept in its object's

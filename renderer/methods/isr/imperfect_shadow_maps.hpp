@@ -22,8 +22,9 @@ class ImperfectShadowMaps {
 public:
     // Points in the cloud the maps draw their subsets from.
     static constexpr std::uint32_t kCloudPoints = 1u << 18;
-    // What build() holds for `views` light views of `rsm_size`^2 texels.
-    static std::uint64_t bytes_for(std::uint64_t views, int rsm_size, const IsmSettings& settings);
+    // What build() holds for `views` light views of `rsm_size`^2 texels in a scene of `objects`
+    // objects.
+    static std::uint64_t bytes_for(std::uint64_t views, int rsm_size, const IsmSettings& settings, std::uint64_t objects);
     // The tree level whose patches carry maps.
     static int map_level(int tree_top_level, const IsmSettings& settings);
 

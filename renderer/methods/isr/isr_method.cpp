@@ -249,7 +249,8 @@ MethodInfo method_info() {
         const IsmSettings ism{input.knob_int("ism_size"), input.knob_int("ism_points"), input.knob_int("ism_levels_below_top")};
         if (ism.size > 0 && input.knob_int("mode") == ISR_MODE_HIERARCHICAL) {
             estimate.push_back({"imperfect_shadow_maps",
-                                ImperfectShadowMaps::bytes_for(passes::light_views_with_power(input.scene), rsm_size, ism),
+                                ImperfectShadowMaps::bytes_for(passes::light_views_with_power(input.scene), rsm_size, ism,
+                                                               input.scene.objects.size()),
                                 "ism_size"});
         }
         return estimate;
