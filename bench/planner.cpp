@@ -2,8 +2,9 @@
 // plan (each GPU method at each preset, the reference at 4 to 256 samples), measures each against
 // the reference, then plans and renders a frame for each target error and each time budget, and
 // compares: a target error E must be met, at no more than 1.5 times the time of the cheapest fixed
-// plan that meets it (timed again right after the planned frame); a budget of T ms must be kept within 1.2 T, with error no worse than the best
-// fixed plan within T by more than two frames of one plan differ by chance (Measured::rel_mse_spread).
+// plan that meets it (timed again right after the planned frame); a budget of T ms must be kept
+// within 1.2 T, with error no worse than the best fixed plan within T by more than two frames of one
+// plan differ by chance (Measured::rel_mse_spread).
 // The fixed plans' frames are recorded as the daemon records frames, so the planner predicts from
 // this scene's measured costs (and from the device's calibration for what it has not measured).
 // Their errors are not given to the planner: it learns a GPU method's error on a scene only as the

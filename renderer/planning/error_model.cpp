@@ -29,7 +29,8 @@ const std::map<std::pair<std::string, std::string>, double> kOwnError = {
     {{"cssm", "high"}, 0.0593},     {{"cssm", "ultra"}, 0.0583},
 };
 // vct with its second bounce (`bounces` 2), against the two-bounce reference, the same way
-// (bench/quality --corpus --method vct --knob bounces=2): the leaves' gather adds its own error, up
+// (bench/quality --corpus --method vct --knob bounces=2; bench/results/corpus/vct_second_bounce.csv,
+// leaving out the presets the analysis finds leaking): the leaves' gather adds its own error, up
 // to twice the first bounce's in the glossy gallery, so the one-bounce table does not carry over.
 const std::map<std::string, double> kVctSecondBounceOwnError = {
     {"draft", 0.1519}, {"low", 0.1537}, {"medium", 1.0136}, {"high", 0.5419}, {"ultra", 0.4753}};

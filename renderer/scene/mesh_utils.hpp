@@ -1,5 +1,6 @@
 // Vertex attributes derived from a triangle list: normals and tangent frames, for meshes whose
-// source has none (glTF files without NORMAL or TANGENT, the built-in scenes).
+// source has none (glTF files without NORMAL or TANGENT, the built-in scenes); and triangles' world
+// areas, summed or sampled.
 #pragma once
 
 #include "renderer/scene/scene.hpp"
@@ -42,7 +43,7 @@ public:
     };
     explicit AreaWeightedTriangles(const Scene& scene);
     bool empty() const { return triangles_.empty(); }
-    // The triangle that `u` (uniform in [0, 1)) falls on along the cumulative area.
+    // The triangle that `u` (uniform in [0, 1)) falls on along the cumulative area; not on an empty set.
     const Triangle& pick(double u) const;
 
 private:

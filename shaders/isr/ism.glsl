@@ -2,9 +2,8 @@
 // indirect visibility. The VPL tree's patches of one level each carry a small paraboloid depth map
 // of the hemisphere above them, splatted from a few points of a random point cloud of the scene's
 // surfaces (isr/ism_splat.comp) with its holes filled by pull-push (isr/ism_pull.comp, ism_push.comp).
-// A VPL gathered from the
-// tree is shadowed by the map of its patch at that level: its ancestor, or for a coarser patch its
-// brightest descendant. Needs isr/vpl_tree.glsl.
+// A VPL gathered from the tree is shadowed by the map of its patch at that level: its ancestor's, or
+// for a coarser patch its brightest descendant's. Needs isr/vpl_tree.glsl.
 
 uniform int u_ism_size;   // texels per side of one map
 uniform int u_ism_level;  // the tree level whose patches carry maps

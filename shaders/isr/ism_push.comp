@@ -24,7 +24,9 @@ void main() {
     ivec2 texel = ivec2(int(thread % texels) % side, int(thread % texels) / side);
     uint at = ism_pyramid_index(u_level, map, texel);
     float own = depth_pyramid[at];
-    float above = depth_pyramid[ism_pyramid_index(u_level + 1, map, texel / 2)];
+    // An odd side's last row and column have no texel above of their own: they take the nearest.
+    int side_above = u_ism_size >> (u_level + 1);
+    float above = depth_pyramid[ism_pyramid_index(u_level + 1, map, min(texel / 2, ivec2(side_above - 1)))];
     bool behind = own > above * (1.0 + ISM_SAME_SURFACE) && u_level + 1 <= ISM_LOCAL_LEVELS;
     if (above < ISM_EMPTY && (own >= ISM_EMPTY || behind)) depth_pyramid[at] = above;
 }

@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <optional>
 #include <regex>
 
 namespace bounce::test {
@@ -38,6 +39,36 @@ scene::Scene cornell_with_point_lights(int count) {
         scene.lights.push_back(light);
     }
     return scene;
+}
+
+// The message of the ResourceExhausted a frame is refused with; empty where it was rendered.
+std::string refusal(Renderer& renderer, SceneResources& resources, const RenderRequest& request) {
+    try {
+        renderer.render(resources, request);
+    } catch (const ResourceExhausted& error) {
+        return error.what();
+    }
+    return {};
+}
+
+// A frame past the budget: refused naming `structure`, with nothing allocated for it, and the value
+// of `knob` its message advises; nullopt (and a failure) otherwise.
+std::optional<int> advised_value(Renderer& renderer, SceneResources& resources, const RenderRequest& request,
+                                 const std::string& structure, const std::string& knob) {
+    const std::uint64_t before = resources.resident_bytes();
+    const std::string message = refusal(renderer, resources, request);
+    if (message.empty()) {
+        ADD_FAILURE() << "a frame past the budget was rendered";
+        return std::nullopt;
+    }
+    EXPECT_EQ(resources.resident_bytes(), before) << "nothing may be allocated for a refused frame";
+    EXPECT_NE(message.find("'" + structure + "'"), std::string::npos) << message;
+    std::smatch match;
+    if (!std::regex_search(message, match, std::regex(knob + "=([0-9]+) would fit"))) {
+        ADD_FAILURE() << "no " << knob << " advised: " << message;
+        return std::nullopt;
+    }
+    return std::stoi(match[1]);
 }
 
 std::uint64_t held(const std::vector<methods::ResidentStructure>& resident, const std::string& name) {
@@ -88,23 +119,13 @@ TEST(MemoryBudget, ShadowMapsPastTheBudgetAreRefusedWithASizeThatFits) {
     Renderer& renderer = shared_renderer();
     const scene::Scene scene = cornell_with_point_lights(16);
     auto resources = renderer.upload(scene);
-    const std::uint64_t geometry = resources->resident_bytes();
     // 16 point lights x 6 faces x 8192^2 x 4 bytes = 24 GiB of shadow maps; the budget is 64 MiB.
     const BudgetScope budget(renderer, 64ull << 20);
     const RenderRequest huge = method_request("direct", "medium", 32, {{"shadow_map_size", 8192}});
-    std::string message;
-    try {
-        renderer.render(*resources, huge);
-        FAIL() << "a 24 GiB frame under a 64 MiB budget was rendered";
-    } catch (const ResourceExhausted& error) {
-        message = error.what();
-    }
-    EXPECT_EQ(resources->resident_bytes(), geometry) << "nothing may be allocated for a refused frame";
-    EXPECT_NE(message.find("'shadow_maps'"), std::string::npos) << message;
-    EXPECT_NE(message.find("64.0 MiB"), std::string::npos) << message;
-    std::smatch match;
-    ASSERT_TRUE(std::regex_search(message, match, std::regex("shadow_map_size=([0-9]+) would fit"))) << message;
-    const int fits = std::stoi(match[1]);
+    EXPECT_NE(refusal(renderer, *resources, huge).find("64.0 MiB"), std::string::npos);
+    const std::optional<int> advised = advised_value(renderer, *resources, huge, "shadow_maps", "shadow_map_size");
+    ASSERT_TRUE(advised.has_value());
+    const int fits = *advised;
     // The largest size that fits: 96 maps of fits^2 x 4 bytes with the rest of the frame under 64 MiB.
     EXPECT_GT(fits, 256);
     EXPECT_LT(fits, 8192);
@@ -124,23 +145,14 @@ TEST(MemoryBudget, ImperfectShadowMapsPastTheBudgetAreRefusedWithASizeThatFits) 
     Renderer& renderer = shared_renderer();
     const scene::Scene scene = cornell_with_point_lights(1);
     auto resources = renderer.upload(scene);
-    const std::uint64_t geometry = resources->resident_bytes();
     const BudgetScope budget(renderer, 256ull << 20);
     const methods::KnobValues extreme = {{"ism_size", 64}, {"ism_points", 16384}, {"ism_levels_below_top", 3}};
-    std::string message;
-    try {
-        renderer.render(*resources, method_request("isr", "low", 32, extreme));
-        FAIL() << "3.7 GB of imperfect shadow maps under a 256 MiB budget were rendered";
-    } catch (const ResourceExhausted& error) {
-        message = error.what();
-    }
-    EXPECT_EQ(resources->resident_bytes(), geometry) << "nothing may be allocated for a refused frame";
-    EXPECT_NE(message.find("'imperfect_shadow_maps'"), std::string::npos) << message;
-    std::smatch match;
-    ASSERT_TRUE(std::regex_search(message, match, std::regex("ism_size=([0-9]+) would fit"))) << message;
+    const std::optional<int> advised =
+        advised_value(renderer, *resources, method_request("isr", "low", 32, extreme), "imperfect_shadow_maps", "ism_size");
+    ASSERT_TRUE(advised.has_value());
+    ASSERT_GT(*advised, 0);
     methods::KnobValues fitting = extreme;
-    fitting["ism_size"] = std::stoi(match[1]);
-    ASSERT_GT(fitting["ism_size"], 0.0) << message;
+    fitting["ism_size"] = *advised;
     fitting["ism_points"] = 16;  // memory does not depend on it; time on a software rasterizer does
     const RenderResult result = renderer.render(*resources, method_request("isr", "low", 32, fitting));
     EXPECT_EQ(result.frame.non_finite_count(), 0u);
@@ -162,15 +174,11 @@ TEST(MemoryBudget, WhatOtherScenesHoldCountsAndAFrameSizeIsAdvised) {
         frame_bytes += structure.bytes;
     }
     const BudgetScope budget(renderer, frame_bytes + first_holds / 2);
-    try {
-        renderer.render(*second, request);
-        FAIL() << "the second scene's frame fit beside the first";
-    } catch (const ResourceExhausted& error) {
-        const std::string message = error.what();
-        EXPECT_NE(message.find("held by resident scenes"), std::string::npos) << message;
-        EXPECT_NE(message.find("'gbuffer'"), std::string::npos) << message;
-        EXPECT_NE(message.find("a frame of"), std::string::npos) << message;
-    }
+    const std::string message = refusal(renderer, *second, request);
+    ASSERT_FALSE(message.empty()) << "the second scene's frame fit beside the first";
+    EXPECT_NE(message.find("held by resident scenes"), std::string::npos) << message;
+    EXPECT_NE(message.find("'gbuffer'"), std::string::npos) << message;
+    EXPECT_NE(message.find("a frame of"), std::string::npos) << message;
     first.reset();  // unloading the first scene frees room for the second's frame
     EXPECT_NO_THROW(renderer.render(*second, request));
 }

@@ -1,4 +1,6 @@
 #include "renderer/base/error.hpp"
+#include "renderer/scene/builtin.hpp"
+#include "renderer/scene/mesh_utils.hpp"
 #include "renderer/scene/scene.hpp"
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -9,6 +11,30 @@
 
 namespace bounce::scene {
 namespace {
+
+// Triangles picked by world area: a 1 m^2 triangle holds the first quarter of [0, 1), one of 3 m^2
+// (0.5 m^2 in its mesh, scaled by its object's transform) the rest; one of zero area none of it.
+TEST(AreaWeightedTriangles, PickInProportionToWorldArea) {
+    Scene scene;
+    const auto triangle = [](float leg) {
+        Primitive p;
+        p.positions = {{0, 0, 0}, {leg, 0, 0}, {0, leg, 0}};
+        p.indices = {0, 1, 2};
+        return p;
+    };
+    Primitive degenerate = triangle(1.0f);
+    degenerate.positions[2] = {2.0f, 0.0f, 0.0f};
+    add_primitive_object(scene, "one", triangle(std::sqrt(2.0f)));
+    add_primitive_object(scene, "flat", degenerate);
+    add_primitive_object(scene, "three", triangle(1.0f), glm::scale(glm::mat4(1.0f), glm::vec3(std::sqrt(6.0f), std::sqrt(6.0f), 1.0f)));
+    const AreaWeightedTriangles picker(scene);
+    ASSERT_FALSE(picker.empty());
+    EXPECT_EQ(picker.pick(0.0).object, 0u);
+    EXPECT_EQ(picker.pick(0.24).object, 0u);
+    EXPECT_EQ(picker.pick(0.26).object, 2u);
+    EXPECT_EQ(picker.pick(0.999999).object, 2u);
+    EXPECT_TRUE(AreaWeightedTriangles(Scene{}).empty());
+}
 
 TEST(Aabb, TransformedHoldsAllCorners) {
     Aabb box;

@@ -1,9 +1,6 @@
 #include "renderer/methods/isr/imperfect_shadow_maps.hpp"
 
-#include "renderer/base/error.hpp"
 #include "renderer/scene/mesh_utils.hpp"
-
-#include <glm/gtc/type_ptr.hpp>
 
 #include <algorithm>
 #include <random>
@@ -62,8 +59,8 @@ std::uint64_t ImperfectShadowMaps::bytes_for(std::uint64_t views, int rsm_size, 
 }
 
 // kCloudPoints points spread over the scene's surfaces by world area, each kept in its object's
-// space (so that a moved object carries its points), in random order: a map's strided subset of
-// them is a random sample.
+// space (so that a moved object carries its points), in random order: a map's run of consecutive
+// points is a random sample. Alpha masks are not read: a masked card occludes as a whole card.
 void ImperfectShadowMaps::make_cloud(const scene::Scene& scene) {
     const scene::AreaWeightedTriangles triangles(scene);
     std::vector<glm::vec4> cloud;
@@ -189,6 +186,12 @@ void ImperfectShadowMaps::set_uniforms(const gpu::ShaderProgram& program) const 
     // A texel covers 4 / size radians at a map's centre (the paraboloid's disk is tan(theta / 2)).
     program.set("u_ism_texel_angle", 4.0f / static_cast<float>(std::max(settings_.size, 1)));
     program.set("u_ism_bias_absolute", 1e-3f * scene_radius_);
+}
+
+void ImperfectShadowMaps::release() {
+    const std::size_t builds = builds_;
+    *this = ImperfectShadowMaps();
+    builds_ = builds;
 }
 
 void ImperfectShadowMaps::bind(const gpu::ShaderProgram& program) const {

@@ -35,6 +35,8 @@ public:
                const std::function<void()>& interruption);
     // Binds the filled maps and sets isr/ism.glsl's uniforms (the tree's are VplTree::bind's).
     void bind(const gpu::ShaderProgram& program) const;
+    // Frees the maps (a frame without visibility holds none); the next build() makes them again.
+    void release();
 
     std::uint64_t maps() const { return maps_; }
     int level() const { return level_; }

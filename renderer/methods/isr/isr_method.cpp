@@ -53,6 +53,7 @@ public:
         const IsmSettings ism{frame.knob_int("ism_size"), frame.knob_int("ism_points"), frame.knob_int("ism_levels_below_top")};
         visibility_ = ism.size > 0 && mode_ == ISR_MODE_HIERARCHICAL;
         if (visibility_) ism_.build(frame, tree_, ism, [&frame] { frame.interruption_point(); });
+        else if (ism_.bytes() > 0) ism_.release();
         if (mode_ != ISR_MODE_HIERARCHICAL && (tree_built || mode_ != cache_mode_ || finest_level_ != cache_level_)) {
             tree_.select(frame, mode_, finest_level_);
             cache_mode_ = mode_;
