@@ -9,7 +9,10 @@
 // this scene's measured costs (and from the device's calibration for what it has not measured).
 // Their errors are not given to the planner: it learns a GPU method's error on a scene only as the
 // daemon does, by comparing its own frames of one view (planned frames, and the probes it renders
-// beside a reference plan) with its reference frames. The budgets run in two passes: the second
+// beside a reference plan) with its reference frames, and from its spot checks: where a target
+// error's plan is the reference and GPU plans may meet it (planning::spot_checks), they are tried
+// first as the daemon tries them, and the request's time is the check's reference, every frame tried
+// and, where none passed, the reference plan's frame. The budgets run in two passes: the second
 // after the first's frames were compared.
 #include "bench/common.hpp"
 #include "bench/corpus.hpp"
@@ -84,6 +87,10 @@ struct BudgetRow {
     bool met = false, holds = false;
     bool holds_strictly = false;  // a time budget's error compared with no noise floor
     std::string why;
+    // Spot-checked plans tried before the reference plan (planning::spot_checks), each with the bound
+    // its check read, and the check's reference time (included in planned.ms).
+    std::string checks;
+    double check_ms = 0.0;
 };
 
 // How much two frames of the same plan differ by chance, for the planned plan or the comparator.
@@ -110,7 +117,8 @@ std::string label(const std::string& method, const std::string& preset, const me
 Measured render_plan(Renderer& renderer, SceneResources& resources, const scene::Scene& scene, const SceneAnalysis& analysis,
                      const planning::DeviceCosts& device, planning::SceneMeasurements& costs, const std::string& method,
                      const std::string& preset, const methods::KnobValues& knobs, int size, const image::Frame& truth,
-                     planning::FrameComparisons* comparisons = nullptr, double scale = 1.0) {
+                     planning::FrameComparisons* comparisons = nullptr, double scale = 1.0,
+                     image::Frame* kept_frame = nullptr) {
     RenderRequest request = bench::linear_request(method, preset, knobs, size);
     std::tie(request.width, request.height) = planning::scaled_size(size, size, scale);
     const FramePlan frame_plan = plan_frame(request);
@@ -170,6 +178,7 @@ Measured render_plan(Renderer& renderer, SceneResources& resources, const scene:
     log::info("bench", "{}: {:.1f} ms, relMSE {:.4f}{}", name, result.stats.render_ms, error,
               errors.size() > 1 && *most > *least ? fmt::format(" ({} frames, {:.4f} to {:.4f})", errors.size(), *least, *most) : "");
     Measured measured{name, result.stats.render_ms, error, *most - *least, method, preset, knobs};
+    if (kept_frame) *kept_frame = result.frame;
     if (comparisons && scale == 1.0) {
         comparisons->add(1, std::make_shared<const RenderResult>(std::move(result)), &analysis, costs);
     }
@@ -303,9 +312,60 @@ int main(int argc, char** argv) {
                 row.predicted_error = plan.chosen.predicted_error;
                 row.why = plan.why;
                 log::info("bench", "{} pass {}, {}: {}", bench_scene.name, pass, text, plan.why);
-                row.planned = render_plan(renderer, *resources, scene, analysis, device, costs, plan.chosen.method,
-                                          plan.chosen.preset, plan.chosen.knobs, options.size, truth, &comparisons,
-                                          plan.chosen.scale);
+                // Checked plans, as the daemon renders them: the check's reference, then each plan until one
+                // passes; the request's time is all of it, and the reference plan's where none passes.
+                double checking_ms = 0.0;
+                bool checked = false;
+                if (plan.spot_check) {
+                    const planning::SpotReference spot = planning::trace_spot_reference(
+                        scene, bench::linear_request("reference", "medium", {}, options.size), *plan.spot_check);
+                    checking_ms = spot.ms;
+                    double predicted_ms = plan.spot_check->predicted_ms;
+                    for (const planning::Candidate& candidate : plan.checks) {
+                        image::Frame frame;
+                        const Measured tried = render_plan(renderer, *resources, scene, analysis, device, costs,
+                                                           candidate.method, candidate.preset, candidate.knobs,
+                                                           options.size, truth, &comparisons, 1.0, &frame);
+                        checking_ms += tried.ms;
+                        const planning::SpotEstimate estimate =
+                            planning::estimate(frame, spot.estimates, plan.spot_check->stopped_error);
+                        // The same pixels against the truth, no noise: what the choice of pixels alone reads.
+                        methods::reference::PixelEstimates at_truth = spot.estimates;
+                        for (std::size_t i = 0; i < at_truth.pixels.size(); ++i) {
+                            const float* p = &truth.rgba[static_cast<std::size_t>(at_truth.pixels[i]) * 4];
+                            for (int half = 0; half < 2; ++half) {
+                                at_truth.mean[half][i] = glm::dvec3(p[0], p[1], p[2]);
+                                at_truth.variance[half][i] = glm::dvec3(0.0);
+                            }
+                        }
+                        const planning::SpotEstimate pixels_alone = planning::estimate(frame, at_truth);
+                        planning::record_spot_check(costs, analysis.bounces.stopped_error, candidate.method,
+                                                    candidate.preset, candidate.knobs, *plan.spot_check, estimate);
+                        log::info("bench", "{} pass {}, {}: {} ({:.1f} ms): {}; measures {:.4f} ({:.4f} +- {:.4f} at "
+                                  "the check's pixels against the truth)", bench_scene.name, pass, text, tried.label,
+                                  tried.ms, planning::describe(*plan.spot_check, estimate), tried.rel_mse,
+                                  pixels_alone.rel_mse, pixels_alone.standard_error);
+                        row.checks += fmt::format("{}{} {:.4f}{}", row.checks.empty() ? "" : "; ", tried.label,
+                                                  estimate.bound, estimate.passes(*budget.max_error) ? " passed" : "");
+                        predicted_ms += candidate.predicted_ms;
+                        if (estimate.passes(*budget.max_error)) {
+                            row.predicted_ms = predicted_ms;
+                            row.predicted_error = estimate.bound;
+                            row.planned = tried;
+                            row.planned.ms = checking_ms;
+                            row.plan = tried.label + " (spot-checked)";
+                            checked = true;
+                            break;
+                        }
+                    }
+                    row.check_ms = spot.ms;
+                }
+                if (!checked) {
+                    row.planned = render_plan(renderer, *resources, scene, analysis, device, costs, plan.chosen.method,
+                                              plan.chosen.preset, plan.chosen.knobs, options.size, truth, &comparisons,
+                                              plan.chosen.scale);
+                    row.planned.ms += checking_ms;
+                }
                 for (const planning::Candidate& probe : plan.probes) {
                     render_plan(renderer, *resources, scene, analysis, device, costs, probe.method, probe.preset, probe.knobs,
                                 options.size, truth, &comparisons);
@@ -355,16 +415,17 @@ int main(int argc, char** argv) {
         }
         std::ofstream csv(options.out / "planner.csv");
         csv << "pass,scene,budget,plan,predicted_ms,predicted_rel_mse,measured_ms,measured_rel_mse,met,fixed_plan,fixed_ms,"
-               "fixed_rel_mse,holds,holds_strictly,measured_rel_mse_spread,fixed_rel_mse_spread,fixed_ms_again\n";
+               "fixed_rel_mse,holds,holds_strictly,measured_rel_mse_spread,fixed_rel_mse_spread,fixed_ms_again,checks,check_ms\n";
         std::string table = "| pass | scene | budget | plan | predicted ms / relMSE | measured ms / relMSE | met | comparator: fixed plan, ms / relMSE | holds |\n"
                             "|---|---|---|---|---|---|---|---|---|\n";
         std::map<int, std::tuple<int, int, int>> holding;  // per pass: holds, holds strictly, rows
         for (const BudgetRow& r : rows) {
-            csv << fmt::format("{},{},\"{}\",\"{}\",{:.2f},{:.5f},{:.2f},{:.5f},{},\"{}\",{:.2f},{:.5f},{},{},{:.5f},{:.5f},{:.2f}\n",
+            csv << fmt::format("{},{},\"{}\",\"{}\",{:.2f},{:.5f},{:.2f},{:.5f},{},\"{}\",{:.2f},{:.5f},{},{},{:.5f},{:.5f},{:.2f},\"{}\",{:.2f}\n",
                                r.pass, r.scene, r.budget, r.plan, r.predicted_ms, r.predicted_error, r.planned.ms,
                                r.planned.rel_mse, r.met, r.fixed ? r.fixed->label : "", r.fixed ? r.fixed->ms : 0.0,
                                r.fixed ? r.fixed->rel_mse : 0.0, r.holds, r.holds_strictly, r.planned.rel_mse_spread,
-                               r.fixed ? r.fixed->rel_mse_spread : 0.0, r.fixed ? r.fixed->ms_again : 0.0);
+                               r.fixed ? r.fixed->rel_mse_spread : 0.0, r.fixed ? r.fixed->ms_again : 0.0, r.checks,
+                               r.check_ms);
             table += fmt::format("| {} | {} | {} | {} | {:.0f} / {:.3f} | {:.0f} / {} | {} | {} | {} |\n", r.pass, r.scene,
                                  r.budget, r.plan, r.predicted_ms, r.predicted_error, r.planned.ms, error_text(r.planned),
                                  r.met ? "yes" : "**no**",
@@ -404,7 +465,10 @@ int main(int argc, char** argv) {
            << "- The planner plans after the fixed plans' frame times were recorded, as a daemon records its frames; "
               "their errors are not given to it. It learns a GPU method's error on the scene by comparing its own "
               "frames with its reference frames of the view: the planned frames, and the GPU probes it renders beside "
-              "a reference plan (planning::probes). Pass 2 asks for the same budgets again.\n\n"
+              "a reference plan (planning::probes), and reads what its spot checks measured: where the plan for a target error is the "
+              "reference, the GPU plans it may replace are rendered first and compared with a reference traced at 1024 of the "
+              "frame's pixel centres, and the first whose bound is within the target is sent (marked `spot-checked`; its time "
+              "includes the check's trace and every frame tried). Pass 2 asks for the same budgets again.\n\n"
            << held << ".\n\n![error against time: fixed plans, their Pareto front and the planner's frames]"
               "(../bench/results/planner.png)\n\n" << table
            << "\nWhat the planner's error model reads from the scene analysis:\n\n" << analysis_md << "\n" << kEnd << "\n";

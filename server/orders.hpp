@@ -98,6 +98,12 @@ struct RenderOrder {
     // Reference frames the planner asks for beside those, of a probe's own bounce count (the
     // probes' companions): traced on the reference's CPU slot after its frame is sent, never sent.
     std::vector<RenderRequest> reference_probes;
+    // GPU frames to try before a reference plan for a target error (planning::spot_checks), with the
+    // check that judges them: its reference is traced on a CPU slot, then each is rendered and the
+    // first within `checks_target` is sent in the reference's place.
+    std::vector<RenderRequest> checks;
+    std::optional<planning::SpotCheck> spot_check;
+    double checks_target = 0.0;
     // Set when the plan renders smaller than asked (planning/resolution.hpp): the size the frame is
     // upsampled to before it is encoded. `request` then holds the size it renders at.
     std::optional<std::pair<int, int>> output_size;

@@ -152,7 +152,9 @@ void RequestHandlers::execute(const std::shared_ptr<Request>& request, Renderer&
                     return bake(request, order, renderer, registry);
                 } else {
                     static_assert(std::is_same_v<T, RenderOrder>);
-                    if (order.plan.site == FrameSite::cpu) {
+                    if (order.plan.site == FrameSite::cpu && order.spot_check && !order.checks.empty()) {
+                        check_before_reference(request, order, renderer, registry);
+                    } else if (order.plan.site == FrameSite::cpu) {
                         render_on_cpu(request, order, renderer, registry);
                         render_probes(order, renderer, registry);
                     } else {
@@ -398,6 +400,17 @@ void RequestHandlers::plan_budgeted(RenderOrder& order, Renderer& renderer, Scen
     }
     order.plan = plan_frame(frame);
     order.planned = planning::plan_json(plan);
+    if (plan.spot_check) {
+        order.spot_check = plan.spot_check;
+        order.checks_target = order.budget->max_error.value_or(0.0);
+        for (const planning::Candidate& check : plan.checks) {
+            RenderRequest check_frame = frame;
+            check_frame.method = check.method;
+            check_frame.preset = check.preset;
+            check_frame.knobs = check.knobs;
+            order.checks.push_back(std::move(check_frame));
+        }
+    }
     for (const planning::Candidate& probe : plan.probes) {
         RenderRequest probe_frame = frame;
         probe_frame.method = probe.method;
@@ -440,6 +453,129 @@ planning::ResampleErrors RequestHandlers::resample_errors(const RenderOrder& ord
         log::warn("planner", "no smaller frames planned: measuring what upsampling loses failed: {}", error.what());
         return {};
     }
+}
+
+void RequestHandlers::check_before_reference(const std::shared_ptr<Request>& request, const RenderOrder& order,
+                                             Renderer& renderer, SceneRegistry& registry) {
+    const SceneEntry& entry = registry.get(order.scene);
+    check_scene_version(entry, order);
+    if (!daemon_.try_start_cpu_job()) {
+        // The reference plan answers busy as it would have; a check is not worth a queue of its own.
+        render_on_cpu(request, order, renderer, registry);
+        return;
+    }
+    auto slot = std::make_shared<CpuSlot>(daemon_);
+    auto snapshot = std::make_shared<const scene::Scene>(*entry.scene);
+    RenderRequest view = order.request;
+    if (auto camera = view_camera(*snapshot, order)) view.camera = std::move(camera);
+    const std::uint64_t version = entry.version;
+    boost::asio::post(daemon_.cpu_pool(), [this, request, order, view, snapshot, version, slot]() mutable {
+        const log::RequestScope scope(request->log_id);
+        std::shared_ptr<const planning::SpotReference> spot;
+        try {
+            request->check_still_wanted();
+            spot = std::make_shared<const planning::SpotReference>(
+                planning::trace_spot_reference(*snapshot, view, *order.spot_check, request->cancelled.get()));
+        } catch (const RequestError&) {  // cancelled, or past its timeout
+            request->fail(std::current_exception());
+            return;
+        } catch (const Cancelled&) {
+            request->fail(std::current_exception());
+            return;
+        } catch (const std::exception& error) {
+            // The check only saves time: without it the reference plan stands.
+            log::warn("planner", "spot check failed, rendering the reference plan: {}", error.what());
+        }
+        slot.reset();  // before the render thread may ask for a slot of its own
+        const bool resumed = daemon_.render_service().resume([this, request, order = std::move(order), spot, version](
+                                                                  Renderer& renderer, SceneRegistry& registry) mutable {
+            const log::RequestScope inner(request->log_id);
+            try {
+                try_checked_plans(request, std::move(order), spot, version, renderer, registry);
+            } catch (...) {
+                request->fail(std::current_exception());
+            }
+        });
+        if (!resumed) {
+            request->fail(std::make_exception_ptr(RequestError(ErrorCode::shutting_down, "the daemon is shutting down")));
+        }
+    });
+}
+
+// On the render thread. Each checked plan whose structures are built (a check never waits for a
+// bake) is rendered, recorded and compared with the check's reference; the first that passes is
+// sent, its plan in the reply's `plan` with what the check read. None passing (or a scene changed
+// since the check was traced), the reference plan is rendered, and the frames tried are compared
+// with it as probes are.
+void RequestHandlers::try_checked_plans(const std::shared_ptr<Request>& request, RenderOrder order,
+                                        const std::shared_ptr<const planning::SpotReference>& spot,
+                                        std::uint64_t traced_version, Renderer& renderer, SceneRegistry& registry) {
+    request->check_still_wanted();
+    SceneEntry& entry = registry.get(order.scene);
+    check_scene_version(entry, order);
+    json tried = json::array();
+    if (spot && entry.version == traced_version) {
+        const planning::DeviceCosts* device = known_device_costs(renderer);
+        const SceneAnalysis* analysis = entry.resources->analysis_if_made();
+        for (RenderRequest frame : order.checks) {
+            FrameClock clock{request->received, Clock::now(), {}, {}};
+            if (auto camera = view_camera(*entry.scene, order)) frame.camera = std::move(camera);
+            if (renderer.pending_work(*entry.resources, frame)) continue;
+            auto result = std::make_shared<const RenderResult>(renderer.render(*entry.resources, frame, request->cancelled.get()));
+            if (device) {
+                planning::record_frame(*entry.resources->measurements, analysis, *device, result->stats, frame.width,
+                                       frame.height);
+            }
+            entry.comparisons->add(view_key(entry.version, frame), result, analysis, *entry.resources->measurements);
+            const planning::SpotEstimate estimate =
+                planning::estimate(result->frame, spot->estimates, order.spot_check->stopped_error);
+            if (analysis) {
+                planning::record_spot_check(*entry.resources->measurements, analysis->bounces.stopped_error, frame.method,
+                                            frame.preset, frame.knobs, *order.spot_check, estimate);
+            }
+            const bool passes = estimate.passes(order.checks_target);
+            tried.push_back({{"method", frame.method},
+                             {"preset", frame.preset},
+                             {"knobs", frame.knobs},
+                             {"render_ms", result->stats.render_ms},
+                             {"rel_mse", estimate.rel_mse},
+                             {"standard_error", estimate.standard_error},
+                             {"noise", estimate.noise},
+                             {"bound", estimate.bound},
+                             {"passed", passes}});
+            log::info("planner", "{} {}: {}", frame.method, frame.preset, planning::describe(*order.spot_check, estimate));
+            if (!passes) continue;
+            clock.rendered = Clock::now();
+            if (order.planned) {
+                json& plan = *order.planned;
+                plan["method"] = frame.method;
+                plan["preset"] = frame.preset;
+                plan["knobs"] = frame.knobs;
+                plan["predicted_error"] = estimate.bound;
+                plan["meets_budget"] = true;
+                plan["spot_check"] = {{"pixels", estimate.pixels},
+                                      {"spp", spot->estimates.samples},
+                                      {"bounces", order.spot_check->bounces},
+                                      {"trace_ms", spot->ms},
+                                      {"tried", tried}};
+                plan["why"] = plan["why"].get<std::string>() +
+                              fmt::format("; sent {} {}: {}", frame.method, frame.preset,
+                                          planning::describe(*order.spot_check, estimate));
+            }
+            order.request = frame;
+            daemon_.metrics().set_resident_bytes(order.scene, result->stats.resident_bytes);
+            deliver(request, order, std::move(result), entry.version, clock);
+            return;
+        }
+    }
+    if (order.planned) {
+        (*order.planned)["spot_check"] = {{"spp", spot ? spot->estimates.samples : order.spot_check->spp},
+                                          {"bounces", order.spot_check->bounces},
+                                          {"trace_ms", spot ? spot->ms : 0.0},
+                                          {"tried", tried}};
+    }
+    render_on_cpu(request, order, renderer, registry);
+    render_probes(order, renderer, registry);
 }
 
 void RequestHandlers::render_probes(const RenderOrder& order, Renderer& renderer, SceneRegistry& registry) {

@@ -77,6 +77,13 @@ private:
     // Renders the order's probes whose structures are built (a probe never waits for a bake) and
     // compares each with the reference frame of its view when there is one.
     void render_probes(const RenderOrder& order, Renderer& renderer, SceneRegistry& registry);
+    // A reference plan with spot-checked GPU plans before it: traces the check's reference on a CPU
+    // slot, then (on the render thread) try_checked_plans(). Without a free slot, the reference plan.
+    void check_before_reference(const std::shared_ptr<Request>& request, const RenderOrder& order, Renderer& renderer,
+                                SceneRegistry& registry);
+    void try_checked_plans(const std::shared_ptr<Request>& request, RenderOrder order,
+                           const std::shared_ptr<const planning::SpotReference>& spot, std::uint64_t traced_version,
+                           Renderer& renderer, SceneRegistry& registry);
     // The error upsampling adds at each scale for the order's view (planning/resolution.hpp).
     planning::ResampleErrors resample_errors(const RenderOrder& order, Renderer& renderer, SceneEntry& entry);
     // The device's cost model: read from the cache folder, else calibrated (render thread; once).

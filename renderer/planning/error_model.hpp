@@ -37,6 +37,10 @@ struct ErrorPrediction {
 // methods without one.
 std::optional<double> own_error_prior(const std::string& method, const std::string& preset, int bounces = 1);
 
+// The median of the same measurements over the bench's scenes: what to expect of a GPU plan on a
+// scene where nothing is measured (spot checks try such plans), never what to promise.
+std::optional<double> typical_own_error(const std::string& method, const std::string& preset, int bounces = 1);
+
 // The indirect bounces a plan models: 0 for direct, 1 for vct and isr, the `bounces` knob for cssm
 // and the reference.
 int modelled_bounces(const std::string& method, const methods::KnobValues& knobs);

@@ -296,7 +296,76 @@ Plan plan(const PlanningInputs& inputs, const Budget& budget) {
     chosen.probes = probes(all, chosen.chosen, inputs.scene, &inputs.analysis,
                            methods::reference::Accumulator::prefixes_that_fit(
                                inputs.width, inputs.height, modelled_bounces(chosen.chosen.method, chosen.chosen.knobs)));
+    if (auto checks = spot_checks(all, chosen.chosen, budget, inputs)) {
+        // A checked plan is compared with the reference as a probe is, where it falls back to it.
+        std::erase_if(chosen.probes, [&](const Candidate& probe) {
+            return std::any_of(checks->plans.begin(), checks->plans.end(), [&](const Candidate& c) {
+                return c.method == probe.method && c.preset == probe.preset;
+            });
+        });
+        chosen.why += fmt::format("; first {} plan{} spot-checked against {} pixel centres of the reference at {} spp: {}",
+                                  checks->plans.size(), checks->plans.size() == 1 ? "" : "s", checks->check.pixels,
+                                  checks->check.spp, [&] {
+                                      std::vector<std::string> labels;
+                                      for (const Candidate& c : checks->plans) labels.push_back(describe(c));
+                                      return fmt::format("{}", fmt::join(labels, ", "));
+                                  }());
+        chosen.checks = std::move(checks->plans);
+        chosen.spot_check = checks->check;
+    }
     return chosen;
+}
+
+std::optional<Checks> spot_checks(const std::vector<Candidate>& all, const Candidate& chosen, const Budget& budget,
+                                  const PlanningInputs& inputs) {
+    if (!budget.max_error || budget.max_ms || chosen.method != "reference" || chosen.scale != 1.0) return std::nullopt;
+    const double target = *budget.max_error;
+    const SceneAnalysis& analysis = inputs.analysis;
+    Checks checks;
+    SpotCheck& check = checks.check;
+    // Against a reference that lacks little light: what it lacks is added to the frame's bound by the
+    // triangle inequality, (sqrt(a) + sqrt(b))^2, and at E/1000 that costs at most 0.07 E.
+    check.bounces = modelled_bounces(chosen.method, chosen.knobs);
+    for (const int bounces : kReferenceBounces) {
+        check.bounces = std::max(bounces, check.bounces);
+        if (BounceEnergy::at(analysis.bounces.stopped_error, bounces) <= 0.001 * target) break;
+    }
+    check.pixels = static_cast<int>(std::min<long long>(kSpotPixels, static_cast<long long>(inputs.width) * inputs.height));
+    const double noise_per_sample =
+        reference_noise(analysis, check.bounces, 1.0, inputs.scene, NoiseAgainst::every_bounce).rel_mse;
+    check.spp = static_cast<int>(
+        std::clamp(std::ceil(noise_per_sample * std::max(kSpotSamplesPerNoise / target, 1.0 / kSpotMaxNoise)),
+                   static_cast<double>(kSpotMinSamples), 4096.0));
+    check.stopped_error = BounceEnergy::at(analysis.bounces.stopped_error, check.bounces);
+    check.max_noise = 2.0 * std::min(kSpotMaxNoise, target / kSpotSamplesPerNoise);  // a half's
+    PlanningInputs spot = inputs;
+    spot.width = check.pixels;
+    spot.height = 1;
+    check.predicted_ms = predicted_ms(spot, "reference", chosen.preset,
+                                      {{"spp", kSpotPricedSamples * check.spp}, {"bounces", check.bounces}, {"pixel_jitter", 0}});
+    const double share_ms = kCheckShare * chosen.predicted_ms;
+    if (!std::isfinite(check.predicted_ms) || check.predicted_ms >= share_ms) return std::nullopt;
+    std::vector<const Candidate*> plausible;
+    for (const Candidate& c : all) {
+        if (c.method == "reference" || c.scale != 1.0) continue;
+        const int bounces = modelled_bounces(c.method, c.knobs);
+        if (inputs.scene) {
+            if (const auto own = inputs.scene->own_error(c.method, c.preset, bounces); own && own->exact) continue;
+        }
+        const auto typical = typical_own_error(c.method, c.preset, bounces);
+        if (!typical) continue;
+        if (*typical + BounceEnergy::at(analysis.bounces.stopped_error, bounces) > target) continue;
+        plausible.push_back(&c);
+    }
+    std::sort(plausible.begin(), plausible.end(), [](const Candidate* a, const Candidate* b) { return faster(*a, *b); });
+    double total_ms = check.predicted_ms;
+    for (const Candidate* c : plausible) {
+        if (total_ms + c->predicted_ms > share_ms) break;
+        total_ms += c->predicted_ms;
+        checks.plans.push_back(*c);
+    }
+    if (checks.plans.empty()) return std::nullopt;
+    return checks;
 }
 
 std::vector<Candidate> probes(const std::vector<Candidate>& all, const Candidate& chosen, const SceneMeasurements* scene,
@@ -419,6 +488,8 @@ void record_frame(SceneMeasurements& measurements, const SceneAnalysis* analysis
 nlohmann::json plan_json(const Plan& plan) {
     std::vector<std::string> probe_labels;
     for (const Candidate& probe : plan.probes) probe_labels.push_back(describe(probe));
+    std::vector<std::string> check_labels;
+    for (const Candidate& check : plan.checks) check_labels.push_back(describe(check));
     return {{"method", plan.chosen.method},
             {"preset", plan.chosen.preset},
             {"knobs", plan.chosen.knobs},
@@ -429,6 +500,7 @@ nlohmann::json plan_json(const Plan& plan) {
             {"considered", plan.considered},
             {"ruled_out", plan.ruled_out},
             {"probes", probe_labels},
+            {"checks", check_labels},
             {"why", plan.why}};
 }
 

@@ -12,6 +12,7 @@
 
 #include "renderer/methods/knobs.hpp"
 #include "renderer/planning/costs.hpp"
+#include "renderer/planning/spot_check.hpp"
 #include "renderer/renderer.hpp"
 #include "renderer/scene_analysis.hpp"
 
@@ -48,6 +49,10 @@ struct Plan {
     // GPU plans to render beside a reference plan, at the same view, to measure their own error on
     // this scene (comparisons.hpp): see probes().
     std::vector<Candidate> probes;
+    // GPU plans to render first, cheapest first, each compared with `spot_check`'s reference: the
+    // first that passes is sent in the chosen reference plan's place (see spot_checks()).
+    std::vector<Candidate> checks;
+    std::optional<SpotCheck> spot_check;
 };
 
 // Of the plans not chosen, GPU presets not yet compared with a reference frame of this scene, one plan
@@ -90,6 +95,24 @@ struct PlanningInputs {
 // Every plan the planner predicts for a frame, at full size and at each scale of its method's
 // `resample_errors`, with those the analysis rules out left out (and named in `ruled_out`).
 std::vector<Candidate> candidates(const PlanningInputs& inputs, std::vector<std::string>* ruled_out = nullptr);
+
+// For a target error E whose chosen plan is the reference (nothing on the scene promises a GPU plan
+// within E): GPU plans at full size whose own error is not measured here, which the bench's typical
+// own error (typical_own_error) and the light of the bounces they lack (the analysis') put within E,
+// cheapest first, while the spot check's price and their predicted times add to at most kCheckShare
+// of the reference plan's: where every one fails, the request costs at most 1 + kCheckShare times
+// the plan it stood in for, and the frames rendered are then compared with its reference as probes
+// are. The check traces kSpotPixels pixel centres at the reference's bounce count and its noise per
+// sample (the analysis', as the scene's reference frames measured it) over E/2 samples (16 to
+// 4096), priced as a reference frame of that many pixels. nullopt when no plan qualifies or the
+// budget has a time limit too (a check and its fallback would not keep it).
+inline constexpr double kCheckShare = 1.0;
+struct Checks {
+    std::vector<Candidate> plans;
+    SpotCheck check;
+};
+std::optional<Checks> spot_checks(const std::vector<Candidate>& all, const Candidate& chosen, const Budget& budget,
+                                  const PlanningInputs& inputs);
 
 // candidates() then choose().
 Plan plan(const PlanningInputs& inputs, const Budget& budget);

@@ -44,6 +44,16 @@ float luminance(const glm::vec3& c) { return 0.2126f * c.r + 0.7152f * c.g + 0.0
 // Per pixel in Accumulator::feature_sums_: albedo RGB, normal XYZ, depth, hits, luminance^2.
 constexpr std::size_t kFeatureFloats = 9;
 
+// A non-finite sample would poison its pixel forever: it is dropped (counted as 0).
+bool finite(const glm::vec3& c) { return std::isfinite(c.r) && std::isfinite(c.g) && std::isfinite(c.b); }
+
+// A frame's camera rays: from the camera through points of its pixels.
+struct CameraRays {
+    glm::vec3 origin;
+    glm::mat4 clip_to_world;
+    int width = 0, height = 0;
+};
+
 // The variance of a pixel's mean luminance over `samples` samples (the samples' variance over their
 // count), from the sums of their RGB and of their luminance squared.
 float mean_luminance_variance(const double* rgb_sum, double luminance2_sum, int samples) {
@@ -419,6 +429,32 @@ struct PathTracer::Impl {
     // random numbers, since the light of bounce k (next-event estimation at vertex k and the emission
     // its BRDF-sampled ray finds) is all added before the path decides to go on.
     // `vertices`, when given, counts the vertices shaded after each bounce count (max_bounces + 1).
+    CameraRays camera_rays(const scene::Camera& camera, int width, int height) const {
+        const float aspect = static_cast<float>(width) / static_cast<float>(height);
+        return {camera.position,
+                glm::inverse(camera.projection(aspect, camera.far_plane_for(scene.world_bounds())) * camera.view()), width,
+                height};
+    }
+
+    // Sample `sample` of pixel (x, y): its random numbers depend on (seed, pixel, sample) alone, so
+    // a pixel traced apart (PathTracer::trace_pixels) gets the samples a whole frame gives it.
+    glm::vec3 camera_sample(const CameraRays& view, const PathTracerSettings& settings, int x, int y,
+                            std::uint64_t sample, float* first = nullptr, glm::vec3* prefixes = nullptr,
+                            int prefix_count = 0, std::uint64_t* vertices = nullptr) const {
+        const std::uint64_t pixel = static_cast<std::uint64_t>(y) * static_cast<std::uint64_t>(view.width) + x;
+        Random random(settings.seed, pixel, sample);
+        const float jx = random.next(), jy = random.next();
+        const float ox = settings.pixel_jitter ? jx : 0.5f, oy = settings.pixel_jitter ? jy : 0.5f;
+        const float ndc_x = (static_cast<float>(x) + ox) / static_cast<float>(view.width) * 2.0f - 1.0f;
+        const float ndc_y = 1.0f - (static_cast<float>(y) + oy) / static_cast<float>(view.height) * 2.0f;
+        const glm::vec4 far_point = view.clip_to_world * glm::vec4(ndc_x, ndc_y, 1.0f, 1.0f);
+        const glm::vec3 direction = glm::normalize(glm::vec3(far_point) / far_point.w - view.origin);
+        return settings.ambient_occlusion
+                   ? glm::vec3(ambient_occlusion(view.origin, direction, settings.ao_lambda, random))
+                   : trace(view.origin, direction, settings.max_bounces, settings.indirect_visibility, random, first,
+                           prefixes, prefix_count, vertices);
+    }
+
     glm::vec3 trace(glm::vec3 origin, glm::vec3 direction, int max_bounces, bool indirect_visibility,
                     Random& random, float* first = nullptr, glm::vec3* prefixes = nullptr, int prefix_count = 0,
                     std::uint64_t* vertices = nullptr) const {
@@ -562,9 +598,7 @@ void PathTracer::render(Accumulator& accumulator, const scene::Camera& camera, i
     BOUNCE_CHECK(count >= 0, "sample count {}", count);
     check_settings(settings);
     const int width = accumulator.width(), height = accumulator.height();
-    const float aspect = static_cast<float>(width) / static_cast<float>(height);
-    const glm::mat4 inverse = glm::inverse(camera.projection(aspect, camera.far_plane_for(impl_->scene.world_bounds())) *
-                                           camera.view());
+    const CameraRays view = impl_->camera_rays(camera, width, height);
     const int first_sample = accumulator.samples_;
     const int prefix_count = accumulator.bounce_prefixes_;
     BOUNCE_CHECK(prefix_count == 0 || (prefix_count <= settings.max_bounces && settings.indirect_visibility &&
@@ -588,23 +622,9 @@ void PathTracer::render(Accumulator& accumulator, const scene::Camera& camera, i
                     float* first = &accumulator.feature_sums_[pixel * kFeatureFloats];
                     float* prefix_luminance2 = accumulator.prefix_luminance2_.data() + pixel * prefix_count;
                     for (int s = first_sample; s < first_sample + count; ++s) {
-                        Random random(settings.seed, pixel, static_cast<std::uint64_t>(s));
-                        const float jx = random.next(), jy = random.next();
-                        const float ox = settings.pixel_jitter ? jx : 0.5f, oy = settings.pixel_jitter ? jy : 0.5f;
-                        const float ndc_x = (static_cast<float>(x) + ox) / static_cast<float>(width) * 2.0f - 1.0f;
-                        const float ndc_y = 1.0f - (static_cast<float>(y) + oy) / static_cast<float>(height) * 2.0f;
-                        const glm::vec4 far_point = inverse * glm::vec4(ndc_x, ndc_y, 1.0f, 1.0f);
-                        const glm::vec3 direction = glm::normalize(glm::vec3(far_point) / far_point.w - camera.position);
-                        const glm::vec3 radiance =
-                            settings.ambient_occlusion
-                                ? glm::vec3(impl_->ambient_occlusion(camera.position, direction, settings.ao_lambda, random))
-                                : impl_->trace(camera.position, direction, settings.max_bounces,
-                                               settings.indirect_visibility, random, first, prefixes.data(),
-                                               prefix_count, vertices.data());
-                        // A non-finite sample would poison the pixel forever: it is dropped (counted as 0).
-                        const auto finite = [](const glm::vec3& c) {
-                            return std::isfinite(c.r) && std::isfinite(c.g) && std::isfinite(c.b);
-                        };
+                        const glm::vec3 radiance = impl_->camera_sample(view, settings, x, y, static_cast<std::uint64_t>(s),
+                                                                        first, prefixes.data(), prefix_count,
+                                                                        vertices.data());
                         if (finite(radiance)) {
                             sum += glm::dvec3(radiance);
                             first[8] += luminance(radiance) * luminance(radiance);
@@ -636,6 +656,80 @@ void PathTracer::render(Accumulator& accumulator, const scene::Camera& camera, i
     });
     if (cancelled && cancelled->load()) throw Cancelled("reference: the trace was cancelled");
     accumulator.samples_ += count;
+}
+
+PixelEstimates PathTracer::trace_pixels(const scene::Camera& camera, int width, int height, std::vector<int> pixels,
+                                        int spp, const PathTracerSettings& settings,
+                                        const std::atomic<bool>* cancelled, int first_sample) const {
+    BOUNCE_CHECK(width > 0 && height > 0, "tracing pixels of a {}x{} frame", width, height);
+    if (spp < 4) throw InputError(fmt::format("{} samples per pixel: two halves of two samples at least are needed", spp));
+    check_settings(settings);
+    const int count = width * height;
+    for (const int pixel : pixels) {
+        BOUNCE_CHECK(pixel >= 0 && pixel < count, "pixel {} is outside a {}x{} frame", pixel, width, height);
+    }
+    const CameraRays view = impl_->camera_rays(camera, width, height);
+    BOUNCE_CHECK(first_sample >= 0, "first sample {}", first_sample);
+    PixelEstimates estimates;
+    estimates.samples = spp;
+    for (int half = 0; half < 2; ++half) {
+        // Samples first_sample..first_sample+spp-1 whose number's parity is `half`.
+        estimates.half_samples[half] = (first_sample + spp + 1 - half) / 2 - (first_sample + 1 - half) / 2;
+    }
+    for (int half = 0; half < 2; ++half) {
+        estimates.mean[half].assign(pixels.size(), glm::dvec3(0.0));
+        estimates.variance[half].assign(pixels.size(), glm::dvec3(0.0));
+    }
+    impl_->arena.execute([&] {
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pixels.size()), [&](const tbb::blocked_range<std::size_t>& range) {
+            for (std::size_t i = range.begin(); i < range.end(); ++i) {
+                if (cancelled && cancelled->load(std::memory_order_relaxed)) return;
+                const int x = pixels[i] % width, y = pixels[i] / width;
+                glm::dvec3 sum[2] = {glm::dvec3(0.0), glm::dvec3(0.0)}, sum2[2] = {glm::dvec3(0.0), glm::dvec3(0.0)};
+                for (int s = first_sample; s < first_sample + spp; ++s) {
+                    const glm::vec3 radiance = impl_->camera_sample(view, settings, x, y, static_cast<std::uint64_t>(s));
+                    if (!finite(radiance)) continue;
+                    sum[s % 2] += glm::dvec3(radiance);
+                    sum2[s % 2] += glm::dvec3(radiance) * glm::dvec3(radiance);
+                }
+                for (int half = 0; half < 2; ++half) {
+                    const double count = static_cast<double>(estimates.half_samples[half]);
+                    if (count < 1.0) continue;
+                    const glm::dvec3 mean = sum[half] / count;
+                    estimates.mean[half][i] = mean;
+                    if (count > 1.0) {
+                        const glm::dvec3 sample_variance =
+                            glm::max(sum2[half] / count - mean * mean, glm::dvec3(0.0)) * (count / (count - 1.0));
+                        estimates.variance[half][i] = sample_variance / count;
+                    }
+                }
+            }
+        });
+    });
+    if (cancelled && cancelled->load()) throw Cancelled("reference: the trace was cancelled");
+    estimates.pixels = std::move(pixels);
+    return estimates;
+}
+
+void merge(PixelEstimates& into, const PixelEstimates& more) {
+    BOUNCE_CHECK(into.pixels == more.pixels, "merging estimates of other pixels");
+    for (int half = 0; half < 2; ++half) {
+        const double a = into.half_samples[half], b = more.half_samples[half], n = a + b;
+        if (b == 0.0) continue;
+        for (std::size_t i = 0; i < into.pixels.size(); ++i) {
+            const glm::dvec3 mean_a = into.mean[half][i], mean_b = more.mean[half][i];
+            const glm::dvec3 mean = (a * mean_a + b * mean_b) / n;
+            // Sums of squares about each mean (the samples' variance is the mean's times the count),
+            // then about the whole's.
+            const glm::dvec3 squares = into.variance[half][i] * a * std::max(a - 1.0, 0.0) +
+                                       more.variance[half][i] * b * std::max(b - 1.0, 0.0) +
+                                       a * (mean_a - mean) * (mean_a - mean) + b * (mean_b - mean) * (mean_b - mean);
+            into.mean[half][i] = mean;
+            into.variance[half][i] = n > 1.0 ? squares / (n - 1.0) / n : glm::dvec3(0.0);
+        }
+        into.half_samples[half] += more.half_samples[half];
+    }
+    into.samples += more.samples;
 }
 
 image::Frame PathTracer::render(const scene::Camera& camera, int width, int height, int spp,

@@ -114,6 +114,22 @@ private:
 // met are missing from it).
 double noise_per_sample(const Accumulator& accumulator);
 
+// Radiance at chosen pixels of a frame: a reference traced through a subset of a frame's pixels.
+// Per pixel, the mean of its even samples and of its odd ones, each with its channels' variance of
+// that mean (the samples' variance over their count): two independent estimates, so that what
+// weighs an error (relMSE's reference value) need not be the draw that makes it.
+struct PixelEstimates {
+    std::vector<int> pixels;  // y * width + x
+    std::vector<glm::dvec3> mean[2];
+    std::vector<glm::dvec3> variance[2];
+    int samples = 0;               // of both halves
+    int half_samples[2] = {0, 0};  // of each
+};
+
+// Adds `more`'s samples (of the same pixels, other sample numbers) to `into`: the halves' means and
+// variances of their means as if traced at once.
+void merge(PixelEstimates& into, const PixelEstimates& more);
+
 class PathTracer {
 public:
     // Builds the acceleration structures; the scene must outlive the tracer.
@@ -135,6 +151,13 @@ public:
     // Convenience: a fresh image of `spp` samples per pixel.
     image::Frame render(const scene::Camera& camera, int width, int height, int spp,
                         const PathTracerSettings& settings) const;
+
+    // `spp` samples (4 or more) at each of `pixels` (y * width + x) of a width x height frame: the
+    // very samples first_sample..first_sample+spp-1 that render() gives those pixels (merge() them
+    // with earlier ones to go on). Throws Cancelled as render() does.
+    PixelEstimates trace_pixels(const scene::Camera& camera, int width, int height, std::vector<int> pixels, int spp,
+                                const PathTracerSettings& settings, const std::atomic<bool>* cancelled = nullptr,
+                                int first_sample = 0) const;
 
     std::uint64_t rays_traced() const;
 
