@@ -102,10 +102,11 @@ std::vector<Candidate> candidates(const PlanningInputs& inputs, std::vector<std:
 // cheapest first, while the spot check's price and their predicted times add to at most kCheckShare
 // of the reference plan's: where every one fails, the request costs at most 1 + kCheckShare times
 // the plan it stood in for, and the frames rendered are then compared with its reference as probes
-// are. The check traces kSpotPixels pixel centres at the reference's bounce count and its noise per
-// sample (the analysis', as the scene's reference frames measured it) over E/2 samples (16 to
-// 4096), priced as a reference frame of that many pixels. nullopt when no plan qualifies or the
-// budget has a time limit too (a check and its fallback would not keep it).
+// are. The check traces kSpotPixels pixel centres at the fewest bounces that lack at most E/1000
+// of light, with samples for its noise per sample (the analysis', as the scene's reference frames
+// measured it) to make min(kSpotMaxNoise, E / kSpotSamplesPerNoise) (8 to 4096), priced as a
+// reference frame of that many pixels at kSpotPricedSamples times those samples. nullopt when no
+// plan qualifies or the budget has a time limit too (a check and its fallback would not keep it).
 inline constexpr double kCheckShare = 1.0;
 struct Checks {
     std::vector<Candidate> plans;

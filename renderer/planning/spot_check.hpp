@@ -34,12 +34,12 @@ namespace bounce::planning {
 // of it. A frame that can pass errs m under about 0.7 E, so n pixels read it within about
 // 3.5 E / sqrt(n) per standard error: at 1024, two of them come to 0.22 E.
 // The noise must stay small beside the reference's own value, whatever E: each term is weighed by
-// the reference there, and a noisy weight biases the estimate up (spot_weight; at a noise of 0.2,
-// by half), so the samples keep the noise per pixel under kSpotMaxNoise, and under
-// E / kSpotSamplesPerNoise where that is less (about 2.5 E: its own part of the standard error is
-// then as large as the pixels').
+// the reference there, and a noisy weight biases the estimate up (spot_weight; in the furnished room
+// at a half's noise of 0.17, cssm draft read 0.079 where its pixels err 0.066), so the samples keep
+// the noise per pixel under kSpotMaxNoise, and under E / kSpotSamplesPerNoise where that is less
+// (about 2.5 E: its own part of the standard error is then as large as the pixels').
 inline constexpr int kSpotPixels = 1024;
-inline constexpr double kSpotMaxNoise = 0.1;         // relMSE of the reference's noise per pixel
+inline constexpr double kSpotMaxNoise = 0.05;        // relMSE of the reference's noise per pixel
 inline constexpr double kSpotSamplesPerNoise = 0.4;  // samples per pixel: this times noise per sample over E
 inline constexpr int kSpotMinSamples = 8;            // two halves of four, for each half's variance
 // Standard errors above the estimate that must still be within the target: one-sided, a frame over

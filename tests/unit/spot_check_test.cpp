@@ -272,14 +272,14 @@ DeviceCosts costs_for_checks() {
 TEST(Planner, ATargetErrorTriesPlausibleGpuPlansWithASpotCheckBeforeTheReference) {
     const SceneAnalysis analysis = analysis_for_checks();
     const DeviceCosts device = costs_for_checks();
-    const PlanningInputs inputs{analysis, device, nullptr, 64, 64, std::nullopt};
+    const PlanningInputs inputs{analysis, device, nullptr, 128, 128, std::nullopt};
     const Plan plan = planning::plan(inputs, {std::nullopt, 0.05});
     ASSERT_EQ(plan.chosen.method, "reference");
-    ASSERT_TRUE(plan.spot_check.has_value()) << plan.why;  // the check, 215 ms, and cssm at 3 bounces, 15, fit its 248
+    ASSERT_TRUE(plan.spot_check.has_value()) << plan.why;  // the check and cssm fit its time at 128x128
     ASSERT_FALSE(plan.checks.empty());
     EXPECT_EQ(plan.spot_check->bounces, 12);  // lacks nothing
     EXPECT_EQ(plan.spot_check->pixels, kSpotPixels);
-    EXPECT_EQ(plan.spot_check->spp, kSpotMinSamples);  // 0.5 x 10 = 5, raised to the least
+    EXPECT_EQ(plan.spot_check->spp, 10);  // 0.5 x 20
     EXPECT_DOUBLE_EQ(plan.spot_check->max_noise, 2.0 * kSpotMaxNoise);
     double total = plan.spot_check->predicted_ms;
     double previous = 0.0;
@@ -313,7 +313,7 @@ TEST(Planner, ATargetErrorTriesPlausibleGpuPlansWithASpotCheckBeforeTheReference
     SceneMeasurements measured;
     const Candidate first = plan.checks.front();
     measured.record_own_error(first.method, first.preset, modelled_bounces(first.method, first.knobs), 0.2);
-    const PlanningInputs with_measured{analysis, device, &measured, 64, 64, std::nullopt};
+    const PlanningInputs with_measured{analysis, device, &measured, 128, 128, std::nullopt};
     const Plan again = planning::plan(with_measured, {std::nullopt, 0.05});
     for (const Candidate& c : again.checks) EXPECT_FALSE(c.method == first.method && c.preset == first.preset && c.knobs == first.knobs);
 }
