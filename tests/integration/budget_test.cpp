@@ -40,8 +40,8 @@ struct BudgetDaemon {
 
     protocol::Message render(json body) {
         body["scene"] = "cornell";
-        body["width"] = 48;
-        body["height"] = 48;
+        if (!body.contains("width")) body["width"] = 48;
+        if (!body.contains("height")) body["height"] = 48;
         body["format"] = "exr";
         return client.request(MessageType::render, body);
     }
@@ -125,16 +125,16 @@ TEST(Budget, AReferencePlanProbesGpuPresetsOncePerScene) {
 // With nothing measured on the scene no GPU plan is promised relMSE 0.055 (under the largest error
 // the bench measured of each preset on its corpus), and the plan is the reference; the daemon first
 // traces a spot check and tries the GPU plans that can plausibly meet it. cssm on the box errs about
-// 0.02 at 48x48, and the check, 1024 of its 2304 pixel centres, bounds it under 0.055, so it is
-// sent, and it meets the target against a reference of 1024 samples (whose noise, about 2.1 per
-// sample here, adds 0.002 to what it measures). cssm high is priced at 5 ms, so that the check and
-// its frames fit within the reference plan's time (tens of milliseconds on llvmpipe at 48x48). A
+// 0.02, and the check, 1024 of the frame's pixel centres, bounds it under 0.055, so it is sent, and
+// it meets the target against a reference of 512 samples (whose noise, about 2.1 per sample here,
+// adds 0.004 to what it measures). At 96x96 the check and a cssm frame fit within the reference
+// plan's time (at 48x48 a reference frame is as cheap as the check); cssm high is priced at 5 ms. A
 // check never waits for a bake (a plan whose structures are not built is skipped), so cssm high is
 // baked first, as a client that bakes on load has it.
 TEST(Budget, ATargetErrorSendsASpotCheckedGpuFrameThatMeetsIt) {
     BudgetDaemon d(false, 5.0);
     d.client.request(MessageType::bake, {{"scene", "cornell"}, {"method", "cssm"}, {"preset", "high"}});
-    const auto reply = d.render({{"method", "auto"}, {"budget", {{"max_error", 0.055}}}});
+    const auto reply = d.render({{"method", "auto"}, {"width", 96}, {"height", 96}, {"budget", {{"max_error", 0.055}}}});
     const json& plan = reply.body["plan"];
     ASSERT_TRUE(plan.contains("spot_check")) << plan.dump();
     const json& tried = plan["spot_check"]["tried"];
@@ -149,7 +149,8 @@ TEST(Budget, ATargetErrorSendsASpotCheckedGpuFrameThatMeetsIt) {
     for (std::size_t i = 0; i + 1 < tried.size(); ++i) EXPECT_FALSE(tried[i]["passed"].get<bool>()) << plan.dump();
     for (const json& check : tried) EXPECT_GE(check["bound"].get<double>(), check["rel_mse"].get<double>());
     EXPECT_GE(plan["spot_check"]["pixels"].get<int>(), 1024);
-    const auto reference = d.render({{"method", "reference"}, {"knobs", {{"spp", 1024}, {"bounces", 8}, {"pixel_jitter", 0}}}});
+    const auto reference = d.render({{"method", "reference"}, {"width", 96}, {"height", 96},
+                                     {"knobs", {{"spp", 512}, {"bounces", 8}, {"pixel_jitter", 0}}}});
     const auto frame_of = [](const protocol::Message& message) {
         const image::DecodedImage decoded = image::decode_image(message.attachment);
         image::Frame frame;
@@ -166,7 +167,7 @@ TEST(Budget, ATargetErrorSendsASpotCheckedGpuFrameThatMeetsIt) {
         return frame;
     };
     const double measured = image::compare(frame_of(reply), frame_of(reference)).rel_mse;
-    EXPECT_LE(measured, 0.055 + 0.002) << plan.dump();
+    EXPECT_LE(measured, 0.055 + 0.004) << plan.dump();
 
 }
 
