@@ -99,7 +99,9 @@ TEST(Planner, AnEmptyTableOrABudgetWithoutLimitsIsRefused) {
     EXPECT_THROW(choose({plan_of("a", 1, 1)}, {}), InputError);
 }
 
-// An analysis made up for the arithmetic: stopping at k bounces loses 0.1 / 2^k, and one sample of
+}  // namespace
+
+// An analysis made up for the arithmetic (spot_check_test.cpp takes it too): stopping at k bounces loses 0.1 / 2^k, and one sample of
 // the reference has relMSE 0.5 at every bounce count.
 SceneAnalysis made_up_analysis() {
     SceneAnalysis analysis;
@@ -112,6 +114,8 @@ SceneAnalysis made_up_analysis() {
     for (const char* preset : {"draft", "low", "medium", "high", "ultra"}) analysis.thin_walls.presets[preset] = {0.1, 0.0};
     return analysis;
 }
+
+namespace {
 
 TEST(ErrorModel, TheReferenceLacksItsMissingBouncesPlusNoiseOverItsSamples) {
     const SceneAnalysis analysis = made_up_analysis();

@@ -16,7 +16,20 @@
 #include <set>
 
 namespace bounce::planning {
+
+// planner_test.cpp's: stopping at k bounces loses 0.1 / 2^k; one sample's relMSE is 0.5; a sample of
+// k bounces takes (k + 1) microseconds.
+SceneAnalysis made_up_analysis();
+
 namespace {
+
+// The box's tracer and a setting of `bounces` through pixel centres.
+methods::reference::PathTracerSettings centres(int bounces) {
+    methods::reference::PathTracerSettings settings;
+    settings.max_bounces = bounces;
+    settings.pixel_jitter = false;
+    return settings;
+}
 
 TEST(SpotCheck, PixelsAreOnePerCellOfAGridShapedLikeTheFrame) {
     // 128x64 in 512 cells: a 32x16 grid of 4x4 cells.
@@ -43,9 +56,7 @@ TEST(SpotCheck, PixelsAreOnePerCellOfAGridShapedLikeTheFrame) {
 TEST(SpotCheck, TracedPixelsAreTheFramesOwnSamples) {
     const scene::Scene scene = scene::make_cornell_box();
     const methods::reference::PathTracer tracer(scene);
-    methods::reference::PathTracerSettings settings;
-    settings.max_bounces = 2;
-    settings.pixel_jitter = false;
+    const methods::reference::PathTracerSettings settings = centres(2);
     const image::Frame frame = tracer.render(scene.cameras.at(0), 16, 16, 8, settings);
     const std::vector<int> pixels = {0, 37, 136, 255};
     const methods::reference::PixelEstimates traced = tracer.trace_pixels(scene.cameras.at(0), 16, 16, pixels, 8, settings);
@@ -68,9 +79,7 @@ TEST(SpotCheck, TracedPixelsAreTheFramesOwnSamples) {
 TEST(SpotCheck, SamplesTracedInTwoGoesMergeIntoTheSamplesTracedAtOnce) {
     const scene::Scene scene = scene::make_cornell_box();
     const methods::reference::PathTracer tracer(scene);
-    methods::reference::PathTracerSettings settings;
-    settings.max_bounces = 3;
-    settings.pixel_jitter = false;
+    const methods::reference::PathTracerSettings settings = centres(3);
     const std::vector<int> pixels = spot_pixels(24, 24, 64);
     const auto at_once = tracer.trace_pixels(scene.cameras.at(0), 24, 24, pixels, 13, settings);
     auto in_two = tracer.trace_pixels(scene.cameras.at(0), 24, 24, pixels, 5, settings);
@@ -241,20 +250,6 @@ TEST(SpotCheck, WhatACheckReadsIsRecordedAsThePlansOwnError) {
     EXPECT_FALSE(measured.own_error("cssm", "high", 6).has_value());
 }
 
-SceneAnalysis analysis_for_checks() {
-    // Stopping at k bounces loses 0.1 / 2^k; one sample's relMSE is 0.5; a sample of k bounces takes
-    // (k + 1) microseconds.
-    SceneAnalysis analysis;
-    for (int k = 0; k <= 12; ++k) {
-        analysis.bounces.stopped_error.push_back(k == 12 ? 0.0 : 0.1 / std::pow(2.0, k));
-        analysis.bounces.noise_per_sample.push_back(0.5);
-        analysis.bounces.sample_ns.push_back(1000.0 * (k + 1));
-    }
-    analysis.bounces.tracer_build_ms = 2.0;
-    for (const char* preset : {"draft", "low", "medium", "high", "ultra"}) analysis.thin_walls.presets[preset] = {0.1, 0.0};
-    return analysis;
-}
-
 DeviceCosts costs_for_checks() {
     DeviceCosts device("test");
     for (const char* preset : {"draft", "low", "medium", "high", "ultra"}) {
@@ -270,7 +265,7 @@ DeviceCosts costs_for_checks() {
 // reference is the plan; cssm plans whose typical own error with the light their bounces lack fits
 // 0.05 are checked first, cheapest first, within the reference's time.
 TEST(Planner, ATargetErrorTriesPlausibleGpuPlansWithASpotCheckBeforeTheReference) {
-    const SceneAnalysis analysis = analysis_for_checks();
+    const SceneAnalysis analysis = made_up_analysis();
     const DeviceCosts device = costs_for_checks();
     const PlanningInputs inputs{analysis, device, nullptr, 128, 128, std::nullopt};
     const Plan plan = planning::plan(inputs, {std::nullopt, 0.05});
