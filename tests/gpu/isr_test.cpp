@@ -437,7 +437,11 @@ TEST(Isr, ImperfectShadowMapsKeepALightInsideAClosedBlock) {
     EXPECT_LT(with_denser.mean_test, with.mean_test);
 }
 
-// The same scene with every object's transform baked into its vertices (one mesh per primitive).
+// The same scene with every object's transform baked into its vertices (one mesh per primitive),
+// each primitive's bounds made again around its moved vertices: kept in object space, they made the
+// baked scene's bounds, and every fit to them (the sun's view, τ's radius), another scene's (on
+// assimp's 2CylinderEngine, 2.5e-3 of relMSE against the placed file where bounds made again leave 1.3e-3,
+// what its rotated objects' boxes, transformed corner by corner, add to the placed one's).
 scene::Scene with_transforms_baked(const scene::Scene& source) {
     scene::Scene baked;
     baked.textures = source.textures;
@@ -449,7 +453,11 @@ scene::Scene with_transforms_baked(const scene::Scene& source) {
         const glm::mat3 normal_matrix = glm::transpose(glm::inverse(glm::mat3(object.transform)));
         int part = 0;
         for (scene::Primitive primitive : source.meshes[static_cast<std::size_t>(object.mesh)].primitives) {
-            for (glm::vec3& position : primitive.positions) position = glm::vec3(object.transform * glm::vec4(position, 1.0f));
+            primitive.bounds = scene::Aabb{};
+            for (glm::vec3& position : primitive.positions) {
+                position = glm::vec3(object.transform * glm::vec4(position, 1.0f));
+                primitive.bounds.extend(position);
+            }
             for (glm::vec3& normal : primitive.normals) normal = glm::normalize(normal_matrix * normal);
             for (glm::vec4& tangent : primitive.tangents) {
                 tangent = glm::vec4(glm::normalize(glm::mat3(object.transform) * glm::vec3(tangent)), tangent.w);
