@@ -476,14 +476,13 @@ void RequestHandlers::check_before_reference(const std::shared_ptr<Request>& req
             request->check_still_wanted();
             spot = std::make_shared<const planning::SpotReference>(
                 planning::trace_spot_reference(*snapshot, view, *order.spot_check, request->cancelled.get()));
-        } catch (const RequestError&) {  // cancelled, or past its timeout
-            request->fail(std::current_exception());
-            return;
-        } catch (const Cancelled&) {
-            request->fail(std::current_exception());
-            return;
         } catch (const std::exception& error) {
-            // The check only saves time: without it the reference plan stands.
+            // Cancelled, or past its timeout: the request ends. Anything else: the check only saves
+            // time, and without it the reference plan stands.
+            if (dynamic_cast<const RequestError*>(&error) || dynamic_cast<const Cancelled*>(&error)) {
+                request->fail(std::current_exception());
+                return;
+            }
             log::warn("planner", "spot check failed, rendering the reference plan: {}", error.what());
         }
         slot.reset();  // before the render thread may ask for a slot of its own

@@ -325,11 +325,11 @@ std::optional<Checks> spot_checks(const std::vector<Candidate>& all, const Candi
     SpotCheck& check = checks.check;
     // Against a reference that lacks little light: what it lacks is added to the frame's bound by the
     // triangle inequality, (sqrt(a) + sqrt(b))^2, and at E/1000 that costs at most 0.07 E.
-    check.bounces = modelled_bounces(chosen.method, chosen.knobs);
-    for (const int bounces : kReferenceBounces) {
-        check.bounces = std::max(bounces, check.bounces);
-        if (BounceEnergy::at(analysis.bounces.stopped_error, bounces) <= 0.001 * target) break;
-    }
+    const int* enough = std::find_if(std::begin(kReferenceBounces), std::end(kReferenceBounces), [&](int bounces) {
+        return BounceEnergy::at(analysis.bounces.stopped_error, bounces) <= 0.001 * target;
+    });
+    check.bounces = std::max(enough != std::end(kReferenceBounces) ? *enough : kReferenceBounces[std::size(kReferenceBounces) - 1],
+                             modelled_bounces(chosen.method, chosen.knobs));
     check.pixels = static_cast<int>(std::min<long long>(kSpotPixels, static_cast<long long>(inputs.width) * inputs.height));
     const double noise_per_sample =
         reference_noise(analysis, check.bounces, 1.0, inputs.scene, NoiseAgainst::every_bounce).rel_mse;

@@ -12,6 +12,10 @@
 
 #include <unistd.h>
 
+#include <chrono>
+#include <cmath>
+#include <thread>
+
 namespace bounce::test {
 namespace {
 
@@ -169,6 +173,45 @@ TEST(Budget, ATargetErrorSendsASpotCheckedGpuFrameThatMeetsIt) {
     const double measured = image::compare(frame_of(reply), frame_of(reference)).rel_mse;
     EXPECT_LE(measured, 0.055 + 0.004) << plan.dump();
 
+}
+
+// The same request where no plan to check is built (cssm not baked: a check never waits for a bake):
+// the reference plan is rendered as planned, and the reply says the check was traced and nothing
+// tried.
+TEST(Budget, ASpotCheckWithNothingBuiltToTryFallsBackToTheReferencePlan) {
+    BudgetDaemon d(false, 5.0);
+    const auto reply = d.render({{"method", "auto"}, {"width", 96}, {"height", 96}, {"budget", {{"max_error", 0.055}}}});
+    const json& plan = reply.body["plan"];
+    ASSERT_TRUE(plan.contains("spot_check")) << plan.dump();
+    EXPECT_FALSE(plan["checks"].empty()) << plan.dump();
+    EXPECT_TRUE(plan["spot_check"]["tried"].empty()) << plan.dump();
+    EXPECT_FALSE(plan["spot_check"].contains("pixels")) << plan.dump();
+    EXPECT_EQ(reply.body["method"], "reference");
+    EXPECT_EQ(plan["method"], "reference");
+    const image::DecodedImage frame = image::decode_image(reply.attachment);
+    EXPECT_EQ(frame.width, 96);
+    for (const float value : frame.pixels) ASSERT_TRUE(std::isfinite(value));
+}
+
+// Clients that hang up while their request's check traces or its plans render: each request ends
+// with its connection, its CPU slot comes back (the daemon has four; six hang-ups in a row), and the
+// daemon then serves a checked request as before.
+TEST(Budget, ClientsThatHangUpDuringASpotCheckLeaveNoSlotTaken) {
+    BudgetDaemon d(false, 5.0);
+    d.client.request(MessageType::bake, {{"scene", "cornell"}, {"method", "cssm"}, {"preset", "high"}});
+    const json body = {{"scene", "cornell"}, {"method", "auto"}, {"width", 96}, {"height", 96}, {"format", "exr"},
+                       {"budget", {{"max_error", 0.055}}}};
+    for (int attempt = 0; attempt < 6; ++attempt) {
+        Client leaving(d.daemon.endpoint());
+        leaving.send_raw(frame_bytes(MessageType::render, 7, body));
+        // Gone at once, or a moment in: while the check traces or a plan renders.
+        std::this_thread::sleep_for(std::chrono::milliseconds(attempt % 2 == 0 ? 0 : 40 * attempt));
+    }
+    const auto reply = d.render({{"method", "auto"}, {"width", 96}, {"height", 96}, {"budget", {{"max_error", 0.055}}}});
+    EXPECT_EQ(reply.type, static_cast<std::uint16_t>(MessageType::frame));
+    EXPECT_TRUE(reply.body["plan"].contains("spot_check") || reply.body["plan"]["method"] != "reference")
+        << reply.body["plan"].dump();
+    EXPECT_EQ(image::decode_image(reply.attachment).width, 96);
 }
 
 // A stream with a budget: its interactive and still rungs are each planned for it at their own
