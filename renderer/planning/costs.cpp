@@ -124,24 +124,36 @@ std::optional<double> median_ratio(const std::map<double, std::deque<FrameTime>>
 }  // namespace
 
 std::optional<double> SceneMeasurements::ratio(const std::string& method, const std::string& preset, int bounces,
-                                               bool* exact) const {
+                                               bool* exact, const BounceRaise& raise) const {
     const std::lock_guard lock(mutex_);
     if (exact) *exact = false;
-    if (const auto it = frames_.find({method, preset, bounces}); it != frames_.end()) {
-        if (const auto own = median_ratio(it->second)) {
+    const auto raised = [&](const Key& key, double ratio) {
+        return raise ? ratio * raise(std::get<1>(key), std::get<2>(key)) : ratio;
+    };
+    // This preset's counts: the one asked, else the nearest below, else the fewest above.
+    const Key* nearest = nullptr;
+    std::optional<double> nearest_ratio;
+    for (const auto& [key, by_size] : frames_) {
+        if (std::get<0>(key) != method || std::get<1>(key) != preset) continue;
+        const auto r = median_ratio(by_size);
+        if (!r) continue;
+        const int count = std::get<2>(key);
+        if (count == bounces) {
             if (exact) *exact = true;
-            return own;
+            return r;
         }
+        const bool better = !nearest || (count < bounces ? std::get<2>(*nearest) > bounces || count > std::get<2>(*nearest)
+                                                         : std::get<2>(*nearest) > bounces && count < std::get<2>(*nearest));
+        if (better) nearest = &key, nearest_ratio = r;
     }
-    for (const bool same_preset : {true, false}) {
-        std::vector<double> others;
-        for (const auto& [key, by_size] : frames_) {
-            if (std::get<0>(key) != method || (same_preset && std::get<1>(key) != preset)) continue;
-            if (const auto r = median_ratio(by_size)) others.push_back(*r);
-        }
-        if (!others.empty()) return median(others);
+    if (nearest) return raised(*nearest, *nearest_ratio);
+    std::vector<double> others;
+    for (const auto& [key, by_size] : frames_) {
+        if (std::get<0>(key) != method) continue;
+        if (const auto r = median_ratio(by_size)) others.push_back(raised(key, *r));
     }
-    return std::nullopt;
+    if (others.empty()) return std::nullopt;
+    return median(std::move(others));
 }
 
 std::optional<SceneMeasurements::AffineTime> SceneMeasurements::reference_time() const {

@@ -8,6 +8,7 @@
 
 #include <deque>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <mutex>
 #include <optional>
@@ -76,11 +77,16 @@ public:
     // `bounces`: the frame's `bounces` knob, or -1 for methods without one.
     void record(const std::string& method, const std::string& preset, int bounces, double measured_ms, double predicted_ms,
                 double pixels = 0.0);
-    // The median of the last frames at this preset and bounce count; else at this preset; else of
-    // the method's other presets; nullopt when no frame of the method was measured on the scene.
-    // `exact`, when given, says whether frames at this preset and bounce count were measured.
+    // What frames measured at `measured_bounces` of a preset are raised by to price another count
+    // (planner.cpp: a bound on what more bounces cost; 1 where the count asked is not more).
+    using BounceRaise = std::function<double(const std::string& preset, int measured_bounces)>;
+    // The median of the last frames at this preset and bounce count; else, raised by `raise`, of this
+    // preset's frames at the nearest count measured below it (the fewest above it where none is
+    // below); else the median of the method's other presets, each raised; nullopt when no frame of
+    // the method was measured on the scene. Without `raise`, frames of other counts count as they
+    // are. `exact`, when given, says whether frames at this preset and bounce count were measured.
     std::optional<double> ratio(const std::string& method, const std::string& preset, int bounces = -1,
-                                bool* exact = nullptr) const;
+                                bool* exact = nullptr, const BounceRaise& raise = {}) const;
     // The reference's frame time on this scene as an affine function of the analysis' prediction:
     // a fixed part per frame (dispatching tiles to the threads, merging them, keeping the frames of
     // fewer bounces) and a part proportional to the samples. Through every reference frame measured

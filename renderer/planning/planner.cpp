@@ -105,6 +105,19 @@ std::optional<double> baseline_ms(const SceneAnalysis* analysis, const DeviceCos
 
 namespace {
 
+// The most a warm frame at a further bounce count cost, as a multiple of the preset's at its own
+// count (bench/bounce_cost.py, bench/results/bounce_cost.csv: every preset on the corpus and the
+// Cornell box at 2 and 8 bounces against 1): the largest ratio measured, raised to the largest of
+// the coarser presets', since a finer threshold refines at least as much where the light arrives.
+struct MostBounceCost {
+    const char* method;
+    const char* preset;
+    double ratio;
+};
+constexpr MostBounceCost kMostBounceCost[] = {
+    {"cssm", "draft", 2.91}, {"cssm", "low", 2.91}, {"cssm", "medium", 3.12}, {"cssm", "high", 5.30}, {"cssm", "ultra", 5.37},
+    {"vct", "draft", 1.23},  {"vct", "low", 1.23},  {"vct", "medium", 1.23},  {"vct", "high", 1.29},  {"vct", "ultra", 1.32}};
+
 // A preset's own `bounces` knob, or -1 where the method has none.
 int preset_bounces(const std::string& method, const std::string& preset) {
     const auto& presets = methods::MethodRegistry::builtin().find(method).presets;
@@ -112,14 +125,12 @@ int preset_bounces(const std::string& method, const std::string& preset) {
     return own != presets.end() && own->second.count("bounces") ? static_cast<int>(own->second.at("bounces")) : -1;
 }
 
-// The device's lines are of the presets' own bounce counts (one for cssm). More bounces than a
-// preset's own, not yet measured on the scene, are priced as repeating the first: an upper bound,
-// since a bounce repeats the gather and shares the rest (bench: at most 4x for 8).
-double unmeasured_bounce_factor(const std::string& method, const std::string& preset, const methods::KnobValues& knobs) {
-    const auto requested = bounces_knob(knobs);
-    const int own = preset_bounces(method, preset);
-    if (!requested || own < 0) return 1.0;
-    return std::max(1.0, *requested / std::max(1.0, static_cast<double>(own)));
+// What frames of `measured_preset` at `measured` bounces are raised by to price `preset` at `bounces`:
+// the ratio of the bounds, never below 1 (fewer bounces are priced as the frames measured).
+double bounce_raise(const std::string& method, const std::string& preset, int bounces, const std::string& measured_preset,
+                    int measured) {
+    if (method == "reference") return 1.0;  // its baseline prices each count (the analysis' time per sample)
+    return std::max(1.0, bounce_cost_bound(method, preset, bounces) / bounce_cost_bound(method, measured_preset, measured));
 }
 
 // A GPU preset's time on this scene from the scene's own lines (SceneMeasurements::line), where it
@@ -148,14 +159,13 @@ std::optional<double> scene_line_ms(const PlanningInputs& inputs, const std::str
     for (const SceneMeasurements::FrameTime& frame : frames) {
         if (frame.pixels > 0.0 && model(frame.pixels) > 0.0) by_size[frame.pixels].push_back(&frame);
     }
-    const bool same_bounces = shape->bounces == bounces;
     if (by_size.empty()) {
-        const double factor = same_bounces ? 1.0 : unmeasured_bounce_factor(method, preset, knobs);
+        const double factor = bounce_raise(method, preset, bounces, shape->preset, shape->bounces);
         if (basis) {
             *basis = fmt::format("this scene's line for {} {} (frames at two sizes or more) x the device's ratio of the "
                                  "presets",
                                  method, shape->preset);
-            if (factor > 1.0) *basis += fmt::format(", x {:g} for bounces not yet measured", factor);
+            if (factor > 1.0) *basis += fmt::format(", x {:.2g} for bounces not yet measured", factor);
         }
         return model(pixels) * factor;
     }
@@ -199,6 +209,16 @@ std::optional<double> scene_line_ms(const PlanningInputs& inputs, const std::str
 
 }  // namespace
 
+double bounce_cost_bound(const std::string& method, const std::string& preset, int bounces) {
+    const auto& presets = methods::MethodRegistry::builtin().find(method).presets;
+    const auto own = presets.find(preset);
+    if (own == presets.end() || !own->second.count("bounces") || bounces <= own->second.at("bounces")) return 1.0;
+    for (const MostBounceCost& most : kMostBounceCost) {
+        if (method == most.method && preset == most.preset) return most.ratio;
+    }
+    return bounces / std::max(1.0, own->second.at("bounces"));  // not measured: as if each bounce repeated the frame
+}
+
 double predicted_ms(const PlanningInputs& inputs, const std::string& method, const std::string& preset,
                     const methods::KnobValues& knobs, std::string* basis) {
     const auto base = baseline_ms(&inputs.analysis, inputs.device, method, preset, knobs, inputs.width, inputs.height);
@@ -217,19 +237,24 @@ double predicted_ms(const PlanningInputs& inputs, const std::string& method, con
             return fit->at(*base);
         }
     }
+    // Frames are recorded under their resolved knobs: a plan that names no bounce count has its preset's.
+    const int bounces = bounces_knob(knobs).value_or(preset_bounces(method, preset));
     std::optional<double> ratio, scene_ratio;
-    bool exact = false;
     if (inputs.scene) {
-        ratio = inputs.scene->ratio(method, preset, bounces_knob(knobs).value_or(-1), &exact);
+        const SceneMeasurements::BounceRaise raise = [&](const std::string& measured_preset, int measured) {
+            return bounce_raise(method, preset, bounces, measured_preset, measured);
+        };
+        ratio = inputs.scene->ratio(method, preset, bounces, nullptr, raise);
         if (!ratio && method != "reference") scene_ratio = inputs.scene->scene_ratio();
     }
-    const double bounce_factor = method != "reference" && !exact ? unmeasured_bounce_factor(method, preset, knobs) : 1.0;
+    // Measured on this scene, the ratio carries its bounces' cost already; else the device's line is at the preset's own count.
+    const double bounce_factor = method != "reference" && !ratio ? bounce_cost_bound(method, preset, bounces) : 1.0;
     const std::string source = method == "reference" ? "the analysis' times" : "the device's calibration";
     if (basis) {
         *basis = ratio         ? fmt::format("{} x {:.2f} measured on this scene", source, *ratio)
                  : scene_ratio ? fmt::format("{} x {:.2f}, this scene's ratio over other methods", source, *scene_ratio)
                                : source;
-        if (bounce_factor > 1.0) *basis += fmt::format(", x {:g} for bounces not yet measured", bounce_factor);
+        if (bounce_factor > 1.0) *basis += fmt::format(", x {:.2g} for bounces not yet measured", bounce_factor);
     }
     return *base * ratio.value_or(scene_ratio.value_or(1.0)) * bounce_factor;
 }

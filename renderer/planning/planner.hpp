@@ -124,6 +124,15 @@ Plan plan(const PlanningInputs& inputs, const Budget& budget);
 double predicted_ms(const PlanningInputs& inputs, const std::string& method, const std::string& preset,
                     const methods::KnobValues& knobs, std::string* basis = nullptr);
 
+// What a warm frame at `bounces` may cost, as a multiple of one at the preset's own count, before the
+// scene measured the count: 1 at the preset's count or fewer; else the most the bench measured a
+// further count cost (bench/bounce_cost.py). A further bounce does not repeat the frame: cssm
+// solves its atlas once per lighting and vct injects its second bounce with the light, so a warm
+// frame gathers as many pixels whatever the count. What grows is cssm's final gather, which refines
+// the radiosity tree wherever more light arrives: warm frames at 2 and 8 bounces took 0.8 to 5.4
+// times those at 1, and vct's at 2, 0.7 to 1.3 times.
+double bounce_cost_bound(const std::string& method, const std::string& preset, int bounces);
+
 // The cost line a frame is measured against when recorded in SceneMeasurements (its ratio's denominator):
 // the device line, or the analysis' time per sample for the reference. nullopt when neither applies.
 std::optional<double> baseline_ms(const SceneAnalysis* analysis, const DeviceCosts& device, const std::string& method,

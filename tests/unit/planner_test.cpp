@@ -173,8 +173,8 @@ TEST(ErrorModel, LeakingVctAndOccludedIsrAreRuledOutWithTheirReason) {
 
 // Where a scene needs more than one bounce, vct is offered with its second (the leaves gather the
 // first bounce before the pixels gather from them): half the missing light, with the bench's own
-// error of vct at two bounces, priced as repeating the first bounce until such frames are measured
-// on the scene.
+// error of vct at two bounces, priced at the most a second bounce cost on the bench until such
+// frames are measured on the scene.
 TEST(Planner, VctIsOfferedWithItsSecondBounce) {
     const SceneAnalysis analysis = made_up_analysis();
     DeviceCosts device("test");
@@ -192,7 +192,7 @@ TEST(Planner, VctIsOfferedWithItsSecondBounce) {
     EXPECT_DOUBLE_EQ(find(2)->predicted_error, 0.1 / 4.0 + *own_error_prior("vct", "medium", 2));
     EXPECT_GT(*own_error_prior("vct", "medium", 2), *own_error_prior("vct", "medium", 1));
     EXPECT_DOUBLE_EQ(find(1)->predicted_ms, 8.0);
-    EXPECT_DOUBLE_EQ(find(2)->predicted_ms, 16.0);
+    EXPECT_DOUBLE_EQ(find(2)->predicted_ms, 8.0 * bounce_cost_bound("vct", "medium", 2));
 }
 
 TEST(Costs, ALineThroughTwoFramesAndItsClamps) {
@@ -206,17 +206,31 @@ TEST(Costs, ALineThroughTwoFramesAndItsClamps) {
     EXPECT_DOUBLE_EQ(noisy.fixed_ms, 10.0);
 }
 
-TEST(Costs, BouncesAreMeasuredApartAndPricedAsRepeatsUntilThen) {
+TEST(Costs, BouncesAreMeasuredApartAndPricedFromTheNearestCountBelow) {
     SceneMeasurements measured;
-    measured.record("cssm", "low", 1, 20.0, 10.0);
+    measured.record("cssm", "low", 2, 20.0, 10.0);
     measured.record("cssm", "low", 8, 60.0, 15.0);
     EXPECT_DOUBLE_EQ(*measured.ratio("cssm", "low", 8), 4.0);
-    EXPECT_DOUBLE_EQ(*measured.ratio("cssm", "low", 1), 2.0);
+    EXPECT_DOUBLE_EQ(*measured.ratio("cssm", "low", 2), 2.0);
     bool exact = true;
-    EXPECT_DOUBLE_EQ(*measured.ratio("cssm", "low", 4, &exact), 3.0);  // not measured: the preset's median
+    const auto raise = [](const std::string&, int measured_bounces) { return measured_bounces == 2 ? 1.5 : 1.25; };
+    EXPECT_DOUBLE_EQ(*measured.ratio("cssm", "low", 4, &exact, raise), 3.0);  // not measured: 2 bounces', raised
     EXPECT_FALSE(exact);
-    EXPECT_DOUBLE_EQ(*measured.ratio("cssm", "high", 4), 3.0);  // nor the preset: the method's
+    EXPECT_DOUBLE_EQ(*measured.ratio("cssm", "low", 4), 2.0);    // unraised without a rule
+    EXPECT_DOUBLE_EQ(*measured.ratio("cssm", "low", 12), 4.0);   // the nearest below is 8
+    EXPECT_DOUBLE_EQ(*measured.ratio("cssm", "low", 1), 2.0);    // none below: the fewest above
+    EXPECT_DOUBLE_EQ(*measured.ratio("cssm", "high", 4, nullptr, raise), 4.0);  // nor the preset: the method's, each raised
     EXPECT_FALSE(measured.ratio("vct", "low", -1).has_value());
+
+    // Until measured, a further bounce costs at most the most the bench measured one cost: not a
+    // repeat of the frame, which would price cssm low at 8 bounces as 8 frames.
+    EXPECT_DOUBLE_EQ(bounce_cost_bound("cssm", "low", 1), 1.0);
+    EXPECT_GT(bounce_cost_bound("cssm", "low", 2), 1.0);
+    EXPECT_EQ(bounce_cost_bound("cssm", "low", 2), bounce_cost_bound("cssm", "low", 8));
+    EXPECT_LT(bounce_cost_bound("cssm", "low", 8), 8.0);
+    EXPECT_LE(bounce_cost_bound("cssm", "draft", 8), bounce_cost_bound("cssm", "ultra", 8));  // finer refines more
+    EXPECT_LT(bounce_cost_bound("vct", "medium", 2), 2.0);
+    EXPECT_DOUBLE_EQ(bounce_cost_bound("isr", "medium", 8), 1.0);  // no bounces knob
 
     const SceneAnalysis analysis = made_up_analysis();
     DeviceCosts device("test");
@@ -224,9 +238,13 @@ TEST(Costs, BouncesAreMeasuredApartAndPricedAsRepeatsUntilThen) {
     SceneMeasurements scene;
     const PlanningInputs inputs{analysis, device, &scene, 64, 64, std::nullopt};
     EXPECT_DOUBLE_EQ(predicted_ms(inputs, "cssm", "draft", {{"bounces", 1}}), 10.0);
-    EXPECT_DOUBLE_EQ(predicted_ms(inputs, "cssm", "draft", {{"bounces", 4}}), 40.0);  // four repeats of the first
+    EXPECT_DOUBLE_EQ(predicted_ms(inputs, "cssm", "draft", {{"bounces", 4}}), 10.0 * bounce_cost_bound("cssm", "draft", 4));
     scene.record("cssm", "draft", 4, 15.0, 10.0);  // measured: 1.5 times the one-bounce line
     EXPECT_DOUBLE_EQ(predicted_ms(inputs, "cssm", "draft", {{"bounces", 4}}), 15.0);
+    // 8 from 4: both past the preset's count, so the bound raises them alike: as measured at 4.
+    EXPECT_DOUBLE_EQ(predicted_ms(inputs, "cssm", "draft", {{"bounces", 8}}), 15.0);
+    // 1 from 4: fewer bounces cost at most what the frames measured, and are not assumed cheaper.
+    EXPECT_DOUBLE_EQ(predicted_ms(inputs, "cssm", "draft", {{"bounces", 1}}), 15.0);
 }
 
 TEST(Costs, TheCacheFileRoundTripsAndAnotherDevicesOrAGarbledOneIsIgnored) {
@@ -317,9 +335,11 @@ TEST(Costs, OtherPresetsTakeTheShapeOfTheMethodsLineOnTheScene) {
     };
     const PlanningInputs at_16{analysis, device, &scene, 16, 16, std::nullopt};
     EXPECT_NEAR(predicted_ms(at_16, "cssm", "medium", {{"bounces", 1}}), model(quarter), 1e-9);
-    EXPECT_NEAR(predicted_ms(at_16, "cssm", "medium", {{"bounces", 4}}), 4.0 * model(quarter), 1e-9);  // bounces unmeasured
-    // The measured preset itself at a bounce count not measured: its line, repeated per bounce.
-    EXPECT_NEAR(predicted_ms(at_16, "cssm", "draft", {{"bounces", 4}}), 4.0 * draft_here.at(quarter), 1e-9);
+    EXPECT_NEAR(predicted_ms(at_16, "cssm", "medium", {{"bounces", 4}}),  // bounces unmeasured
+                bounce_cost_bound("cssm", "medium", 4) * model(quarter), 1e-9);
+    // The measured preset itself at a bounce count not measured: its line, at the bound.
+    EXPECT_NEAR(predicted_ms(at_16, "cssm", "draft", {{"bounces", 4}}), bounce_cost_bound("cssm", "draft", 4) * draft_here.at(quarter),
+                1e-9);
     scene.record("cssm", "medium", 1, 1.5 * model(full), 99.0, full);  // medium measured 1.5x the shape at full size
     std::string basis;
     const double as_fixed = model(quarter) + 0.5 * model(full);
