@@ -186,10 +186,12 @@ void check_reach(const scene::Scene& scene, const scene::Object& object, const g
 }  // namespace
 
 void apply_transform(scene::Scene& scene, const TransformOrder& order) {
-    scene::Object& object = scene.objects[object_index(scene, order.object)];
+    const std::size_t index = object_index(scene, order.object);
+    scene::Object& object = scene.objects[index];
     if (order.matrix) {
         check_reach(scene, object, *order.matrix, order);
         object.transform = *order.matrix;
+        scene.fit_bounds(index);
         return;
     }
     // TRS about the object's origin, relative to how it was loaded.
@@ -207,6 +209,7 @@ void apply_transform(scene::Scene& scene, const TransformOrder& order) {
     const glm::mat4 transform = glm::translate(glm::mat4(1.0f), origin) * trs * local;
     check_reach(scene, object, transform, order);
     object.transform = transform;
+    scene.fit_bounds(index);
 }
 
 void apply_light(scene::Scene& scene, const LightOrder& order) {

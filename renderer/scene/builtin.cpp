@@ -136,6 +136,7 @@ Scene make_cornell_box() {
                                     2.0f * std::atan(12.5f / 35.0f));
     camera.name = "default";
     scene.cameras.push_back(camera);
+    scene.fit_bounds();
     return scene;
 }
 
@@ -236,6 +237,7 @@ Scene make_cornell_blob() {
     object.mesh = static_cast<int>(scene.meshes.size()) - 1;
     object.initial_transform = object.transform = place;
     scene.objects.push_back(object);
+    scene.fit_bounds();
     return scene;
 }
 

@@ -123,6 +123,7 @@ public:
         convert_materials();
         convert_meshes();
         flatten_nodes();
+        scene_.fit_bounds();
         if (scene_.cameras.empty()) add_default_camera();
         warn_if_unlit();
         return std::move(scene_);

@@ -90,6 +90,20 @@ Aabb Scene::world_bounds() const {
     return bounds;
 }
 
+void Scene::fit_bounds(std::size_t index) {
+    Object& object = objects.at(index);
+    object.fitted_bounds = Aabb();
+    object.fitted_transform = object.transform;
+    if (object.mesh < 0 || static_cast<std::size_t>(object.mesh) >= meshes.size()) return;
+    for (const Primitive& primitive : meshes[static_cast<std::size_t>(object.mesh)].primitives) {
+        for (const glm::vec3& p : primitive.positions) object.fitted_bounds.extend(glm::vec3(object.transform * glm::vec4(p, 1.0f)));
+    }
+}
+
+void Scene::fit_bounds() {
+    for (std::size_t i = 0; i < objects.size(); ++i) fit_bounds(i);
+}
+
 const Material& Scene::default_material() {
     static const Material material = [] {
         Material m;

@@ -148,7 +148,17 @@ struct Object {
     // motion up front instead of when it first moves.
     bool dynamic = false;
 
-    Aabb world_bounds(const Mesh& mesh_data) const { return mesh_data.bounds.transformed(transform); }
+    // The box around the mesh's vertices at `fitted_transform` (Scene::fit_bounds). Lights' views,
+    // shadow maps and voxel grids are fitted to these boxes, and the corners of a rotated mesh box
+    // hold space its mesh does not fill: fitted to the mesh's box, a frame would depend on whether
+    // the file's exporter rotated its nodes or its vertices.
+    Aabb fitted_bounds;
+    std::optional<glm::mat4> fitted_transform;
+    // fitted_bounds at the transform they were fitted at; at another, the mesh box's corners
+    // transformed (looser, never too small).
+    Aabb world_bounds(const Mesh& mesh_data) const {
+        return fitted_transform && *fitted_transform == transform ? fitted_bounds : mesh_data.bounds.transformed(transform);
+    }
 };
 
 enum class LightType { point, spot, directional };
@@ -204,6 +214,11 @@ struct Scene {
     std::vector<std::string> warnings;  // what the importer fell back on
 
     Aabb world_bounds() const;
+    // Fits each object's bounds (one object's) to its mesh's vertices at its transform
+    // (Object::fitted_bounds): the importers do it, and whoever moves an object or changes a mesh's
+    // vertices does it again; until then the object keeps its looser box.
+    void fit_bounds();
+    void fit_bounds(std::size_t object);
     // The material a primitive uses (the default material for -1).
     const Material& material(int index) const;
     std::optional<std::size_t> find_object(const std::string& name) const;

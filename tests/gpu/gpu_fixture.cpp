@@ -108,4 +108,30 @@ glm::ivec2 project_to_pixel(const scene::Camera& camera, int width, int height, 
             static_cast<int>((0.5f - ndc.y * 0.5f) * static_cast<float>(height))};
 }
 
+scene::Scene with_transforms_baked(const scene::Scene& source) {
+    scene::Scene baked;
+    baked.textures = source.textures;
+    baked.materials = source.materials;
+    baked.lights = source.lights;
+    baked.cameras = source.cameras;
+    for (const scene::Object& object : source.objects) {
+        if (object.mesh < 0) continue;
+        const glm::mat3 normal_matrix = glm::transpose(glm::inverse(glm::mat3(object.transform)));
+        int part = 0;
+        for (scene::Primitive primitive : source.meshes[static_cast<std::size_t>(object.mesh)].primitives) {
+            primitive.bounds = scene::Aabb{};
+            for (glm::vec3& position : primitive.positions) {
+                position = glm::vec3(object.transform * glm::vec4(position, 1.0f));
+                primitive.bounds.extend(position);
+            }
+            for (glm::vec3& normal : primitive.normals) normal = glm::normalize(normal_matrix * normal);
+            for (glm::vec4& tangent : primitive.tangents) {
+                tangent = glm::vec4(glm::normalize(glm::mat3(object.transform) * glm::vec3(tangent)), tangent.w);
+            }
+            scene::add_primitive_object(baked, object.name + "#" + std::to_string(part++), std::move(primitive));
+        }
+    }
+    return baked;
+}
+
 }  // namespace bounce::test

@@ -54,4 +54,8 @@ glm::vec3 pixel_on_ground(const scene::Camera& camera, int width, int height, in
 // The pixel whose centre sees `world` (rows top to bottom).
 glm::ivec2 project_to_pixel(const scene::Camera& camera, int width, int height, const glm::vec3& world);
 
+// The same scene with every object's transform baked into its vertices (one object per primitive,
+// its bounds made around its moved vertices), as an exporter that applies transforms writes it.
+scene::Scene with_transforms_baked(const scene::Scene& source);
+
 }  // namespace bounce::test

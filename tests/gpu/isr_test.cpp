@@ -437,37 +437,6 @@ TEST(Isr, ImperfectShadowMapsKeepALightInsideAClosedBlock) {
     EXPECT_LT(with_denser.mean_test, with.mean_test);
 }
 
-// The same scene with every object's transform baked into its vertices (one mesh per primitive),
-// each primitive's bounds made again around its moved vertices: kept in object space, they made the
-// baked scene's bounds, and every fit to them (the sun's view, τ's radius), another scene's (on
-// assimp's 2CylinderEngine, 2.5e-3 of relMSE against the placed file where bounds made again leave 1.3e-3,
-// what its rotated objects' boxes, transformed corner by corner, add to the placed one's).
-scene::Scene with_transforms_baked(const scene::Scene& source) {
-    scene::Scene baked;
-    baked.textures = source.textures;
-    baked.materials = source.materials;
-    baked.lights = source.lights;
-    baked.cameras = source.cameras;
-    for (const scene::Object& object : source.objects) {
-        if (object.mesh < 0) continue;
-        const glm::mat3 normal_matrix = glm::transpose(glm::inverse(glm::mat3(object.transform)));
-        int part = 0;
-        for (scene::Primitive primitive : source.meshes[static_cast<std::size_t>(object.mesh)].primitives) {
-            primitive.bounds = scene::Aabb{};
-            for (glm::vec3& position : primitive.positions) {
-                position = glm::vec3(object.transform * glm::vec4(position, 1.0f));
-                primitive.bounds.extend(position);
-            }
-            for (glm::vec3& normal : primitive.normals) normal = glm::normalize(normal_matrix * normal);
-            for (glm::vec4& tangent : primitive.tangents) {
-                tangent = glm::vec4(glm::normalize(glm::mat3(object.transform) * glm::vec3(tangent)), tangent.w);
-            }
-            scene::add_primitive_object(baked, object.name + "#" + std::to_string(part++), std::move(primitive));
-        }
-    }
-    return baked;
-}
-
 // The point cloud is kept in each object's space and moved by its transform: the Cornell box with its
 // blocks placed by their transforms (moved 5 cm off their spots) gives the frame that the same
 // geometry gives with the transforms baked into its vertices. Both clouds pick the same triangles
