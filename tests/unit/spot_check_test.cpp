@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <random>
 #include <set>
 
@@ -191,6 +192,7 @@ TEST(SpotCheck, TheEstimateIsNearlyUnbiasedAndItsBoundCoversTheFramesRelMse) {
             sum += estimate.rel_mse;
             covered += estimate.bound >= made.rel_mse;
         }
+        std::printf("noise %g: mean %.4f of %.4f (%.3f), covered %d of %d\n", noise, sum / kDraws, made.rel_mse, sum / kDraws / made.rel_mse, covered, kDraws);
         if (noise <= 0.02) {
             EXPECT_NEAR(sum / kDraws, made.rel_mse, 0.06 * made.rel_mse) << "noise " << noise;
         } else {
