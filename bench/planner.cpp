@@ -322,6 +322,10 @@ int main(int argc, char** argv) {
                     checking_ms = spot.ms;
                     double predicted_ms = plan.spot_check->predicted_ms;
                     for (const planning::Candidate& candidate : plan.checks) {
+                        if (planning::ruled_out_by_measurements(costs, analysis, candidate.method, candidate.preset,
+                                                                candidate.knobs, *budget.max_error)) {
+                            continue;
+                        }
                         image::Frame frame;
                         const Measured tried = render_plan(renderer, *resources, scene, analysis, device, costs,
                                                            candidate.method, candidate.preset, candidate.knobs,

@@ -520,6 +520,10 @@ void RequestHandlers::try_checked_plans(const std::shared_ptr<Request>& request,
             FrameClock clock{request->received, Clock::now(), {}, {}};
             if (auto camera = view_camera(*entry.scene, order)) frame.camera = std::move(camera);
             if (renderer.pending_work(*entry.resources, frame)) continue;
+            if (analysis && planning::ruled_out_by_measurements(*entry.resources->measurements, *analysis, frame.method,
+                                                                frame.preset, frame.knobs, order.checks_target)) {
+                continue;
+            }
             auto result = std::make_shared<const RenderResult>(renderer.render(*entry.resources, frame, request->cancelled.get()));
             if (device) {
                 planning::record_frame(*entry.resources->measurements, analysis, *device, result->stats, frame.width,

@@ -131,20 +131,19 @@ std::optional<double> SceneMeasurements::ratio(const std::string& method, const 
         return raise ? ratio * raise(std::get<1>(key), std::get<2>(key)) : ratio;
     };
     // This preset's counts: the one asked, else the nearest below, else the fewest above.
+    const auto distance = [&](int count) { return count <= bounces ? bounces - count : (1 << 20) + count; };
     const Key* nearest = nullptr;
     std::optional<double> nearest_ratio;
     for (const auto& [key, by_size] : frames_) {
         if (std::get<0>(key) != method || std::get<1>(key) != preset) continue;
         const auto r = median_ratio(by_size);
-        if (!r) continue;
-        const int count = std::get<2>(key);
-        if (count == bounces) {
-            if (exact) *exact = true;
-            return r;
-        }
-        const bool better = !nearest || (count < bounces ? std::get<2>(*nearest) > bounces || count > std::get<2>(*nearest)
-                                                         : std::get<2>(*nearest) > bounces && count < std::get<2>(*nearest));
-        if (better) nearest = &key, nearest_ratio = r;
+        if (!r || (nearest && distance(std::get<2>(key)) >= distance(std::get<2>(*nearest)))) continue;
+        nearest = &key;
+        nearest_ratio = r;
+    }
+    if (nearest && std::get<2>(*nearest) == bounces) {
+        if (exact) *exact = true;
+        return nearest_ratio;
     }
     if (nearest) return raised(*nearest, *nearest_ratio);
     std::vector<double> others;

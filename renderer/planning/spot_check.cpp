@@ -192,6 +192,12 @@ void record_spot_check(SceneMeasurements& measurements, const std::vector<double
     measurements.record_compared(method, preset);
 }
 
+bool ruled_out_by_measurements(const SceneMeasurements& measured, const SceneAnalysis& analysis, const std::string& method,
+                               const std::string& preset, const methods::KnobValues& knobs, double target) {
+    if (!measured.own_error(method, preset, modelled_bounces(method, knobs))) return false;
+    return predict_error(analysis, method, preset, knobs, &measured).rel_mse > target;
+}
+
 std::string describe(const SpotCheck& check, const SpotEstimate& estimate) {
     return fmt::format("a spot check of {} pixel centres at {} spp, {} bounces: relMSE {:.4f} +- {:.4f} (noise {:.4f} "
                        "taken out){}, at most {:.4f} against every bounce",

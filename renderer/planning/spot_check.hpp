@@ -27,6 +27,10 @@
 #include <string>
 #include <vector>
 
+namespace bounce {
+struct SceneAnalysis;
+}
+
 namespace bounce::planning {
 
 // How a check is sized. Its standard error has two parts: which pixels were drawn, and the
@@ -109,6 +113,14 @@ SpotReference trace_spot_reference(const scene::Scene& scene, const RenderReques
 void record_spot_check(SceneMeasurements& measurements, const std::vector<double>& stopped_error, const std::string& method,
                        const std::string& preset, const methods::KnobValues& knobs, const SpotCheck& check,
                        const SpotEstimate& estimate);
+
+// Whether a plan to try has been ruled out since the check was planned: the frames tried before it
+// recorded own errors (record_spot_check), and the scene now has one for the plan (at its bounce
+// count, or at more bounces of its preset, as SceneMeasurements::own_error reads them) that, with
+// the light its bounces lack, is over `target`: the planner would no longer offer it. So a failed
+// cssm draft at 8 bounces in the atrium (bound 0.147 for 0.05) is not followed by cssm draft at 6.
+bool ruled_out_by_measurements(const SceneMeasurements& measured, const SceneAnalysis& analysis, const std::string& method,
+                               const std::string& preset, const methods::KnobValues& knobs, double target);
 
 // "a spot check of 1024 pixel centres at 38 spp, 8 bounces: relMSE 0.0249 +- 0.0101 (noise 0.1675
 // taken out), at most 0.0475 against every bounce"

@@ -252,6 +252,32 @@ TEST(SpotCheck, WhatACheckReadsIsRecordedAsThePlansOwnError) {
     EXPECT_FALSE(measured.own_error("cssm", "high", 6).has_value());
 }
 
+// What a failed try recorded rules out the plans the planner would no longer offer: the preset at
+// fewer bounces (its own error read from the count measured above it), not another preset, and not
+// where what was read leaves room under the target.
+TEST(SpotCheck, AFailedTryRulesOutThePresetAtFewerBouncesAndNothingElse) {
+    const SceneAnalysis analysis = made_up_analysis();  // 8 bounces lack 0.1 / 256, 6 lack 0.1 / 64
+    SpotCheck check;
+    check.bounces = 12;
+    SpotEstimate read;
+    read.rel_mse = 0.10;
+    read.standard_error = 0.02;
+    read.pixels = 1024;
+    SceneMeasurements measured;
+    EXPECT_FALSE(ruled_out_by_measurements(measured, analysis, "cssm", "draft", {{"bounces", 6}}, 0.05));  // nothing read
+    record_spot_check(measured, analysis.bounces.stopped_error, "cssm", "draft", {{"bounces", 8}}, check, read);
+    EXPECT_TRUE(ruled_out_by_measurements(measured, analysis, "cssm", "draft", {{"bounces", 8}}, 0.05));
+    EXPECT_TRUE(ruled_out_by_measurements(measured, analysis, "cssm", "draft", {{"bounces", 6}}, 0.05));
+    EXPECT_FALSE(ruled_out_by_measurements(measured, analysis, "cssm", "low", {{"bounces", 6}}, 0.05));
+    EXPECT_FALSE(ruled_out_by_measurements(measured, analysis, "cssm", "draft", {{"bounces", 6}}, 0.2));
+    // Read well under the target: the preset at fewer bounces stays to try.
+    SceneMeasurements passed;
+    read.rel_mse = 0.01;
+    read.standard_error = 0.002;
+    record_spot_check(passed, analysis.bounces.stopped_error, "cssm", "draft", {{"bounces", 8}}, check, read);
+    EXPECT_FALSE(ruled_out_by_measurements(passed, analysis, "cssm", "draft", {{"bounces", 6}}, 0.05));
+}
+
 DeviceCosts costs_for_checks() {
     DeviceCosts device("test");
     for (const char* preset : {"draft", "low", "medium", "high", "ultra"}) {
