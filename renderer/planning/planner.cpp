@@ -374,9 +374,10 @@ std::optional<Checks> spot_checks(const std::vector<Candidate>& all, const Candi
     for (const Candidate& c : all) {
         if (c.method == "reference" || c.scale != 1.0) continue;
         const int bounces = modelled_bounces(c.method, c.knobs);
-        if (inputs.scene) {
-            if (const auto own = inputs.scene->own_error(c.method, c.preset, bounces); own && own->exact) continue;
-        }
+        // Measured on the scene (at its count, or at more bounces of its preset): the prediction from
+        // that stands, and where it is over E the frames tried before have ruled it out
+        // (ruled_out_by_measurements); a check would be traced for nothing.
+        if (inputs.scene && inputs.scene->own_error(c.method, c.preset, bounces)) continue;
         const auto typical = typical_own_error(c.method, c.preset, bounces);
         if (!typical) continue;
         if (*typical + BounceEnergy::at(analysis.bounces.stopped_error, bounces) > target) continue;
