@@ -210,13 +210,12 @@ std::optional<double> scene_line_ms(const PlanningInputs& inputs, const std::str
 }  // namespace
 
 double bounce_cost_bound(const std::string& method, const std::string& preset, int bounces) {
-    const auto& presets = methods::MethodRegistry::builtin().find(method).presets;
-    const auto own = presets.find(preset);
-    if (own == presets.end() || !own->second.count("bounces") || bounces <= own->second.at("bounces")) return 1.0;
+    const int own = preset_bounces(method, preset);
+    if (own < 0 || bounces <= own) return 1.0;
     for (const MostBounceCost& most : kMostBounceCost) {
         if (method == most.method && preset == most.preset) return most.ratio;
     }
-    return bounces / std::max(1.0, own->second.at("bounces"));  // not measured: as if each bounce repeated the frame
+    return static_cast<double>(bounces) / std::max(1, own);  // not measured: as if each bounce repeated the frame
 }
 
 double predicted_ms(const PlanningInputs& inputs, const std::string& method, const std::string& preset,

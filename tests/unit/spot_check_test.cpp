@@ -226,6 +226,15 @@ TEST(SpotCheck, AFrameWithANonFinitePixelFails) {
     EXPECT_FALSE(estimate.passes(1e9));
 }
 
+// A check's reading of 1024 pixels, as estimate() would give it.
+SpotEstimate reading(double rel_mse, double standard_error) {
+    SpotEstimate read;
+    read.rel_mse = rel_mse;
+    read.standard_error = standard_error;
+    read.pixels = 1024;
+    return read;
+}
+
 // A check is recorded as a comparison would be: the safe side of what it read, less the light of the
 // bounces the check's reference has beyond the plan's; not where that light is most of it, nor for a
 // plan of more bounces than the check.
@@ -233,10 +242,7 @@ TEST(SpotCheck, WhatACheckReadsIsRecordedAsThePlansOwnError) {
     const std::vector<double> stopped = {0.08, 0.02, 0.005, 0.0};
     SpotCheck check;
     check.bounces = 3;
-    SpotEstimate read;
-    read.rel_mse = 0.05;
-    read.standard_error = 0.005;
-    read.pixels = 1024;
+    SpotEstimate read = reading(0.05, 0.005);
     SceneMeasurements measured;
     record_spot_check(measured, stopped, "cssm", "low", {{"bounces", 2}}, check, read);
     const auto own = measured.own_error("cssm", "low", 2);
@@ -259,22 +265,16 @@ TEST(SpotCheck, AFailedTryRulesOutThePresetAtFewerBouncesAndNothingElse) {
     const SceneAnalysis analysis = made_up_analysis();  // 8 bounces lack 0.1 / 256, 6 lack 0.1 / 64
     SpotCheck check;
     check.bounces = 12;
-    SpotEstimate read;
-    read.rel_mse = 0.10;
-    read.standard_error = 0.02;
-    read.pixels = 1024;
     SceneMeasurements measured;
     EXPECT_FALSE(ruled_out_by_measurements(measured, analysis, "cssm", "draft", {{"bounces", 6}}, 0.05));  // nothing read
-    record_spot_check(measured, analysis.bounces.stopped_error, "cssm", "draft", {{"bounces", 8}}, check, read);
+    record_spot_check(measured, analysis.bounces.stopped_error, "cssm", "draft", {{"bounces", 8}}, check, reading(0.10, 0.02));
     EXPECT_TRUE(ruled_out_by_measurements(measured, analysis, "cssm", "draft", {{"bounces", 8}}, 0.05));
     EXPECT_TRUE(ruled_out_by_measurements(measured, analysis, "cssm", "draft", {{"bounces", 6}}, 0.05));
     EXPECT_FALSE(ruled_out_by_measurements(measured, analysis, "cssm", "low", {{"bounces", 6}}, 0.05));
     EXPECT_FALSE(ruled_out_by_measurements(measured, analysis, "cssm", "draft", {{"bounces", 6}}, 0.2));
     // Read well under the target: the preset at fewer bounces stays to try.
     SceneMeasurements passed;
-    read.rel_mse = 0.01;
-    read.standard_error = 0.002;
-    record_spot_check(passed, analysis.bounces.stopped_error, "cssm", "draft", {{"bounces", 8}}, check, read);
+    record_spot_check(passed, analysis.bounces.stopped_error, "cssm", "draft", {{"bounces", 8}}, check, reading(0.01, 0.002));
     EXPECT_FALSE(ruled_out_by_measurements(passed, analysis, "cssm", "draft", {{"bounces", 6}}, 0.05));
 }
 
