@@ -77,8 +77,10 @@ TEST(SceneAnalysis, BounceSharesSumToOneAndDirectLightComesFirst) {
     for (std::size_t k = 0; k < 12; ++k) EXPECT_LE(energy.noise_against_whole[k], energy.noise_per_sample[k]) << k;
     EXPECT_GT(energy.stopped_error[0], energy.stopped_error[1]);
     EXPECT_GT(energy.sample_ns[0], 0.0);
+    // Non-decreasing by construction (each count adds its vertices at a cost clamped at zero); that a
+    // vertex costs more than nothing is a timing, which a loaded machine can read as zero, so it is
+    // not asserted here.
     for (std::size_t k = 1; k < energy.sample_ns.size(); ++k) EXPECT_GE(energy.sample_ns[k], energy.sample_ns[k - 1]) << k;
-    EXPECT_GT(energy.sample_ns[12], energy.sample_ns[0]);
 }
 
 // Each bounce's light against the one before, past a bounce count: over three bounces, capped at
