@@ -47,6 +47,16 @@ double ms_since(Clock::time_point start);
 // A square frame of linear radiance only (no display image).
 RenderRequest linear_request(const std::string& method, const std::string& preset, methods::KnobValues knobs, int size);
 
+// Changes every light of `scene` from `original` (its lights before any change) as a client's
+// `light.set` would, the worst case for what a frame redoes (frame_change.hpp: every shadow map and
+// every light's work), by amounts no comparison sees: the `change`-th change moves each light by
+// 1e-5 or 2e-5 of the scene's extent, turns it by as many radians, and scales its intensity by
+// 1.001 or 1.002, alternately, so that each change differs from the last. Returns the intensity's
+// factor: light transport is linear, so the truth of the changed scene is the truth times it, less
+// what the moves change (a point light a tenth of the extent away changes irradiance by 4e-4 of
+// itself, 2e-7 of relMSE).
+double change_every_light(scene::Scene& scene, const std::vector<scene::Light>& original, int change);
+
 // The CPU model and its hardware thread count.
 std::string machine_description();
 

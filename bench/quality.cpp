@@ -65,6 +65,12 @@ struct Row {
     double rel_mse = 0, rmse = 0, rel_mse_same_bounces = 0, mean_ratio = 0;
     double rays_per_second = 0;
     double cold_ms = 0;  // GPU methods: the first frame, which builds the scene's structures
+    // GPU methods: a frame after every light changed (bench::change_every_light): what the lights
+    // feed is redone (FrameChange::lights), the structures are kept.
+    double relit_ms = 0;
+    // GPU methods: the shadow_maps pass of the first and of the relit frame (each draws every map):
+    // what the planner prices apart, from the scene's own shadow-map timings (planner.hpp).
+    double cold_shadow_ms = 0, relit_shadow_ms = 0;
 };
 
 bench::ReferenceSpec reference_spec(const Options& options) {
@@ -74,11 +80,11 @@ bench::ReferenceSpec reference_spec(const Options& options) {
 void write_csv(const fs::path& path, const std::vector<Row>& rows) {
     std::ofstream out(path);
     out << "scene,method,preset,bounces,wall_ms,gpu_ms,passes_ms,resident_bytes,rel_mse,rmse,rel_mse_same_bounces,"
-           "mean_ratio,rays_per_second,cold_ms\n";
+           "mean_ratio,rays_per_second,cold_ms,relit_ms,cold_shadow_ms,relit_shadow_ms\n";
     for (const Row& r : rows) {
-        out << fmt::format("{},{},{},{},{:.3f},{:.3f},{},{},{:.6g},{:.6g},{:.6g},{:.5f},{:.4g},{:.3f}\n", r.scene, r.method,
+        out << fmt::format("{},{},{},{},{:.3f},{:.3f},{},{},{:.6g},{:.6g},{:.6g},{:.5f},{:.4g},{:.3f},{:.3f},{:.3f},{:.3f}\n", r.scene, r.method,
                            r.preset, r.bounces, r.wall_ms, r.gpu_ms, r.passes, r.resident_bytes, r.rel_mse, r.rmse,
-                           r.rel_mse_same_bounces, r.mean_ratio, r.rays_per_second, r.cold_ms);
+                           r.rel_mse_same_bounces, r.mean_ratio, r.rays_per_second, r.cold_ms, r.relit_ms, r.cold_shadow_ms, r.relit_shadow_ms);
     }
 }
 
@@ -284,7 +290,8 @@ int main(int argc, char** argv) {
                 return it->second;
             };
             if (options.corpus) analysis_rows += analysis_row(bench_scene);
-            auto resources = renderer.upload(bench_scene.scene);
+            scene::Scene relit_scene = bench_scene.scene;  // its lights change to time a relit frame
+            auto resources = renderer.upload(relit_scene);
             for (const auto& method : registry.names()) {
                 if (plan_frame(linear_request(method, "medium", {}, options.size)).site != FrameSite::gpu) {
                     continue;  // CPU methods (the reference) are measured below
@@ -305,6 +312,10 @@ int main(int argc, char** argv) {
                     std::sort(results.begin(), results.end(),
                               [](const auto& a, const auto& b) { return a.stats.render_ms < b.stats.render_ms; });
                     const RenderResult& median = results[results.size() / 2];
+                    // Every light changed by amounts no comparison sees; back as they were for the next preset.
+                    bench::change_every_light(relit_scene, bench_scene.scene.lights, 1);
+                    const RenderResult relit = renderer.render(*resources, request);
+                    relit_scene.lights = bench_scene.scene.lights;
                     if (options.previews && preset == "medium") {
                         write_preview(*options.previews / fmt::format("{}-{}.png", bench_scene.name, method), median.frame);
                     }
@@ -318,6 +329,14 @@ int main(int argc, char** argv) {
                     row.wall_ms = median.stats.render_ms;
                     row.gpu_ms = median.stats.gpu_ms;
                     row.cold_ms = cold.stats.render_ms;
+                    row.relit_ms = relit.stats.render_ms;
+                    const auto shadow_ms = [](const FrameStats& stats) {
+                        double ms = 0.0;
+                        for (const auto& pass : stats.passes) ms += pass.pass == "shadow_maps" ? pass.gpu_ms : 0.0;
+                        return ms;
+                    };
+                    row.cold_shadow_ms = shadow_ms(cold.stats);
+                    row.relit_shadow_ms = shadow_ms(relit.stats);
                     for (const auto& pass : median.stats.passes) {
                         row.passes += fmt::format("{}{}={:.2f}", row.passes.empty() ? "" : ";", pass.pass, pass.gpu_ms);
                     }
@@ -331,8 +350,8 @@ int main(int argc, char** argv) {
                     for (const auto& pass : cold.stats.passes) {
                         if (pass.gpu_ms >= 1.0) cold_passes += fmt::format(" {}={:.0f}", pass.pass, pass.gpu_ms);
                     }
-                    log::info("bench", "{} {} {}: {:.1f} ms (first frame {:.1f} ms, GPU ms over 1:{}) relMSE {:.4f} (same bounces {:.5f})",
-                              row.scene, method, preset, row.wall_ms, row.cold_ms, cold_passes, row.rel_mse,
+                    log::info("bench", "{} {} {}: {:.1f} ms (first frame {:.1f} ms, relit {:.1f} ms, GPU ms over 1:{}) relMSE {:.4f} (same bounces {:.5f})",
+                              row.scene, method, preset, row.wall_ms, row.cold_ms, row.relit_ms, cold_passes, row.rel_mse,
                               row.rel_mse_same_bounces);
                     rows.push_back(row);
                 }

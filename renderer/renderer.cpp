@@ -6,6 +6,7 @@
 #include "renderer/base/error.hpp"
 #include "renderer/base/log.hpp"
 #include "renderer/memory_admission.hpp"
+#include "renderer/passes/light_geometry.hpp"
 
 #include "common/shared_layout.h"
 
@@ -87,6 +88,27 @@ std::uint64_t lights_fingerprint(const scene::Scene& scene) {
         hash.add(light.inner_cone).add(light.outer_cone);
     }
     return hash.value();
+}
+
+MethodState SceneResources::state_now(const methods::KnobValues& knobs) const {
+    const scene::Scene& scene = gpu_scene.scene();
+    return {knobs, lights_fingerprint(scene), passes::geometry_fingerprint(scene), true};
+}
+
+void SceneResources::record_state(const std::string& method, std::optional<MethodState> state) {
+    const std::lock_guard lock(states_mutex_);
+    if (state) method_states_[method] = std::move(*state);
+    else method_states_.erase(method);
+}
+
+FrameChange SceneResources::change_for(const std::string& method, const methods::KnobValues& knobs) const {
+    return change_for(method, state_now(knobs));
+}
+
+FrameChange SceneResources::change_for(const std::string& method, const MethodState& next) const {
+    const std::lock_guard lock(states_mutex_);
+    const auto last = method_states_.find(method);
+    return change_between(last == method_states_.end() ? std::nullopt : std::optional(last->second), next);
 }
 
 const SceneAnalysis& SceneResources::analysis() {
@@ -273,6 +295,7 @@ void Renderer::with_frame(SceneResources& resources, const RenderRequest& reques
     } catch (const ResourceExhausted&) {
         // Whatever the method allocated is in an unknown state: free it all, so the next frame starts clean.
         resources.methods.erase(request.method);
+        resources.record_state(request.method, std::nullopt);
         throw;
     }
 }
@@ -288,9 +311,17 @@ FrameStats Renderer::prepare(SceneResources& resources, const RenderRequest& req
     FrameStats stats;
     with_frame(resources, request, precompute, [&](methods::Method& method, const methods::FrameContext& frame,
                                                    const methods::KnobValues& knobs) {
+        const FrameChange change = resources.change_for(request.method, knobs);
         timers_.begin_frame();
-        method.prepare(frame);
+        const bool built = method.prepare(frame);
         fill_stats(stats, request, knobs, method, resources);
+        stats.change = built ? change : FrameChange::none;
+        // Structures built for these knobs, no light solved with them (unless a frame already did).
+        if (built && change == FrameChange::knobs) {
+            MethodState unlit = resources.state_now(knobs);
+            unlit.lit = false;
+            resources.record_state(request.method, std::move(unlit));
+        }
     });
     stats.render_ms = ms_since(start);
     return stats;
@@ -316,8 +347,10 @@ RenderResult Renderer::render(SceneResources& resources, const RenderRequest& re
     RenderResult result;
     with_frame(resources, request, precompute_, [&](methods::Method& method, const methods::FrameContext& frame,
                                                     const methods::KnobValues& knobs) {
+        result.stats.change = resources.change_for(request.method, knobs);
         timers_.begin_frame();
         method.render(frame);
+        resources.record_state(request.method, resources.state_now(knobs));
         const gpu::Texture* display = nullptr;
         if (request.make_display_image) display = &tonemap_.run(shaders_, state_, timers_, output_, request.display);
 

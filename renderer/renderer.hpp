@@ -5,6 +5,7 @@
 // to render_on_cpu() on any other thread.
 #pragma once
 
+#include "renderer/frame_change.hpp"
 #include "renderer/gpu/bounds_check.hpp"
 #include "renderer/gpu/brdf_tables.hpp"
 #include "renderer/gpu/egl_device.hpp"
@@ -21,6 +22,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <vector>
 #include <optional>
 #include <set>
@@ -50,6 +52,7 @@ struct FrameStats {
     std::vector<methods::ResidentStructure> resident;
     std::size_t resident_bytes = 0;
     std::map<std::string, double> method_statistics;  // Method::statistics() after this frame
+    FrameChange change = FrameChange::none;  // GPU frames: what it redid against its method's last frame
 };
 
 struct RenderResult {
@@ -106,6 +109,14 @@ public:
     // it was made with (lights_fingerprint of that copy); analysis() makes it anew if they changed.
     void install_analysis(SceneAnalysis analysis, std::uint64_t lights);
 
+    // What a frame of `method` at `knobs` (resolved, as plan_frame resolves them) would redo now,
+    // against the method's last frame on these resources (frame_change.hpp). Thread-safe.
+    FrameChange change_for(const std::string& method, const methods::KnobValues& knobs) const;
+    // The same for a state made once by state_now() (the planner asks for hundreds of plans).
+    FrameChange change_for(const std::string& method, const MethodState& next) const;
+    // The state a frame at `knobs` would leave now: the scene's lights and geometry as they are.
+    MethodState state_now(const methods::KnobValues& knobs) const;
+
     // What this scene's frames measured, for the planner (renderer/planning/). Shared: CPU frames
     // record into it from the CPU pool, and may outlive the resources.
     const std::shared_ptr<planning::SceneMeasurements> measurements = std::make_shared<planning::SceneMeasurements>();
@@ -114,6 +125,10 @@ private:
     friend class Renderer;
     std::optional<SceneAnalysis> analysis_;
     std::uint64_t analysis_lights_ = 0;  // the lights it was made for
+    // Per method, the state its structures were last made for (the render thread writes it).
+    void record_state(const std::string& method, std::optional<MethodState> state);
+    mutable std::mutex states_mutex_;
+    std::map<std::string, MethodState> method_states_;
     std::set<const SceneResources*>* live_ = nullptr;  // the uploading Renderer's list, for its memory budget
 };
 

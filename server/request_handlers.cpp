@@ -389,7 +389,8 @@ void RequestHandlers::plan_budgeted(RenderOrder& order, Renderer& renderer, Scen
     RenderRequest& frame = order.request;
     const std::optional<std::string> method = frame.method == "auto" ? std::nullopt : std::optional(frame.method);
     const planning::Plan plan = planning::plan({entry.resources->analysis(), device, entry.resources->measurements.get(),
-                                                frame.width, frame.height, method, resample_errors(order, renderer, entry)},
+                                                frame.width, frame.height, method, resample_errors(order, renderer, entry),
+                                                planning::changes_on(*entry.resources)},
                                                *order.budget);
     frame.method = plan.chosen.method;
     frame.preset = plan.chosen.preset;
@@ -421,37 +422,40 @@ void RequestHandlers::plan_budgeted(RenderOrder& order, Renderer& renderer, Scen
     }
 }
 
-// Measured once per scene and frame size (capped: planning::measured_size), on the first budgeted
-// view at that size: each GPU method whose draft structures are built (a measurement never waits
-// for a bake) renders three draft frames, milliseconds on a GPU. A method without a measurement is
-// planned at full size only.
+// Measured once per scene, frame size (capped: planning::measured_size) and method, on the first
+// budgeted view at that size where the method's draft structures are built (a measurement never
+// waits for a bake): three draft frames, milliseconds on a GPU. A method without a measurement is
+// planned at full size only, and measured on a later view once built. Methods measured are not
+// measured again: their draft frames would leave each method's structures at draft, and the
+// planned frame would then build its own anew (frame_change.hpp).
 planning::ResampleErrors RequestHandlers::resample_errors(const RenderOrder& order, Renderer& renderer, SceneEntry& entry) {
     RenderRequest view = order.request;
     if (auto camera = view_camera(*entry.scene, order)) view.camera = std::move(camera);
     std::tie(view.width, view.height) = planning::measured_size(view.width, view.height);
     Hasher key;
     key.add(view.width).add(view.height);
-    if (entry.resampling && entry.resampling->key == key.value()) return entry.resampling->errors;
+    if (!entry.resampling || entry.resampling->key != key.value()) entry.resampling = SceneEntry::Resampling{key.value(), {}};
+    planning::ResampleErrors& known = entry.resampling->errors;
     std::vector<std::string> ready;
-    std::size_t gpu_methods = 0;
     for (const std::string& method : methods::MethodRegistry::builtin().names()) {
         if (methods::MethodRegistry::builtin().find(method).device != methods::MethodDevice::gpu) continue;
-        ++gpu_methods;
+        if (entry.resampling->measured.contains(method)) continue;
         RenderRequest draft = view;
         draft.method = method;
         draft.preset = "draft";
         draft.knobs.clear();
         if (!renderer.pending_work(*entry.resources, draft)) ready.push_back(method);
     }
+    if (ready.empty()) return known;
     try {
         planning::ResampleErrors errors = planning::measure_resample_errors(
             renderer, *entry.resources, view, ready, entry.resources->measurements.get(), known_device_costs(renderer));
-        // Kept only once every GPU method is in it: until then, measured again as more are built.
-        if (ready.size() == gpu_methods) entry.resampling = SceneEntry::Resampling{key.value(), errors};
-        return errors;
+        for (auto& [method, scales] : errors) known[method] = std::move(scales);
+        entry.resampling->measured.insert(ready.begin(), ready.end());  // frames too small to scale have none
+        return known;
     } catch (const std::exception& error) {
         log::warn("planner", "no smaller frames planned: measuring what upsampling loses failed: {}", error.what());
-        return {};
+        return known;
     }
 }
 

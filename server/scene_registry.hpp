@@ -8,6 +8,7 @@
 
 #include <cstdint>
 #include <map>
+#include <set>
 #include <memory>
 #include <optional>
 #include <string>
@@ -27,6 +28,7 @@ struct SceneEntry {
     struct Resampling {
         std::uint64_t key = 0;  // the frame size's
         std::map<std::string, std::map<double, double>> errors;
+        std::set<std::string> measured;  // methods measured at this size (some frames are too small to scale)
     };
     std::optional<Resampling> resampling;
 };

@@ -96,9 +96,13 @@ public:
     virtual std::string_view name() const = 0;
     virtual void render(const FrameContext& frame) = 0;
     // Builds the precomputed structures these knobs need without drawing a frame (the `bake`
-    // request), reporting progress through frame.precompute. Nothing by default: render() builds
-    // what it needs lazily.
-    virtual void prepare(const FrameContext& frame) { (void)frame; }
+    // request), reporting progress through frame.precompute, and returns whether it built any (the
+    // next frame at these knobs then redoes only the light, frame_change.hpp). Nothing by default:
+    // render() builds what it needs lazily.
+    virtual bool prepare(const FrameContext& frame) {
+        (void)frame;
+        return false;
+    }
     // Long CPU work this frame would otherwise do inline on the render thread (render() and prepare()
     // still do it there when nobody ran it first); none by default.
     virtual std::optional<PendingWork> pending_work(const FrameContext& frame) {

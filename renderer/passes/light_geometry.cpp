@@ -63,6 +63,13 @@ std::uint64_t light_view_fingerprint(const scene::Scene& scene, int size) {
     return hash.value();
 }
 
+std::uint64_t shadow_map_fingerprint(const scene::Light& light, std::uint64_t geometry, int size) {
+    Hasher hash;
+    hash.add(geometry).add(size).add(light.type).add(light.position).add(light.direction);
+    hash.add(light.inner_cone).add(light.outer_cone).add(has_power(light));
+    return hash.value();
+}
+
 void set_light_uniforms(const gpu::ShaderProgram& program, const scene::Light& light) {
     program.set("u_light_type", static_cast<int>(light.type));
     program.set("u_light_position", light.position);

@@ -28,8 +28,13 @@ glm::mat4 directional_view(const glm::vec3& center, const glm::vec3& direction, 
 // The content hash (renderer/base/hash.hpp) of every object's mesh and transform (geometry itself is immutable once uploaded).
 std::uint64_t geometry_fingerprint(const scene::Scene& scene);
 
-// The content hash of what light-view and shadow maps depend on: the lights, the geometry and the map size.
+// The content hash of what light-view maps depend on: the lights, the geometry and the map size.
 std::uint64_t light_view_fingerprint(const scene::Scene& scene, int size);
+
+// The content hash of what one light's shadow map depends on: where the light is and how it shines
+// (not its colour or intensity: a depth map holds none, save whether it has power at all), the
+// geometry (occluders, and the bounds a directional map is fitted to) and the map size.
+std::uint64_t shadow_map_fingerprint(const scene::Light& light, std::uint64_t geometry, int size);
 
 // Sets u_light_type, u_light_position, u_light_direction, u_light_radiant, u_light_cos_inner and
 // u_light_cos_outer.

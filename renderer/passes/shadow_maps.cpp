@@ -39,19 +39,27 @@ void ShadowMaps::render_view(const PassContext& context, const gpu::ShaderProgra
 
 void ShadowMaps::render(const PassContext& context, int size) {
     gpu::GpuTimers::Scope timing(context.timers, "shadow_maps");
-    const std::uint64_t fingerprint = light_view_fingerprint(context.scene, size);
-    last_reused_ = fingerprint == fingerprint_ && maps_.size() == context.scene.lights.size();
+    const auto& lights = context.scene.lights;
+    const std::uint64_t geometry = geometry_fingerprint(context.scene);
+    std::vector<std::uint64_t> fingerprints(lights.size());
+    bool stale = maps_.size() != lights.size();
+    for (std::size_t i = 0; i < lights.size(); ++i) {
+        fingerprints[i] = shadow_map_fingerprint(lights[i], geometry, size);
+        stale = stale || maps_[i].fingerprint != fingerprints[i];
+    }
+    last_reused_ = !stale;
     if (last_reused_) {
         ++frames_reused_;
         return;
     }
-    fingerprint_ = fingerprint;
     ++frames_drawn_;
-    const auto& lights = context.scene.lights;
     maps_.resize(lights.size());
     const scene::Aabb bounds = context.scene.world_bounds();
     if (bounds.empty()) {
-        for (auto& map : maps_) map.valid = false;
+        for (std::size_t i = 0; i < maps_.size(); ++i) {
+            maps_[i] = LightMap{};
+            maps_[i].fingerprint = fingerprints[i];
+        }
         return;
     }
     const gpu::ShaderProgram& program =
@@ -66,11 +74,14 @@ void ShadowMaps::render(const PassContext& context, int size) {
     for (std::size_t i = 0; i < lights.size(); ++i) {
         const scene::Light& light = lights[i];
         LightMap& map = maps_[i];
+        if (map.fingerprint == fingerprints[i]) continue;  // its light did not move or reshape
+        map.fingerprint = fingerprints[i];
         map.valid = has_power(light);
         if (!map.valid) {
             map.depth = gpu::Texture();
             continue;
         }
+        ++maps_drawn_;
         map.type = light.type;
         const GLenum target = light.type == scene::LightType::point ? GL_TEXTURE_CUBE_MAP : GL_TEXTURE_2D;
         if (!map.depth || map.depth.width() != size || map.depth.desc().target != target) {

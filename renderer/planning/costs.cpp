@@ -5,6 +5,7 @@
 #include "renderer/base/log.hpp"
 
 #include <algorithm>
+#include <iterator>
 #include <cmath>
 #include <fstream>
 #include <vector>
@@ -101,12 +102,44 @@ void DeviceCosts::save(const std::filesystem::path& file) const {
 }
 
 void SceneMeasurements::record(const std::string& method, const std::string& preset, int bounces, double measured_ms,
-                               double predicted_ms, double pixels) {
+                               double predicted_ms, double pixels, FrameChange change) {
     if (!(predicted_ms > 0.0) || !(measured_ms >= 0.0) || !(pixels >= 0.0)) return;
     const std::lock_guard lock(mutex_);
-    auto& kept = frames_[{method, preset, bounces}][pixels];
+    auto& kept = change == FrameChange::none ? frames_[{method, preset, bounces}][pixels]
+                                             : changed_frames_[{{method, preset, bounces}, change}];
     kept.push_back({pixels, measured_ms, predicted_ms});
     if (kept.size() > kKept) kept.pop_front();
+}
+
+void SceneMeasurements::record_shadow_maps(int size, double ms) {
+    if (size <= 0 || !(ms >= 0.0)) return;
+    const std::lock_guard lock(mutex_);
+    auto& kept = shadow_maps_[size];
+    kept.push_back(ms);
+    if (kept.size() > kKept) kept.pop_front();
+}
+
+std::optional<double> SceneMeasurements::shadow_maps_ms(int size) const {
+    const std::lock_guard lock(mutex_);
+    if (shadow_maps_.empty()) return std::nullopt;
+    const auto largest = [](const std::deque<double>& kept) { return *std::max_element(kept.begin(), kept.end()); };
+    const auto above = shadow_maps_.lower_bound(size);
+    if (above != shadow_maps_.end() && above->first == size) return largest(above->second);
+    if (above != shadow_maps_.begin()) {
+        const auto below = std::prev(above);
+        const double texels = static_cast<double>(size) / below->first;
+        return largest(below->second) * texels * texels;
+    }
+    return largest(above->second);
+}
+
+std::vector<SceneMeasurements::FrameTime> SceneMeasurements::changed_frames(const std::string& method,
+                                                                            const std::string& preset, int bounces,
+                                                                            FrameChange change) const {
+    const std::lock_guard lock(mutex_);
+    const auto it = changed_frames_.find({{method, preset, bounces}, change});
+    if (it == changed_frames_.end()) return {};
+    return {it->second.begin(), it->second.end()};
 }
 
 namespace {

@@ -4,6 +4,8 @@
 // compare with that line, since a scene's size and light change what each method costs.
 #pragma once
 
+#include "renderer/frame_change.hpp"
+
 #include <nlohmann/json.hpp>
 
 #include <deque>
@@ -74,9 +76,14 @@ public:
         double baseline_ms = 0.0;  // what the device's line (or the analysis, for the reference) predicted
     };
 
-    // `bounces`: the frame's `bounces` knob, or -1 for methods without one.
+    // `bounces`: the frame's `bounces` knob, or -1 for methods without one. `change`: what the frame
+    // redid (frame_change.hpp); only warm frames (none) are what ratio(), frames() and the lines read.
     void record(const std::string& method, const std::string& preset, int bounces, double measured_ms, double predicted_ms,
-                double pixels = 0.0);
+                double pixels = 0.0, FrameChange change = FrameChange::none);
+    // The last frames at this preset and bounce count that redid what `change` redoes, at every size
+    // (the planner prices that work as their time beyond a warm frame's).
+    std::vector<FrameTime> changed_frames(const std::string& method, const std::string& preset, int bounces,
+                                          FrameChange change) const;
     // What frames measured at `measured_bounces` of a preset are raised by to price another count
     // (planner.cpp: a bound on what more bounces cost; 1 where the count asked is not more).
     using BounceRaise = std::function<double(const std::string& preset, int measured_bounces)>;
@@ -127,6 +134,16 @@ public:
     // of 64 pixels a side and more have their quarter-size draft (16x); smaller ones keep the ratio.
     static constexpr double kLineSpan = 8.0;
 
+    // The shadow_maps pass of GPU frames that redid work, by map size (the `shadow_map_size` knob):
+    // every GPU method draws the same maps of the scene's lights, and on a scene of many triangles
+    // they are most of what a change of the lights costs (the furnished room's, 262K triangles and
+    // lamps in cube maps, took 1.5 s at 2048 texels on llvmpipe, where a warm frame of direct took
+    // 7 ms). shadow_maps_ms(): the largest of the last kKept at the size (a frame that reused some
+    // maps drew less); else the nearest size measured below it, scaled by the ratio of texels, else
+    // the nearest above as measured (never lowered); nullopt when none was measured.
+    void record_shadow_maps(int size, double ms);
+    std::optional<double> shadow_maps_ms(int size) const;
+
     // A reference frame's noise per sample (methods::reference::noise_per_sample) at a bounce count,
     // as a multiple of what the analysis measured there: over a whole frame's samples it meets rare
     // bright paths that the analysis' few samples miss.
@@ -176,8 +193,10 @@ private:
     using Key = std::tuple<std::string, std::string, int>;
     std::optional<CostLine> line_locked(const Key& key) const;
     mutable std::mutex mutex_;
-    std::map<Key, std::map<double, std::deque<FrameTime>>> frames_;  // by pixels
+    std::map<Key, std::map<double, std::deque<FrameTime>>> frames_;  // warm, by pixels
+    std::map<std::pair<Key, FrameChange>, std::deque<FrameTime>> changed_frames_;
     std::map<int, double> noise_;
+    std::map<int, std::deque<double>> shadow_maps_;  // by size
     std::deque<double> noise_scales_;
     std::map<std::tuple<std::string, std::string, int>, std::deque<double>> own_errors_;
     std::set<std::pair<std::string, std::string>> compared_;

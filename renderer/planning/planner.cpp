@@ -218,8 +218,11 @@ double bounce_cost_bound(const std::string& method, const std::string& preset, i
     return static_cast<double>(bounces) / std::max(1, own);  // not measured: as if each bounce repeated the frame
 }
 
-double predicted_ms(const PlanningInputs& inputs, const std::string& method, const std::string& preset,
-                    const methods::KnobValues& knobs, std::string* basis) {
+namespace {
+
+// A warm frame's price (predicted_ms without the work a change redoes).
+double warm_ms(const PlanningInputs& inputs, const std::string& method, const std::string& preset,
+               const methods::KnobValues& knobs, std::string* basis) {
     const auto base = baseline_ms(&inputs.analysis, inputs.device, method, preset, knobs, inputs.width, inputs.height);
     if (!base) return std::numeric_limits<double>::infinity();
     if (inputs.scene && method != "reference") {
@@ -258,6 +261,125 @@ double predicted_ms(const PlanningInputs& inputs, const std::string& method, con
     return *base * ratio.value_or(scene_ratio.value_or(1.0)) * bounce_factor;
 }
 
+// The same inputs for a frame of `pixels` pixels (prices read the pixel count, not the shape).
+PlanningInputs at_pixels(const PlanningInputs& inputs, double pixels) {
+    PlanningInputs sized = inputs;
+    sized.width = static_cast<int>(std::lround(pixels));
+    sized.height = 1;
+    return sized;
+}
+
+}  // namespace
+
+// The most a frame that redid a change's work cost beyond a warm frame of its preset, as a multiple
+// of that warm frame, at 128x128 on the bench corpus (bench/quality --corpus, every light changed:
+// relit_ms and cold_ms against wall_ms, bench/results/corpus/frame_changes.csv): in all, and less
+// the shadow maps the frame drew (relit_shadow_ms, cold_shadow_ms), which a scene prices from its
+// own timings of them. A cold frame's includes compiling the method's shaders for its first preset,
+// which a daemon does once.
+struct MostChangeCost {
+    const char* method;
+    const char* preset;
+    double lights, lights_besides_maps;
+    double knobs, knobs_besides_maps;  // an object's move is priced as knobs: it may rebuild what they select
+};
+constexpr MostChangeCost kMostChangeCost[] = {
+    {"direct", "draft", 6.9, 0.464, 11.9, 3.79},   {"direct", "low", 22, 0.389, 23.9, 0.399},
+    {"direct", "medium", 83.8, 0.651, 90.6, 1.1},  {"direct", "high", 255, 0.397, 228, 1.28},
+    {"direct", "ultra", 870, 0.917, 897, 0.55},
+    {"vct", "draft", 2.61, 1.25, 2.96, 1.53},      {"vct", "low", 4.17, 1.76, 4.81, 2.17},
+    {"vct", "medium", 7.28, 1.23, 6.34, 1.48},     {"vct", "high", 5.82, 2.23, 6.16, 2.47},
+    {"vct", "ultra", 1.91, 0.946, 1.92, 0.967},
+    {"isr", "draft", 4.7, 0.157, 7.69, 0.362},     {"isr", "low", 4.63, 0.616, 4.52, 0.205},
+    {"isr", "medium", 2.09, 0.589, 2.65, 0.487},   {"isr", "high", 1.26, 0.32, 0.919, 0.175},
+    {"isr", "ultra", 0.44, 0.0865, 0.55, 0.374},
+    {"cssm", "draft", 3.92, 0.342, 5.31, 0.381},   {"cssm", "low", 2.36, 0.433, 2.04, 0.336},
+    {"cssm", "medium", 1.31, 0.587, 0.989, 0.504}, {"cssm", "high", 0.191, 0.0, 0.603, 0.44},
+    {"cssm", "ultra", 0.278, 0.131, 0.99, 0.874}};
+
+const MostChangeCost* most_change_cost(const std::string& method, const std::string& preset) {
+    for (const MostChangeCost& most : kMostChangeCost) {
+        if (method == most.method && preset == most.preset) return &most;
+    }
+    return nullptr;
+}
+
+double change_cost_bound(const std::string& method, const std::string& preset, FrameChange change, bool besides_maps) {
+    const MostChangeCost* most = most_change_cost(method, preset);
+    if (change == FrameChange::none || !most) return 0.0;
+    const double lights = besides_maps ? most->lights_besides_maps : most->lights;
+    if (change == FrameChange::lights) return lights;
+    // Structures built anew redo the lights' work too (a cold frame measured under a relit one only
+    // where it kept maps of the same size, or by the noise of one frame).
+    return std::max(lights, besides_maps ? most->knobs_besides_maps : most->knobs);
+}
+
+PlanningInputs::ChangeOf changes_on(const SceneResources& resources) {
+    const MethodState now = resources.state_now({});  // the scene's lights and geometry, hashed once
+    return [&resources, now](const std::string& method, const std::string& preset, const methods::KnobValues& knobs) {
+        RenderRequest request;
+        request.method = method;
+        request.preset = preset;
+        request.knobs = knobs;
+        request.width = request.height = 1;  // any size: knobs resolve alike at every size
+        try {
+            MethodState next = now;
+            next.knobs = plan_frame(request).knobs;
+            return resources.change_for(method, next);
+        } catch (const InputError&) {
+            return FrameChange::knobs;
+        }
+    };
+}
+
+double predicted_ms(const PlanningInputs& inputs, const std::string& method, const std::string& preset,
+                    const methods::KnobValues& knobs, std::string* basis) {
+    const double warm = warm_ms(inputs, method, preset, knobs, basis);
+    if (!std::isfinite(warm) || !inputs.change || method == "reference") return warm;
+    const FrameChange change = inputs.change(method, preset, knobs);
+    if (change == FrameChange::none) return warm;
+    const int bounces = bounces_knob(knobs).value_or(preset_bounces(method, preset));
+    std::vector<double> beyond_warm;
+    if (inputs.scene) {
+        for (const SceneMeasurements::FrameTime& frame : inputs.scene->changed_frames(method, preset, bounces, change)) {
+            if (!(frame.pixels > 0.0)) continue;
+            const double warm_there = warm_ms(at_pixels(inputs, frame.pixels), method, preset, knobs, nullptr);
+            if (std::isfinite(warm_there)) beyond_warm.push_back(frame.measured_ms - warm_there);
+        }
+    }
+    double extra = 0.0;
+    std::string source;
+    if (!beyond_warm.empty()) {
+        extra = std::max(0.0, median(beyond_warm));
+        source = fmt::format("as {} such frame{} of the preset measured here beyond a warm one", beyond_warm.size(),
+                             beyond_warm.size() == 1 ? "" : "s");
+    } else {
+        // The shadow maps from this scene's own timings of them at the plan's map size, where it has
+        // any; the rest, or all where it has none, from the bench's bound.
+        const double warm_at_prior = warm_ms(at_pixels(inputs, kChangePriorPixels), method, preset, knobs, nullptr);
+        const auto& registry = methods::MethodRegistry::builtin();
+        const methods::KnobValues resolved = registry.resolve(method, preset, knobs);
+        const auto map_size = resolved.find("shadow_map_size");
+        const auto maps_ms = inputs.scene && map_size != resolved.end()
+                                 ? inputs.scene->shadow_maps_ms(static_cast<int>(map_size->second))
+                                 : std::nullopt;
+        const double bound = change_cost_bound(method, preset, change, maps_ms.has_value());
+        extra = bound * warm_at_prior + maps_ms.value_or(0.0);
+        source = maps_ms ? fmt::format("{:.1f} ms of shadow maps as this scene's frames drew them, and {:.2g} x its warm "
+                                       "frame at 128x128 besides, the most the bench measured",
+                                       *maps_ms, bound)
+                         : fmt::format("{:.2g} x its warm frame at 128x128, the most the bench measured", bound);
+    }
+    if (basis) {
+        *basis += fmt::format("; + {:.1f} ms redone: {} ({})", extra,
+                              change == FrameChange::lights    ? "the lights changed since the method's last frame"
+                              : change == FrameChange::objects ? "objects moved since the method's last frame"
+                                                               : "the method's last frame here had other knobs, or none",
+                              source);
+    }
+    return warm + extra;
+}
+
 std::vector<Candidate> candidates(const PlanningInputs& inputs, std::vector<std::string>* ruled_out) {
     const auto& registry = methods::MethodRegistry::builtin();
     std::vector<Candidate> all;
@@ -282,6 +404,7 @@ std::vector<Candidate> candidates(const PlanningInputs& inputs, std::vector<std:
                     fmt::format("; upsampling adds {:.3f} (this scene's {} draft frames)", resample_error, method);
             }
             candidate.predicted_ms = predicted_ms(scaled, method, preset, knobs, &candidate.cost_basis);
+            if (inputs.change && method != "reference") candidate.redoes = inputs.change(method, preset, knobs);
             if (std::isfinite(candidate.predicted_ms)) all.push_back(std::move(candidate));
         }
     };
@@ -499,7 +622,14 @@ void record_frame(SceneMeasurements& measurements, const SceneAnalysis* analysis
                   const FrameStats& stats, int width, int height) {
     if (const auto baseline = baseline_ms(analysis, device, stats.method, stats.preset, stats.knobs, width, height)) {
         measurements.record(stats.method, stats.preset, bounces_knob(stats.knobs).value_or(-1), stats.render_ms, *baseline,
-                            static_cast<double>(width) * height);
+                            static_cast<double>(width) * height, stats.change);
+    }
+    // A warm frame reuses the maps: only frames that redid work time them.
+    const auto map_size = stats.knobs.find("shadow_map_size");
+    if (stats.change != FrameChange::none && map_size != stats.knobs.end()) {
+        for (const auto& pass : stats.passes) {
+            if (pass.pass == "shadow_maps") measurements.record_shadow_maps(static_cast<int>(map_size->second), pass.gpu_ms);
+        }
     }
     record_reference_noise(measurements, analysis, stats);
 }
@@ -521,6 +651,7 @@ nlohmann::json plan_json(const Plan& plan) {
             {"scale", plan.chosen.scale},
             {"predicted_ms", plan.chosen.predicted_ms},
             {"predicted_error", plan.chosen.predicted_error},
+            {"redoes", to_string(plan.chosen.redoes)},
             {"meets_budget", plan.meets_budget},
             {"considered", plan.considered},
             {"ruled_out", plan.ruled_out},

@@ -7,7 +7,9 @@
 //   both:        the fastest meeting both, else the most accurate within T.
 //
 // When no plan meets the budget it says so and takes the nearest: the most accurate (for E) or
-// the fastest (for T). Predicted times are of a frame whose structures are built (a warm frame).
+// the fastest (for T). Predicted times are of the frame as it would be rendered now: a warm frame, plus
+// what the frame would redo where the lights, the objects or the method's knobs changed since its
+// method's last frame (frame_change.hpp).
 #pragma once
 
 #include "renderer/methods/knobs.hpp"
@@ -18,6 +20,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <functional>
 #include <map>
 #include <optional>
 #include <string>
@@ -38,6 +41,7 @@ struct Candidate {
     double predicted_error = 0.0;
     std::string cost_basis, error_basis;
     double scale = 1.0;  // rendered at this fraction of the size and upsampled (resolution.hpp)
+    FrameChange redoes = FrameChange::none;  // what its frame would redo now (PlanningInputs::change)
 };
 
 struct Plan {
@@ -90,7 +94,17 @@ struct PlanningInputs {
     // Per GPU method, scales below 1 to offer and the error upsampling adds at each
     // (measure_resample_errors); a method without: its plans at full size only.
     std::map<std::string, std::map<double, double>> resample_errors = {};
+    // What a frame of a GPU plan would redo now (SceneResources::change_for, its knobs resolved);
+    // unset: nothing, every plan priced as a warm frame (the bench's fixed plans are warm frames).
+    using ChangeOf =
+        std::function<FrameChange(const std::string& method, const std::string& preset, const methods::KnobValues& knobs)>;
+    ChangeOf change = {};
 };
+
+// PlanningInputs::change for a scene's resources as the scene is now (its lights and geometry hashed
+// at the call: make it for each plan): each plan's knobs resolved as plan_frame resolves them, then
+// SceneResources::change_for. Plans it cannot resolve count as built anew (knobs).
+PlanningInputs::ChangeOf changes_on(const SceneResources& resources);
 
 // Every plan the planner predicts for a frame, at full size and at each scale of its method's
 // `resample_errors`, with those the analysis rules out left out (and named in `ruled_out`).
@@ -120,7 +134,12 @@ Plan plan(const PlanningInputs& inputs, const Budget& budget);
 
 // The device line for a preset times the scene's measured ratio (the method's, else the scene's
 // over every method, else 1); for the reference, the analysis' time to build the tracer and per
-// sample times the samples.
+// sample times the samples. For a GPU plan whose frame would redo work (PlanningInputs::change), plus
+// that work: what this scene's frames that redid the same measured beyond a warm frame's price at
+// their size (the median of the last), else the scene's timing of its shadow maps at the plan's map
+// size plus change_cost_bound(besides_maps) times the plan's warm frame at kChangePriorPixels, else
+// change_cost_bound() times that frame. The work is the scene's (shadow maps, an atlas, an octree),
+// not the frame's pixels: a smaller frame redoes as much.
 double predicted_ms(const PlanningInputs& inputs, const std::string& method, const std::string& preset,
                     const methods::KnobValues& knobs, std::string* basis = nullptr);
 
@@ -132,6 +151,18 @@ double predicted_ms(const PlanningInputs& inputs, const std::string& method, con
 // the radiosity tree wherever more light arrives: warm frames at 2 and 8 bounces took 0.8 to 5.4
 // times those at 1, and vct's at 2, 0.7 to 1.3 times.
 double bounce_cost_bound(const std::string& method, const std::string& preset, int bounces);
+
+// What a frame that redoes `change`'s work may cost beyond a warm one, as a multiple of the preset's
+// warm frame at kChangePriorPixels, before the scene measured it: the most the bench measured
+// (bench/quality's relit_ms for lights, cold_ms for knobs, against wall_ms, every preset on the
+// corpus, 128x128); a moved object as knobs, since it may rebuild what they select (cssm rebakes an
+// object it took for static). `besides_maps`: less the shadow maps such frames drew, for a scene
+// that prices those from its own timings (SceneMeasurements::shadow_maps_ms): their cost follows
+// the scene's triangles and lights, not the warm frame's pixels. 0 for FrameChange::none and for
+// methods the bench has no figure of.
+inline constexpr double kChangePriorPixels = 128.0 * 128.0;
+double change_cost_bound(const std::string& method, const std::string& preset, FrameChange change,
+                         bool besides_maps = false);
 
 // The cost line a frame is measured against when recorded in SceneMeasurements (its ratio's denominator):
 // the device line, or the analysis' time per sample for the reference. nullopt when neither applies.

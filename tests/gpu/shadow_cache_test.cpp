@@ -41,7 +41,55 @@ TEST(ShadowMaps, ReusedUntilALightOrATransformChanges) {
     timers.resolve();
 }
 
-// A reused map gives the same frame as a freshly drawn one, and a moved light changes it.
+// Each light's map depends on where that light is and how it shines, not on its colour or
+// intensity: dimming a light redraws nothing, moving one of two lights redraws its map alone.
+TEST(ShadowMaps, EachMapIsRedrawnOnlyWhenItsOwnLightMovesOrReshapes) {
+    shared_renderer();  // makes the GL context current on this thread
+    scene::Scene scene = scene::make_cornell_box();
+    scene::Light spot = scene.lights[0];
+    spot.type = scene::LightType::spot;
+    spot.direction = {0.0f, -1.0f, 0.0f};
+    scene.lights.push_back(spot);
+    gpu::GpuScene gpu_scene(scene);
+    gpu::ShaderCache shaders;
+    gpu::StateCache state;
+    gpu::GpuTimers timers;
+    gpu::Framebuffer output;
+    const passes::PassContext context{scene, gpu_scene, shaders, state, timers, output, 16, 16, scene.cameras[0]};
+    passes::ShadowMaps maps;
+    timers.begin_frame();
+
+    maps.render(context, 64);
+    EXPECT_EQ(maps.maps_drawn(), 2u);
+    scene.lights[0].intensity *= 0.5f;
+    scene.lights[1].color = {1.0f, 0.5f, 0.25f};
+    maps.render(context, 64);
+    EXPECT_TRUE(maps.last_render_reused());
+    EXPECT_EQ(maps.maps_drawn(), 2u);
+    scene.lights[1].outer_cone *= 0.5f;  // reshaped: its map alone
+    maps.render(context, 64);
+    EXPECT_FALSE(maps.last_render_reused());
+    EXPECT_EQ(maps.maps_drawn(), 3u);
+    scene.lights[0].position.x += 0.01f;  // moved: its map alone
+    maps.render(context, 64);
+    EXPECT_EQ(maps.maps_drawn(), 4u);
+    scene.lights[1].intensity = 0.0f;  // no power: no map, and none drawn
+    maps.render(context, 64);
+    EXPECT_EQ(maps.maps_drawn(), 4u);
+    EXPECT_FALSE(maps.has_map(1));
+    EXPECT_TRUE(maps.has_map(0));
+    scene.lights[1].intensity = 1.0f;  // power again: its map drawn
+    maps.render(context, 64);
+    EXPECT_EQ(maps.maps_drawn(), 5u);
+    EXPECT_TRUE(maps.has_map(1));
+    scene.objects[1].transform[3].x += 0.01f;  // a block moved: every map
+    maps.render(context, 64);
+    EXPECT_EQ(maps.maps_drawn(), 7u);
+    timers.resolve();
+}
+
+// A reused map gives the same frame as a freshly drawn one, and a moved light changes it; a dimmed
+// light keeps its map and renders as a fresh one does.
 TEST(ShadowMaps, ReusedMapsRenderTheSameFrame) {
     scene::Scene scene = scene::make_cornell_box();
     RenderRequest request;
@@ -55,6 +103,10 @@ TEST(ShadowMaps, ReusedMapsRenderTheSameFrame) {
     EXPECT_NE(first.frame.rgba, moved.frame.rgba);
     const auto fresh = render_scene(scene, request);
     EXPECT_EQ(moved.frame.rgba, fresh.frame.rgba);
+    scene.lights[0].intensity *= 0.25f;
+    const auto dimmed = shared_renderer().render(*resources, request);
+    EXPECT_NE(dimmed.frame.rgba, moved.frame.rgba);
+    EXPECT_EQ(dimmed.frame.rgba, render_scene(scene, request).frame.rgba);
 }
 
 }  // namespace

@@ -313,6 +313,30 @@ TEST(Budget, ThePlanReadsAnAnalysisOfTheCurrentLights) {
     EXPECT_NE(dark_why.find("0 bounces lack 0.000"), std::string::npos) << dark_why;
 }
 
+// A method keeps its structures between frames: a plan says what its frame would redo and is priced
+// with it, and the frame says what it redid. After a light changes, both say `lights`; the next
+// frame redoes nothing.
+TEST(Budget, AFrameAfterALightChangeSaysWhatItRedoesAndIsPricedWithIt) {
+    BudgetDaemon d;
+    const json budget = {{"method", "vct"}, {"budget", {{"max_ms", 1.0e5}}}};
+    const auto first = d.render(budget);
+    EXPECT_EQ(first.body["redid"], first.body["plan"]["redoes"]) << first.body["plan"].dump();
+    const auto warm = d.render(budget);
+    EXPECT_EQ(warm.body["plan"]["redoes"], "none") << warm.body["plan"].dump();
+    EXPECT_EQ(warm.body["redid"], "none");
+    // 0.5 W/sr as it is, in candela as files give it: 341.5 cd; dimmed by a fifth.
+    d.client.request(MessageType::light_set, {{"scene", "cornell"}, {"light", "ceiling_light"}, {"intensity", 273.2}});
+    const auto relit = d.render(budget);
+    EXPECT_EQ(relit.body["plan"]["redoes"], "lights") << relit.body["plan"].dump();
+    EXPECT_EQ(relit.body["redid"], "lights");
+    EXPECT_EQ(relit.body["method_stats"]["light_injections"].get<double>(),
+              warm.body["method_stats"]["light_injections"].get<double>() + 1.0);
+    EXPECT_NE(relit.body["plan"]["why"].get<std::string>().find("the lights changed"), std::string::npos)
+        << relit.body["plan"].dump();
+    const auto after = d.render(budget);
+    EXPECT_EQ(after.body["redid"], "none");
+}
+
 TEST(Budget, MalformedBudgetsAreRefusedNamingTheField) {
     BudgetDaemon d;
     const auto refused = [&](json body, const std::string& field) {

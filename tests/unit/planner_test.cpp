@@ -3,6 +3,7 @@
 // it says so when nothing fits. The error model's arithmetic, the cost lines, the cache file and the
 // scene's measured ratios.
 #include "renderer/base/error.hpp"
+#include "renderer/methods/registry.hpp"
 #include "renderer/planning/costs.hpp"
 #include "renderer/planning/error_model.hpp"
 #include "renderer/planning/planner.hpp"
@@ -429,6 +430,156 @@ TEST(Costs, AReferenceFrameRecordsItsNoiseAgainstTheAnalysis) {
     SceneMeasurements few;
     record_frame(few, &analysis, DeviceCosts("test"), stats, 32, 32);
     EXPECT_FALSE(few.noise_ratio(4).has_value());
+}
+
+// A method keeps its structures between frames, so what a frame redoes depends on what changed
+// since its method's last frame on the scene.
+TEST(FrameChange, AFrameRedoesWhatChangedSinceItsMethodsLastFrame) {
+    const MethodState last{{{"resolution", 64}}, 1, 2, true};
+    EXPECT_EQ(change_between(std::nullopt, last), FrameChange::knobs);  // the method's first frame
+    EXPECT_EQ(change_between(last, last), FrameChange::none);
+    MethodState next = last;
+    next.lights = 3;
+    EXPECT_EQ(change_between(last, next), FrameChange::lights);
+    next.geometry = 3;
+    EXPECT_EQ(change_between(last, next), FrameChange::objects);  // the lights' work and the objects'
+    next.knobs["resolution"] = 128;
+    EXPECT_EQ(change_between(last, next), FrameChange::knobs);  // the knobs' structures count first
+    MethodState baked = last;
+    baked.lit = false;  // a bake built the structures and solved no light
+    EXPECT_EQ(change_between(baked, last), FrameChange::lights);
+}
+
+// Frames that redid work are kept apart: a relit frame is not a slow warm frame, and a warm one does
+// not lower what relighting costs.
+TEST(Costs, FramesThatRedidWorkAreKeptApartFromWarmFrames) {
+    SceneMeasurements scene;
+    for (const double ms : {30.0, 31.0, 29.0}) scene.record("vct", "medium", 1, ms, 10.0, 4096.0);
+    scene.record("vct", "medium", 1, 400.0, 10.0, 4096.0, FrameChange::lights);
+    scene.record("vct", "medium", 1, 900.0, 10.0, 4096.0, FrameChange::knobs);
+    EXPECT_DOUBLE_EQ(*scene.ratio("vct", "medium", 1), 3.0);
+    ASSERT_EQ(scene.changed_frames("vct", "medium", 1, FrameChange::lights).size(), 1u);
+    EXPECT_DOUBLE_EQ(scene.changed_frames("vct", "medium", 1, FrameChange::lights).front().measured_ms, 400.0);
+    EXPECT_DOUBLE_EQ(scene.changed_frames("vct", "medium", 1, FrameChange::knobs).front().measured_ms, 900.0);
+    EXPECT_TRUE(scene.changed_frames("vct", "high", 1, FrameChange::lights).empty());
+    EXPECT_EQ(scene.frames("vct", "medium", 1).size(), 3u);
+    // Their shadow maps are timed; a warm frame's, which reused them, are not.
+    const SceneAnalysis analysis = made_up_analysis();
+    DeviceCosts device("test");
+    FrameStats relit;
+    relit.method = "vct";
+    relit.preset = "medium";
+    relit.knobs = {{"shadow_map_size", 2048}};
+    relit.passes = {{"shadow_maps", 120.0}, {"vct_cone_trace", 20.0}};
+    relit.change = FrameChange::lights;
+    FrameStats warm = relit;
+    warm.passes = {{"shadow_maps", 0.01}, {"vct_cone_trace", 20.0}};
+    warm.change = FrameChange::none;
+    record_frame(scene, &analysis, device, relit, 64, 64);
+    // As many warm frames as are kept: recorded, they would have pushed the relit frame's timing out.
+    for (std::size_t i = 0; i < SceneMeasurements::kKept; ++i) record_frame(scene, &analysis, device, warm, 64, 64);
+    EXPECT_DOUBLE_EQ(*scene.shadow_maps_ms(2048), 120.0);
+}
+
+// A plan whose frame would redo work is priced with it: before the scene measured it, the bench's
+// bound times the preset's warm frame at 128x128 (the work is the scene's, not the pixels'); once
+// measured, what those frames took beyond a warm frame at their size, the median of them.
+TEST(Planner, AFrameIsPricedWithWhatItWouldRedo) {
+    const SceneAnalysis analysis = made_up_analysis();
+    DeviceCosts device("test");
+    device.set("vct", "medium", {10.0, 1.0e3});  // 10 ms + 1 ms per thousand pixels
+    SceneMeasurements scene;
+    PlanningInputs inputs{analysis, device, &scene, 64, 64, std::nullopt};
+    FrameChange now = FrameChange::none;
+    inputs.change = [&](const std::string& method, const std::string&, const methods::KnobValues&) {
+        return method == "vct" ? now : FrameChange::none;
+    };
+    const double warm_64 = 10.0 + 4.096, warm_128 = 10.0 + 16.384;
+    EXPECT_DOUBLE_EQ(predicted_ms(inputs, "vct", "medium", {}), warm_64);
+    now = FrameChange::lights;
+    const double bound = change_cost_bound("vct", "medium", FrameChange::lights);
+    EXPECT_GT(bound, 0.0);
+    std::string basis;
+    EXPECT_DOUBLE_EQ(predicted_ms(inputs, "vct", "medium", {}, &basis), warm_64 + bound * warm_128);
+    EXPECT_NE(basis.find("the lights changed"), std::string::npos) << basis;
+    // Relit frames measured at 32x32 and 128x128: what they took beyond a warm frame there.
+    const double warm_32 = 10.0 + 1.024;
+    scene.record("vct", "medium", 1, warm_32 + 50.0, warm_32, 32.0 * 32.0, FrameChange::lights);
+    scene.record("vct", "medium", 1, warm_128 + 70.0, warm_128, 128.0 * 128.0, FrameChange::lights);
+    scene.record("vct", "medium", 1, warm_128 + 400.0, warm_128, 128.0 * 128.0, FrameChange::lights);
+    EXPECT_NEAR(predicted_ms(inputs, "vct", "medium", {}, &basis), warm_64 + 70.0, 1e-9);
+    EXPECT_NE(basis.find("as 3 such frames"), std::string::npos) << basis;
+    // A frame at other knobs is priced by its own kind's frames, the bench's bound until measured.
+    now = FrameChange::knobs;
+    EXPECT_DOUBLE_EQ(predicted_ms(inputs, "vct", "medium", {}),
+                     warm_64 + change_cost_bound("vct", "medium", FrameChange::knobs) * warm_128);
+    EXPECT_GE(change_cost_bound("vct", "medium", FrameChange::knobs), bound);  // structures built redo the light too
+    EXPECT_EQ(change_cost_bound("vct", "medium", FrameChange::objects), change_cost_bound("vct", "medium", FrameChange::knobs));
+    // The reference keeps nothing between frames.
+    EXPECT_DOUBLE_EQ(predicted_ms(inputs, "reference", "medium", {{"spp", 1}, {"bounces", 0}}), 2.0 + 1e-3 * 64 * 64);
+    EXPECT_DOUBLE_EQ(change_cost_bound("vct", "medium", FrameChange::none), 0.0);
+}
+
+// Shadow maps cost what the scene's triangles and lights make them cost, not what a warm frame
+// does: a scene that timed its maps prices them at that time, and the rest of the work by the
+// bench's bound without them.
+TEST(Planner, ShadowMapsArePricedFromTheScenesOwnTimingsOfThem) {
+    SceneMeasurements scene;
+    EXPECT_FALSE(scene.shadow_maps_ms(1024));
+    scene.record_shadow_maps(1024, 100.0);
+    scene.record_shadow_maps(1024, 5.0);  // most maps reused
+    EXPECT_DOUBLE_EQ(*scene.shadow_maps_ms(1024), 100.0);
+    EXPECT_DOUBLE_EQ(*scene.shadow_maps_ms(2048), 400.0);  // four times the texels
+    EXPECT_DOUBLE_EQ(*scene.shadow_maps_ms(512), 100.0);   // never lowered
+
+    const SceneAnalysis analysis = made_up_analysis();
+    DeviceCosts device("test");
+    device.set("vct", "medium", {10.0, 0.0});
+    PlanningInputs inputs{analysis, device, &scene, 64, 64, std::nullopt};
+    inputs.change = [](const std::string&, const std::string&, const methods::KnobValues&) { return FrameChange::lights; };
+    const int map_size = static_cast<int>(methods::MethodRegistry::builtin().resolve("vct", "medium", {}).at("shadow_map_size"));
+    const double besides = change_cost_bound("vct", "medium", FrameChange::lights, true);
+    EXPECT_LE(besides, change_cost_bound("vct", "medium", FrameChange::lights));
+    std::string basis;
+    EXPECT_DOUBLE_EQ(predicted_ms(inputs, "vct", "medium", {}, &basis), 10.0 + *scene.shadow_maps_ms(map_size) + besides * 10.0);
+    EXPECT_NE(basis.find("of shadow maps as this scene's frames drew them"), std::string::npos) << basis;
+    // Planned with smaller maps: priced at the time of the smaller maps.
+    EXPECT_DOUBLE_EQ(predicted_ms(inputs, "vct", "medium", {{"shadow_map_size", 1024}}), 10.0 + 100.0 + besides * 10.0);
+}
+
+// Under a time budget, a plan that fits warm but not with what it would redo gives way to one that
+// fits as it would render now, and the plan says what its frame redoes.
+TEST(Planner, ATimeBudgetCountsWhatTheFrameWouldRedo) {
+    const SceneAnalysis analysis = made_up_analysis();
+    DeviceCosts device("test");
+    for (const char* preset : {"draft", "low", "medium", "high", "ultra"}) {
+        device.set("vct", preset, {20.0, 0.0});
+        device.set("direct", preset, {5.0, 0.0});
+    }
+    SceneMeasurements scene;
+    for (const char* preset : {"draft", "low", "medium", "high", "ultra"}) scene.record_own_error("vct", preset, 1, 1e-4);
+    PlanningInputs inputs{analysis, device, &scene, 64, 64, std::nullopt};
+    const Budget within_50{50.0, std::nullopt};
+    const Plan warm = plan(inputs, within_50);
+    ASSERT_EQ(warm.chosen.method, "vct") << warm.why;  // one bounce: more accurate than direct
+    EXPECT_EQ(warm.chosen.redoes, FrameChange::none);
+    EXPECT_EQ(plan_json(warm)["redoes"].get<std::string>(), "none");
+    for (const char* preset : {"draft", "low", "medium", "high", "ultra"}) {
+        scene.record("vct", preset, 1, 200.0, 20.0, 64.0 * 64.0, FrameChange::lights);  // a relight: 180 ms more
+    }
+    inputs.change = [](const std::string& method, const std::string&, const methods::KnobValues&) {
+        return method == "vct" ? FrameChange::lights : FrameChange::none;
+    };
+    const Plan relit = plan(inputs, within_50);
+    EXPECT_EQ(relit.chosen.method, "direct") << relit.why;
+    EXPECT_TRUE(relit.meets_budget);
+    EXPECT_LE(relit.chosen.predicted_ms, 50.0);
+    // Within a budget that holds the relight, vct again, priced with it and saying so.
+    const Plan roomy = plan(inputs, {220.0, std::nullopt});
+    ASSERT_EQ(roomy.chosen.method, "vct") << roomy.why;
+    EXPECT_EQ(roomy.chosen.redoes, FrameChange::lights);
+    EXPECT_NEAR(roomy.chosen.predicted_ms, 200.0, 1e-9);
+    EXPECT_NE(roomy.why.find("redone"), std::string::npos) << roomy.why;
 }
 
 }  // namespace

@@ -98,7 +98,10 @@ public:
     void install(std::shared_ptr<PrecomputeResult> result) override { finished_ = std::move(result); }
 
 private:
-    void prepare(const FrameContext& frame) override { ensure_bake(frame); }
+    bool prepare(const FrameContext& frame) override {
+        ensure_bake(frame);
+        return true;
+    }
 
     // The bake these knobs need: kept (its moving objects placed anew when they moved), taken from
     // finished work, or made resident anew with its texels where they stand.

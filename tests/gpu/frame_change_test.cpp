@@ -1,0 +1,74 @@
+// What a frame says it redid (frame_change.hpp) is what its method did: each method counts the light
+// work it redoes (cssm its atlas solutions, vct its injections, isr its VPL tree builds), and a frame
+// said to redo nothing must leave that count as it was, one said to redo the scene's light must add
+// one. The planner prices frames by this classification, so a frame called warm that solved again
+// would be priced as a warm frame and break a time budget.
+#include "gpu_fixture.hpp"
+
+#include "renderer/scene/builtin.hpp"
+
+#include <glm/gtc/matrix_transform.hpp>
+#include <gtest/gtest.h>
+
+namespace bounce::test {
+namespace {
+
+constexpr int kSize = 32;
+
+struct LightWork {
+    const char* method;
+    const char* count;  // the method's statistic that counts the light work it redid
+    bool bakes;         // a `bake` request builds its structures (Method::prepare)
+};
+
+class FrameChanges : public ::testing::TestWithParam<LightWork> {};
+
+TEST_P(FrameChanges, EachFrameSaysWhatItRedidAsItsMethodCountsIt) {
+    const LightWork work = GetParam();
+    scene::Scene scene = scene::make_cornell_box();
+    Renderer& renderer = shared_renderer();
+    auto resources = renderer.upload(scene);
+    const RenderRequest draft = method_request(work.method, "draft", kSize);
+    const methods::KnobValues draft_knobs = plan_frame(draft).knobs;
+    double counted = 0.0;
+    // Renders `request`, checks that it was predicted to redo `expected`, that it says so, and that the
+    // method's count of light work grew by `solved` (0 or 1).
+    const auto frame = [&](const RenderRequest& request, FrameChange expected, int solved, const char* step) {
+        SCOPED_TRACE(step);
+        EXPECT_EQ(resources->change_for(request.method, plan_frame(request).knobs), expected);
+        const RenderResult result = renderer.render(*resources, request);
+        EXPECT_EQ(result.stats.change, expected);
+        const double now = result.stats.method_statistics.at(work.count);
+        EXPECT_EQ(now - counted, solved) << work.count;
+        counted = now;
+    };
+    frame(draft, FrameChange::knobs, 1, "the method's first frame");
+    frame(draft, FrameChange::none, 0, "the same frame again");
+    frame(method_request(work.method, "draft", 2 * kSize), FrameChange::none, 0, "another size: nothing of the scene's");
+    scene.lights.front().intensity *= 1.001f;
+    frame(draft, FrameChange::lights, 1, "a light dimmed by a factor no image shows");
+    frame(draft, FrameChange::none, 0, "warm again");
+    scene.objects.back().transform = glm::translate(glm::mat4(1.0f), glm::vec3(0.05f, 0.0f, 0.0f)) * scene.objects.back().transform;
+    scene.fit_bounds(scene.objects.size() - 1);
+    frame(draft, FrameChange::objects, 1, "an object moved");
+    frame(method_request(work.method, "low", kSize), FrameChange::knobs, 1, "another preset");
+    // A bake builds the structures for its knobs and solves no light: the next frame redoes the light.
+    // A method whose bake builds nothing leaves its next frame to build them.
+    const FrameChange after = work.bakes ? FrameChange::lights : FrameChange::knobs;
+    const FrameStats baked = renderer.prepare(*resources, draft, [](double, const std::string&) { return true; });
+    EXPECT_EQ(baked.change, work.bakes ? FrameChange::knobs : FrameChange::none);
+    EXPECT_EQ(resources->change_for(draft.method, draft_knobs), after);
+    const RenderResult after_bake = renderer.render(*resources, draft);
+    EXPECT_EQ(after_bake.stats.change, after);
+    EXPECT_EQ(after_bake.stats.method_statistics.at(work.count) - counted, 1.0);
+    resources.reset();
+}
+
+INSTANTIATE_TEST_SUITE_P(Methods, FrameChanges,
+                         ::testing::Values(LightWork{"cssm", "atlas_solutions", true},
+                                           LightWork{"vct", "light_injections", false},
+                                           LightWork{"isr", "vpl_tree_builds", false}),
+                         [](const auto& info) { return std::string(info.param.method); });
+
+}  // namespace
+}  // namespace bounce::test
