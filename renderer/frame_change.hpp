@@ -8,8 +8,12 @@
 //             views and VPL tree;
 //   objects:  an object moved: the lights' work, and what the objects' placement feeds besides (vct
 //             voxelizes the moved objects again, cssm rebakes once an object it took for static);
-//   knobs:    the method's first frame on the scene, or one at other knobs than its last (a preset or
-//             bounce count of its own): the structures those knobs select (an octree, a bake) as well.
+//   knobs:    other knobs than the method's last frame (a preset or bounce count of its own), the
+//             scene as it was: the structures those knobs select (an octree, a bake), and whatever of
+//             the lights' work they size (maps of another size);
+//   knobs_and_scene: other knobs, and the lights or objects changed too, or the method's first frame
+//             on the scene: everything. A preset switch costs far more after a change of the lights
+//             than before one (presets that share their shadow maps' size keep them otherwise).
 #pragma once
 
 #include "renderer/methods/knobs.hpp"
@@ -20,7 +24,7 @@
 
 namespace bounce {
 
-enum class FrameChange { none, lights, objects, knobs };
+enum class FrameChange { none, lights, objects, knobs, knobs_and_scene };
 
 constexpr std::string_view to_string(FrameChange change) {
     switch (change) {
@@ -28,6 +32,7 @@ constexpr std::string_view to_string(FrameChange change) {
     case FrameChange::lights: return "lights";
     case FrameChange::objects: return "objects";
     case FrameChange::knobs: return "knobs";
+    case FrameChange::knobs_and_scene: return "knobs_and_scene";
     }
     return "knobs";
 }
@@ -40,12 +45,13 @@ struct MethodState {
     bool lit = false;            // a frame lit them: a `bake` request builds structures and solves no light
 };
 
-// What a frame in `next` redoes after a method's last frame in `last` (none yet: knobs).
+// What a frame in `next` redoes after a method's last frame in `last` (none yet: everything).
 inline FrameChange change_between(const std::optional<MethodState>& last, const MethodState& next) {
-    if (!last || last->knobs != next.knobs) return FrameChange::knobs;
+    if (!last) return FrameChange::knobs_and_scene;
+    const bool scene = !last->lit || last->lights != next.lights || last->geometry != next.geometry;
+    if (last->knobs != next.knobs) return scene ? FrameChange::knobs_and_scene : FrameChange::knobs;
     if (last->geometry != next.geometry) return FrameChange::objects;
-    if (!last->lit || last->lights != next.lights) return FrameChange::lights;
-    return FrameChange::none;
+    return scene ? FrameChange::lights : FrameChange::none;
 }
 
 }  // namespace bounce

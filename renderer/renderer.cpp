@@ -316,8 +316,9 @@ FrameStats Renderer::prepare(SceneResources& resources, const RenderRequest& req
         const bool built = method.prepare(frame);
         fill_stats(stats, request, knobs, method, resources);
         stats.change = built ? change : FrameChange::none;
-        // Structures built for these knobs, no light solved with them (unless a frame already did).
-        if (built && change == FrameChange::knobs) {
+        // Structures built for these knobs and this geometry, no light solved with them (unless a
+        // frame already did: nothing changed since).
+        if (built && change != FrameChange::none) {
             MethodState unlit = resources.state_now(knobs);
             unlit.lit = false;
             resources.record_state(request.method, std::move(unlit));

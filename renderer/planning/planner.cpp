@@ -269,8 +269,6 @@ PlanningInputs at_pixels(const PlanningInputs& inputs, double pixels) {
     return sized;
 }
 
-}  // namespace
-
 // The most a frame that redid a change's work cost beyond a warm frame of its preset, as a multiple
 // of that warm frame, at 128x128 on the bench corpus (bench/quality --corpus, every light changed:
 // relit_ms and cold_ms against wall_ms, bench/results/corpus/frame_changes.csv): in all, and less
@@ -304,6 +302,8 @@ const MostChangeCost* most_change_cost(const std::string& method, const std::str
     return nullptr;
 }
 
+}  // namespace
+
 double change_cost_bound(const std::string& method, const std::string& preset, FrameChange change, bool besides_maps) {
     const MostChangeCost* most = most_change_cost(method, preset);
     if (change == FrameChange::none || !most) return 0.0;
@@ -327,7 +327,7 @@ PlanningInputs::ChangeOf changes_on(const SceneResources& resources) {
             next.knobs = plan_frame(request).knobs;
             return resources.change_for(method, next);
         } catch (const InputError&) {
-            return FrameChange::knobs;
+            return FrameChange::knobs_and_scene;
         }
     };
 }
@@ -374,7 +374,9 @@ double predicted_ms(const PlanningInputs& inputs, const std::string& method, con
         *basis += fmt::format("; + {:.1f} ms redone: {} ({})", extra,
                               change == FrameChange::lights    ? "the lights changed since the method's last frame"
                               : change == FrameChange::objects ? "objects moved since the method's last frame"
-                                                               : "the method's last frame here had other knobs, or none",
+                              : change == FrameChange::knobs   ? "the method's last frame here had other knobs"
+                                                               : "the method's last frame here had other knobs, or none, "
+                                                                 "and the scene changed since",
                               source);
     }
     return warm + extra;

@@ -103,7 +103,7 @@ struct PlanningInputs {
 
 // PlanningInputs::change for a scene's resources as the scene is now (its lights and geometry hashed
 // at the call: make it for each plan): each plan's knobs resolved as plan_frame resolves them, then
-// SceneResources::change_for. Plans it cannot resolve count as built anew (knobs).
+// SceneResources::change_for. Plans it cannot resolve count as built anew (knobs_and_scene).
 PlanningInputs::ChangeOf changes_on(const SceneResources& resources);
 
 // Every plan the planner predicts for a frame, at full size and at each scale of its method's
@@ -155,7 +155,8 @@ double bounce_cost_bound(const std::string& method, const std::string& preset, i
 // What a frame that redoes `change`'s work may cost beyond a warm one, as a multiple of the preset's
 // warm frame at kChangePriorPixels, before the scene measured it: the most the bench measured
 // (bench/quality's relit_ms for lights, cold_ms for knobs, against wall_ms, every preset on the
-// corpus, 128x128); a moved object as knobs, since it may rebuild what they select (cssm rebakes an
+// corpus, 128x128, each cold frame right after the lights changed back: knobs_and_scene); knobs
+// and a moved object as that, since either may rebuild what the knobs select (cssm rebakes an
 // object it took for static). `besides_maps`: less the shadow maps such frames drew, for a scene
 // that prices those from its own timings (SceneMeasurements::shadow_maps_ms): their cost follows
 // the scene's triangles and lights, not the warm frame's pixels. 0 for FrameChange::none and for

@@ -29,7 +29,6 @@ TEST_P(FrameChanges, EachFrameSaysWhatItRedidAsItsMethodCountsIt) {
     Renderer& renderer = shared_renderer();
     auto resources = renderer.upload(scene);
     const RenderRequest draft = method_request(work.method, "draft", kSize);
-    const methods::KnobValues draft_knobs = plan_frame(draft).knobs;
     double counted = 0.0;
     // Renders `request`, checks that it was predicted to redo `expected`, that it says so, and that the
     // method's count of light work grew by `solved` (0 or 1).
@@ -42,7 +41,7 @@ TEST_P(FrameChanges, EachFrameSaysWhatItRedidAsItsMethodCountsIt) {
         EXPECT_EQ(now - counted, solved) << work.count;
         counted = now;
     };
-    frame(draft, FrameChange::knobs, 1, "the method's first frame");
+    frame(draft, FrameChange::knobs_and_scene, 1, "the method's first frame");
     frame(draft, FrameChange::none, 0, "the same frame again");
     frame(method_request(work.method, "draft", 2 * kSize), FrameChange::none, 0, "another size: nothing of the scene's");
     scene.lights.front().intensity *= 1.001f;
@@ -51,14 +50,17 @@ TEST_P(FrameChanges, EachFrameSaysWhatItRedidAsItsMethodCountsIt) {
     scene.objects.back().transform = glm::translate(glm::mat4(1.0f), glm::vec3(0.05f, 0.0f, 0.0f)) * scene.objects.back().transform;
     scene.fit_bounds(scene.objects.size() - 1);
     frame(draft, FrameChange::objects, 1, "an object moved");
-    frame(method_request(work.method, "low", kSize), FrameChange::knobs, 1, "another preset");
+    const RenderRequest low = method_request(work.method, "low", kSize);
+    frame(low, FrameChange::knobs, 1, "another preset");
+    scene.lights.front().intensity *= 1.001f;
+    frame(draft, FrameChange::knobs_and_scene, 1, "another preset after a light changed");
     // A bake builds the structures for its knobs and solves no light: the next frame redoes the light.
     // A method whose bake builds nothing leaves its next frame to build them.
     const FrameChange after = work.bakes ? FrameChange::lights : FrameChange::knobs;
-    const FrameStats baked = renderer.prepare(*resources, draft, [](double, const std::string&) { return true; });
+    const FrameStats baked = renderer.prepare(*resources, low, [](double, const std::string&) { return true; });
     EXPECT_EQ(baked.change, work.bakes ? FrameChange::knobs : FrameChange::none);
-    EXPECT_EQ(resources->change_for(draft.method, draft_knobs), after);
-    const RenderResult after_bake = renderer.render(*resources, draft);
+    EXPECT_EQ(resources->change_for(low.method, plan_frame(low).knobs), after);
+    const RenderResult after_bake = renderer.render(*resources, low);
     EXPECT_EQ(after_bake.stats.change, after);
     EXPECT_EQ(after_bake.stats.method_statistics.at(work.count) - counted, 1.0);
     resources.reset();

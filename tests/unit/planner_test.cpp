@@ -436,7 +436,7 @@ TEST(Costs, AReferenceFrameRecordsItsNoiseAgainstTheAnalysis) {
 // since its method's last frame on the scene.
 TEST(FrameChange, AFrameRedoesWhatChangedSinceItsMethodsLastFrame) {
     const MethodState last{{{"resolution", 64}}, 1, 2, true};
-    EXPECT_EQ(change_between(std::nullopt, last), FrameChange::knobs);  // the method's first frame
+    EXPECT_EQ(change_between(std::nullopt, last), FrameChange::knobs_and_scene);  // the method's first frame
     EXPECT_EQ(change_between(last, last), FrameChange::none);
     MethodState next = last;
     next.lights = 3;
@@ -444,7 +444,10 @@ TEST(FrameChange, AFrameRedoesWhatChangedSinceItsMethodsLastFrame) {
     next.geometry = 3;
     EXPECT_EQ(change_between(last, next), FrameChange::objects);  // the lights' work and the objects'
     next.knobs["resolution"] = 128;
-    EXPECT_EQ(change_between(last, next), FrameChange::knobs);  // the knobs' structures count first
+    EXPECT_EQ(change_between(last, next), FrameChange::knobs_and_scene);  // other knobs after a move
+    MethodState switched = last;
+    switched.knobs["resolution"] = 128;
+    EXPECT_EQ(change_between(last, switched), FrameChange::knobs);  // the scene as it was
     MethodState baked = last;
     baked.lit = false;  // a bake built the structures and solved no light
     EXPECT_EQ(change_between(baked, last), FrameChange::lights);
