@@ -38,7 +38,6 @@ void ShadowMaps::render_view(const PassContext& context, const gpu::ShaderProgra
 }
 
 void ShadowMaps::render(const PassContext& context, int size) {
-    gpu::GpuTimers::Scope timing(context.timers, "shadow_maps");
     const auto& lights = context.scene.lights;
     const std::uint64_t geometry = geometry_fingerprint(context.scene);
     std::vector<std::uint64_t> fingerprints(lights.size());
@@ -52,6 +51,9 @@ void ShadowMaps::render(const PassContext& context, int size) {
         ++frames_reused_;
         return;
     }
+    // Timed only where maps are drawn: a frame's `shadow_maps` pass says it drew them, and what that
+    // took (the planner prices the maps by it, planning/costs.hpp).
+    gpu::GpuTimers::Scope timing(context.timers, "shadow_maps");
     ++frames_drawn_;
     maps_.resize(lights.size());
     const scene::Aabb bounds = context.scene.world_bounds();

@@ -134,7 +134,7 @@ public:
     // of 64 pixels a side and more have their quarter-size draft (16x); smaller ones keep the ratio.
     static constexpr double kLineSpan = 8.0;
 
-    // The shadow_maps pass of GPU frames that redid work, by map size (the `shadow_map_size` knob):
+    // The shadow_maps pass of GPU frames that drew maps, by map size (the `shadow_map_size` knob):
     // every GPU method draws the same maps of the scene's lights, and on a scene of many triangles
     // they are most of what a change of the lights costs (the furnished room's, 262K triangles and
     // lamps in cube maps, took 1.5 s at 2048 texels on llvmpipe, where a warm frame of direct took

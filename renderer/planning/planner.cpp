@@ -626,9 +626,9 @@ void record_frame(SceneMeasurements& measurements, const SceneAnalysis* analysis
         measurements.record(stats.method, stats.preset, bounces_knob(stats.knobs).value_or(-1), stats.render_ms, *baseline,
                             static_cast<double>(width) * height, stats.change);
     }
-    // A warm frame reuses the maps: only frames that redid work time them.
+    // The pass is timed only in frames that drew maps (passes::ShadowMaps).
     const auto map_size = stats.knobs.find("shadow_map_size");
-    if (stats.change != FrameChange::none && map_size != stats.knobs.end()) {
+    if (map_size != stats.knobs.end()) {
         for (const auto& pass : stats.passes) {
             if (pass.pass == "shadow_maps") measurements.record_shadow_maps(static_cast<int>(map_size->second), pass.gpu_ms);
         }

@@ -10,6 +10,8 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 namespace bounce::test {
 namespace {
 
@@ -40,16 +42,23 @@ TEST_P(FrameChanges, EachFrameSaysWhatItRedidAsItsMethodCountsIt) {
         const double now = result.stats.method_statistics.at(work.count);
         EXPECT_EQ(now - counted, solved) << work.count;
         counted = now;
+        return result;
     };
-    frame(draft, FrameChange::knobs_and_scene, 1, "the method's first frame");
-    frame(draft, FrameChange::none, 0, "the same frame again");
+    // A frame times its shadow maps only where it drew them (the planner prices them by it).
+    const auto drew_maps = [](const RenderResult& result) {
+        return std::any_of(result.stats.passes.begin(), result.stats.passes.end(),
+                           [](const gpu::PassTiming& pass) { return pass.pass == "shadow_maps"; });
+    };
+    EXPECT_TRUE(drew_maps(frame(draft, FrameChange::knobs_and_scene, 1, "the method's first frame")));
+    EXPECT_FALSE(drew_maps(frame(draft, FrameChange::none, 0, "the same frame again")));
     frame(method_request(work.method, "draft", 2 * kSize), FrameChange::none, 0, "another size: nothing of the scene's");
     scene.lights.front().intensity *= 1.001f;
-    frame(draft, FrameChange::lights, 1, "a light dimmed by a factor no image shows");
+    // Dimmed, a light keeps its shadow map.
+    EXPECT_FALSE(drew_maps(frame(draft, FrameChange::lights, 1, "a light dimmed by a factor no image shows")));
     frame(draft, FrameChange::none, 0, "warm again");
     scene.objects.back().transform = glm::translate(glm::mat4(1.0f), glm::vec3(0.05f, 0.0f, 0.0f)) * scene.objects.back().transform;
     scene.fit_bounds(scene.objects.size() - 1);
-    frame(draft, FrameChange::objects, 1, "an object moved");
+    EXPECT_TRUE(drew_maps(frame(draft, FrameChange::objects, 1, "an object moved")));
     const RenderRequest low = method_request(work.method, "low", kSize);
     frame(low, FrameChange::knobs, 1, "another preset");
     scene.lights.front().intensity *= 1.001f;
