@@ -53,13 +53,13 @@ RenderRequest linear_request(const std::string& method, const std::string& prese
 }
 
 double change_every_light(scene::Scene& scene, const std::vector<scene::Light>& original, int change) {
-    const float step = static_cast<float>(1 + change % 2);
+    const float step = static_cast<float>(1 + change % 97);
     const float extent = glm::length(scene.world_bounds().extent());
-    const double factor = 1.0 + 1e-3 * step;
+    const double factor = 1.0 + 1e-4 * change;
     for (std::size_t i = 0; i < scene.lights.size() && i < original.size(); ++i) {
         scene::Light& light = scene.lights[i];
-        light.position = original[i].position + glm::vec3(1e-5f * step * extent, 0.0f, 0.0f);
-        const glm::vec3 turned = original[i].direction + glm::vec3(0.0f, 0.0f, 1e-5f * step);
+        light.position = original[i].position + glm::vec3(1e-6f * step * extent, 0.0f, 0.0f);
+        const glm::vec3 turned = original[i].direction + glm::vec3(0.0f, 0.0f, 1e-6f * step);
         light.direction = glm::normalize(turned);
         light.intensity = static_cast<float>(original[i].intensity * factor);
     }

@@ -49,12 +49,13 @@ RenderRequest linear_request(const std::string& method, const std::string& prese
 
 // Changes every light of `scene` from `original` (its lights before any change) as a client's
 // `light.set` would, the worst case for what a frame redoes (frame_change.hpp: every shadow map and
-// every light's work), by amounts no comparison sees: the `change`-th change moves each light by
-// 1e-5 or 2e-5 of the scene's extent, turns it by as many radians, and scales its intensity by
-// 1.001 or 1.002, alternately, so that each change differs from the last. Returns the intensity's
-// factor: light transport is linear, so the truth of the changed scene is the truth times it, less
-// what the moves change (a point light a tenth of the extent away changes irradiance by 4e-4 of
-// itself, 2e-7 of relMSE).
+// every light's work), by amounts no comparison sees: the `change`-th change (from 1) moves each
+// light by 1e-6 of the scene's extent times 1 + change % 97, turns it by as many radians, and scales
+// its intensity by 1 + 1e-4 change, so that no two changes of a run leave the same lights (a method
+// last rendered some changes ago still sees them changed). Returns the intensity's factor: light
+// transport is linear, so the truth of the changed scene is the truth times it, less what the moves
+// change (a point light a tenth of the extent away changes irradiance by at most 2e-3 of itself,
+// 4e-6 of relMSE).
 double change_every_light(scene::Scene& scene, const std::vector<scene::Light>& original, int change);
 
 // The CPU model and its hardware thread count.
