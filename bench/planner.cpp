@@ -100,6 +100,18 @@ double noise_floor(const BudgetRow& row) {
     return std::max(row.planned.rel_mse_spread, row.fixed ? row.fixed->rel_mse_spread : 0.0);
 }
 
+// A time budget T holds when the planned frame took at most 1.2 T, with error no worse than the most
+// accurate of `comparators` within T: by no more than two frames of one of the two plans differ by
+// chance (holds_strictly: by nothing).
+void judge_time_budget(BudgetRow& row, double budget, const std::vector<Measured>& comparators) {
+    row.met = row.planned.ms <= 1.2 * budget;
+    for (const Measured& m : comparators) {
+        if (m.ms <= budget && (!row.fixed || m.rel_mse < row.fixed->rel_mse)) row.fixed = m;
+    }
+    row.holds_strictly = row.met && (!row.fixed || row.planned.rel_mse <= row.fixed->rel_mse);
+    row.holds = row.met && (!row.fixed || row.planned.rel_mse <= row.fixed->rel_mse + noise_floor(row));
+}
+
 std::string error_text(const Measured& m) {
     return m.rel_mse_spread >= 0.001 ? fmt::format("{:.3f} ± {:.3f}", m.rel_mse, m.rel_mse_spread / 2.0)
                                   : fmt::format("{:.3f}", m.rel_mse);
@@ -458,13 +470,7 @@ int main(int argc, char** argv) {
             }
             for (const double budget : options.budgets_ms) {
                 BudgetRow row = run({budget, std::nullopt}, fmt::format("≤ {:g} ms", budget));
-                row.met = row.planned.ms <= 1.2 * budget;
-                for (const Measured& m : fixed) {
-                    if (m.ms <= budget && (!row.fixed || m.rel_mse < row.fixed->rel_mse)) row.fixed = m;
-                }
-                // No worse: by no more than two frames of one of the two plans differ by chance.
-                row.holds_strictly = row.met && (!row.fixed || row.planned.rel_mse <= row.fixed->rel_mse);
-                row.holds = row.met && (!row.fixed || row.planned.rel_mse <= row.fixed->rel_mse + noise_floor(row));
+                judge_time_budget(row, budget, fixed);
                 rows.push_back(row);
             }
             }
@@ -507,12 +513,7 @@ int main(int argc, char** argv) {
                                                     plan.chosen.preset, plan.chosen.knobs, options.size, scaled(truth, factor))
                                       : render_as_it_comes(renderer, *resources, scene, analysis, device, costs,
                                                            plan.chosen, options.size, scaled(truth, factor));
-                    row.met = row.planned.ms <= 1.2 * budget;
-                    for (const Measured& m : relit_fixed) {
-                        if (m.ms <= budget && (!row.fixed || m.rel_mse < row.fixed->rel_mse)) row.fixed = m;
-                    }
-                    row.holds_strictly = row.met && (!row.fixed || row.planned.rel_mse <= row.fixed->rel_mse);
-                    row.holds = row.met && (!row.fixed || row.planned.rel_mse <= row.fixed->rel_mse + noise_floor(row));
+                    judge_time_budget(row, budget, relit_fixed);
                     rows.push_back(row);
                 }
                 scene.lights = original_lights;

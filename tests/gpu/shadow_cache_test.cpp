@@ -8,17 +8,26 @@
 namespace bounce::test {
 namespace {
 
-TEST(ShadowMaps, ReusedUntilALightOrATransformChanges) {
-    shared_renderer();  // makes the GL context current on this thread
-    scene::Scene scene = scene::make_cornell_box();
-    gpu::GpuScene gpu_scene(scene);
+// What a pass needs to draw `scene`'s shadow maps outside a frame; the scene may change between draws.
+struct MapsOfAScene {
+    explicit MapsOfAScene(scene::Scene drawn) : scene(std::move(drawn)) { timers.begin_frame(); }
+    ~MapsOfAScene() { timers.resolve(); }
+    Renderer& renderer = shared_renderer();  // first: it makes the GL context current on this thread
+    scene::Scene scene;
+    gpu::GpuScene gpu_scene{scene};
     gpu::ShaderCache shaders;
     gpu::StateCache state;
     gpu::GpuTimers timers;
     gpu::Framebuffer output;
     const passes::PassContext context{scene, gpu_scene, shaders, state, timers, output, 16, 16, scene.cameras[0]};
     passes::ShadowMaps maps;
-    timers.begin_frame();
+};
+
+TEST(ShadowMaps, ReusedUntilALightOrATransformChanges) {
+    MapsOfAScene drawn(scene::make_cornell_box());
+    scene::Scene& scene = drawn.scene;
+    passes::ShadowMaps& maps = drawn.maps;
+    const passes::PassContext& context = drawn.context;
 
     maps.render(context, 64);
     EXPECT_FALSE(maps.last_render_reused());
@@ -38,26 +47,20 @@ TEST(ShadowMaps, ReusedUntilALightOrATransformChanges) {
     EXPECT_FALSE(maps.last_render_reused());
     EXPECT_EQ(maps.frames_drawn(), 4u);
     EXPECT_EQ(maps.frames_reused(), 2u);
-    timers.resolve();
 }
 
 // Each light's map depends on where that light is and how it shines, not on its colour or
 // intensity: dimming a light redraws nothing, moving one of two lights redraws its map alone.
 TEST(ShadowMaps, EachMapIsRedrawnOnlyWhenItsOwnLightMovesOrReshapes) {
-    shared_renderer();  // makes the GL context current on this thread
-    scene::Scene scene = scene::make_cornell_box();
-    scene::Light spot = scene.lights[0];
+    scene::Scene two_lights = scene::make_cornell_box();
+    scene::Light spot = two_lights.lights[0];
     spot.type = scene::LightType::spot;
     spot.direction = {0.0f, -1.0f, 0.0f};
-    scene.lights.push_back(spot);
-    gpu::GpuScene gpu_scene(scene);
-    gpu::ShaderCache shaders;
-    gpu::StateCache state;
-    gpu::GpuTimers timers;
-    gpu::Framebuffer output;
-    const passes::PassContext context{scene, gpu_scene, shaders, state, timers, output, 16, 16, scene.cameras[0]};
-    passes::ShadowMaps maps;
-    timers.begin_frame();
+    two_lights.lights.push_back(spot);
+    MapsOfAScene drawn(std::move(two_lights));
+    scene::Scene& scene = drawn.scene;
+    passes::ShadowMaps& maps = drawn.maps;
+    const passes::PassContext& context = drawn.context;
 
     maps.render(context, 64);
     EXPECT_EQ(maps.maps_drawn(), 2u);
@@ -85,7 +88,6 @@ TEST(ShadowMaps, EachMapIsRedrawnOnlyWhenItsOwnLightMovesOrReshapes) {
     scene.objects[1].transform[3].x += 0.01f;  // a block moved: every map
     maps.render(context, 64);
     EXPECT_EQ(maps.maps_drawn(), 7u);
-    timers.resolve();
 }
 
 // A reused map gives the same frame as a freshly drawn one, and a moved light changes it; a dimmed
