@@ -4,8 +4,10 @@
 // (planning/costs.hpp):
 //
 //   none:     nothing: a warm frame, as the bench measures methods;
-//   lights:   what the lights feed: shadow maps, vct's injected light, cssm's atlas solve, isr's light
-//             views and VPL tree;
+//   light_power: a light's colour or intensity alone: what its power feeds (vct's injected light,
+//             cssm's atlas solve, isr's light views and VPL tree), not the shadow maps, which hold
+//             depths (passes::shadow_map_fingerprint);
+//   lights:   a light moved, turned, reshaped or was added or removed: that, and the shadow maps;
 //   objects:  an object moved: the lights' work, and what the objects' placement feeds besides (vct
 //             voxelizes the moved objects again, cssm rebakes once an object it took for static);
 //   knobs:    other knobs than the method's last frame (a preset or bounce count of its own), the
@@ -24,11 +26,12 @@
 
 namespace bounce {
 
-enum class FrameChange { none, lights, objects, knobs, knobs_and_scene };
+enum class FrameChange { none, light_power, lights, objects, knobs, knobs_and_scene };
 
 constexpr std::string_view to_string(FrameChange change) {
     switch (change) {
     case FrameChange::none: return "none";
+    case FrameChange::light_power: return "light_power";
     case FrameChange::lights: return "lights";
     case FrameChange::objects: return "objects";
     case FrameChange::knobs: return "knobs";
@@ -40,7 +43,8 @@ constexpr std::string_view to_string(FrameChange change) {
 // The state a method's structures were last made for on a scene's resources.
 struct MethodState {
     methods::KnobValues knobs;
-    std::uint64_t lights = 0;    // lights_fingerprint (renderer.hpp)
+    std::uint64_t lights = 0;        // lights_fingerprint (renderer.hpp)
+    std::uint64_t light_places = 0;  // the same without colour and intensity: what shadow maps depend on
     std::uint64_t geometry = 0;  // passes::geometry_fingerprint: meshes and their transforms
     bool lit = false;            // a frame lit them: a `bake` request builds structures and solves no light
 };
@@ -51,7 +55,8 @@ inline FrameChange change_between(const std::optional<MethodState>& last, const 
     const bool scene = !last->lit || last->lights != next.lights || last->geometry != next.geometry;
     if (last->knobs != next.knobs) return scene ? FrameChange::knobs_and_scene : FrameChange::knobs;
     if (last->geometry != next.geometry) return FrameChange::objects;
-    return scene ? FrameChange::lights : FrameChange::none;
+    if (!last->lit || last->light_places != next.light_places) return FrameChange::lights;
+    return scene ? FrameChange::light_power : FrameChange::none;
 }
 
 }  // namespace bounce

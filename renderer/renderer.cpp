@@ -92,7 +92,10 @@ std::uint64_t lights_fingerprint(const scene::Scene& scene) {
 
 MethodState SceneResources::state_now(const methods::KnobValues& knobs) const {
     const scene::Scene& scene = gpu_scene.scene();
-    return {knobs, lights_fingerprint(scene), passes::geometry_fingerprint(scene), true};
+    Hasher places;
+    for (const scene::Light& light : scene.lights) places.add(passes::shadow_map_fingerprint(light, 0, 0));
+    places.add(scene.lights.size());
+    return {knobs, lights_fingerprint(scene), places.value(), passes::geometry_fingerprint(scene), true};
 }
 
 void SceneResources::record_state(const std::string& method, std::optional<MethodState> state) {

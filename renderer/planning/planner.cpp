@@ -307,6 +307,8 @@ const MostChangeCost* most_change_cost(const std::string& method, const std::str
 double change_cost_bound(const std::string& method, const std::string& preset, FrameChange change, bool besides_maps) {
     const MostChangeCost* most = most_change_cost(method, preset);
     if (change == FrameChange::none || !most) return 0.0;
+    // A light's power alone redraws no map: what a change of the lights redid besides them.
+    if (change == FrameChange::light_power) return most->lights_besides_maps;
     const double lights = besides_maps ? most->lights_besides_maps : most->lights;
     if (change == FrameChange::lights) return lights;
     // Structures built anew redo the lights' work too (a cold frame measured under a relit one only
@@ -360,7 +362,8 @@ double predicted_ms(const PlanningInputs& inputs, const std::string& method, con
         const auto& registry = methods::MethodRegistry::builtin();
         const methods::KnobValues resolved = registry.resolve(method, preset, knobs);
         const auto map_size = resolved.find("shadow_map_size");
-        const auto maps_ms = inputs.scene && map_size != resolved.end()
+        const bool maps_drawn = change != FrameChange::light_power;
+        const auto maps_ms = maps_drawn && inputs.scene && map_size != resolved.end()
                                  ? inputs.scene->shadow_maps_ms(static_cast<int>(map_size->second))
                                  : std::nullopt;
         const double bound = change_cost_bound(method, preset, change, maps_ms.has_value());
@@ -372,7 +375,8 @@ double predicted_ms(const PlanningInputs& inputs, const std::string& method, con
     }
     if (basis) {
         *basis += fmt::format("; + {:.1f} ms redone: {} ({})", extra,
-                              change == FrameChange::lights    ? "the lights changed since the method's last frame"
+                              change == FrameChange::light_power ? "a light's colour or intensity changed since the method's last frame"
+                              : change == FrameChange::lights  ? "the lights changed since the method's last frame"
                               : change == FrameChange::objects ? "objects moved since the method's last frame"
                               : change == FrameChange::knobs   ? "the method's last frame here had other knobs"
                                                                : "the method's last frame here had other knobs, or none, "

@@ -54,7 +54,10 @@ TEST_P(FrameChanges, EachFrameSaysWhatItRedidAsItsMethodCountsIt) {
     frame(method_request(work.method, "draft", 2 * kSize), FrameChange::none, 0, "another size: nothing of the scene's");
     scene.lights.front().intensity *= 1.001f;
     // Dimmed, a light keeps its shadow map.
-    EXPECT_FALSE(drew_maps(frame(draft, FrameChange::lights, 1, "a light dimmed by a factor no image shows")));
+    EXPECT_FALSE(drew_maps(frame(draft, FrameChange::light_power, 1, "a light dimmed by a factor no image shows")));
+    frame(draft, FrameChange::none, 0, "warm again");
+    scene.lights.front().position.x += 0.01f;
+    EXPECT_TRUE(drew_maps(frame(draft, FrameChange::lights, 1, "a light moved")));
     frame(draft, FrameChange::none, 0, "warm again");
     scene.objects.back().transform = glm::translate(glm::mat4(1.0f), glm::vec3(0.05f, 0.0f, 0.0f)) * scene.objects.back().transform;
     scene.fit_bounds(scene.objects.size() - 1);

@@ -314,8 +314,8 @@ TEST(Budget, ThePlanReadsAnAnalysisOfTheCurrentLights) {
 }
 
 // A method keeps its structures between frames: a plan says what its frame would redo and is priced
-// with it, and the frame says what it redid. After a light changes, both say `lights`; the next
-// frame redoes nothing.
+// with it, and the frame says what it redid. After a light is dimmed, both say `light_power`; after
+// it moves, `lights`; the next frame redoes nothing.
 TEST(Budget, AFrameAfterALightChangeSaysWhatItRedoesAndIsPricedWithIt) {
     BudgetDaemon d;
     const json budget = {{"method", "vct"}, {"budget", {{"max_ms", 1.0e5}}}};
@@ -327,12 +327,18 @@ TEST(Budget, AFrameAfterALightChangeSaysWhatItRedoesAndIsPricedWithIt) {
     // 0.5 W/sr as it is, in candela as files give it: 341.5 cd; dimmed by a fifth.
     d.client.request(MessageType::light_set, {{"scene", "cornell"}, {"light", "ceiling_light"}, {"intensity", 273.2}});
     const auto relit = d.render(budget);
-    EXPECT_EQ(relit.body["plan"]["redoes"], "lights") << relit.body["plan"].dump();
-    EXPECT_EQ(relit.body["redid"], "lights");
+    EXPECT_EQ(relit.body["plan"]["redoes"], "light_power") << relit.body["plan"].dump();
+    EXPECT_EQ(relit.body["redid"], "light_power");
     EXPECT_EQ(relit.body["method_stats"]["light_injections"].get<double>(),
               warm.body["method_stats"]["light_injections"].get<double>() + 1.0);
-    EXPECT_NE(relit.body["plan"]["why"].get<std::string>().find("the lights changed"), std::string::npos)
+    EXPECT_NE(relit.body["plan"]["why"].get<std::string>().find("colour or intensity changed"), std::string::npos)
         << relit.body["plan"].dump();
+    // Moved, the light's shadow maps are redrawn too.
+    d.client.request(MessageType::light_set, {{"scene", "cornell"}, {"light", "ceiling_light"}, {"position", {0.27, 0.44, 0.28}}});
+    const auto moved = d.render(budget);
+    EXPECT_EQ(moved.body["plan"]["redoes"], "lights") << moved.body["plan"].dump();
+    EXPECT_EQ(moved.body["redid"], "lights");
+    EXPECT_TRUE(moved.body["timings_ms"]["passes"].contains("shadow_maps"));
     const auto after = d.render(budget);
     EXPECT_EQ(after.body["redid"], "none");
 }

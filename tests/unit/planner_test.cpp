@@ -435,11 +435,13 @@ TEST(Costs, AReferenceFrameRecordsItsNoiseAgainstTheAnalysis) {
 // A method keeps its structures between frames, so what a frame redoes depends on what changed
 // since its method's last frame on the scene.
 TEST(FrameChange, AFrameRedoesWhatChangedSinceItsMethodsLastFrame) {
-    const MethodState last{{{"resolution", 64}}, 1, 2, true};
+    const MethodState last{{{"resolution", 64}}, 1, 5, 2, true};
     EXPECT_EQ(change_between(std::nullopt, last), FrameChange::knobs_and_scene);  // the method's first frame
     EXPECT_EQ(change_between(last, last), FrameChange::none);
     MethodState next = last;
-    next.lights = 3;
+    next.lights = 3;  // a colour or an intensity: the lights' places as they were
+    EXPECT_EQ(change_between(last, next), FrameChange::light_power);
+    next.light_places = 6;  // a light moved too
     EXPECT_EQ(change_between(last, next), FrameChange::lights);
     next.geometry = 3;
     EXPECT_EQ(change_between(last, next), FrameChange::objects);  // the lights' work and the objects'
@@ -519,6 +521,10 @@ TEST(Planner, AFrameIsPricedWithWhatItWouldRedo) {
                      warm_64 + change_cost_bound("vct", "medium", FrameChange::knobs) * warm_128);
     EXPECT_GE(change_cost_bound("vct", "medium", FrameChange::knobs), bound);  // structures built redo the light too
     EXPECT_EQ(change_cost_bound("vct", "medium", FrameChange::objects), change_cost_bound("vct", "medium", FrameChange::knobs));
+    // A change of power alone redraws no shadow map: the bench's bound on the rest, until measured.
+    now = FrameChange::light_power;
+    EXPECT_DOUBLE_EQ(predicted_ms(inputs, "vct", "medium", {}),
+                     warm_64 + change_cost_bound("vct", "medium", FrameChange::lights, true) * warm_128);
     // The reference keeps nothing between frames.
     EXPECT_DOUBLE_EQ(predicted_ms(inputs, "reference", "medium", {{"spp", 1}, {"bounces", 0}}), 2.0 + 1e-3 * 64 * 64);
     EXPECT_DOUBLE_EQ(change_cost_bound("vct", "medium", FrameChange::none), 0.0);
@@ -549,6 +555,10 @@ TEST(Planner, ShadowMapsArePricedFromTheScenesOwnTimingsOfThem) {
     EXPECT_NE(basis.find("of shadow maps as this scene's frames drew them"), std::string::npos) << basis;
     // Planned with smaller maps: priced at the time of the smaller maps.
     EXPECT_DOUBLE_EQ(predicted_ms(inputs, "vct", "medium", {{"shadow_map_size", 1024}}), 10.0 + 100.0 + besides * 10.0);
+    // A light dimmed: no maps to draw, whatever the scene timed of them.
+    inputs.change = [](const std::string&, const std::string&, const methods::KnobValues&) { return FrameChange::light_power; };
+    EXPECT_DOUBLE_EQ(predicted_ms(inputs, "vct", "medium", {}, &basis), 10.0 + besides * 10.0);
+    EXPECT_NE(basis.find("colour or intensity"), std::string::npos) << basis;
 }
 
 // Under a time budget, a plan that fits warm but not with what it would redo gives way to one that
