@@ -71,6 +71,9 @@ struct Row {
     // GPU methods: the shadow_maps pass of the first and of the relit frame (each draws every map):
     // what the planner prices apart, from the scene's own shadow-map timings (planner.hpp).
     double cold_shadow_ms = 0, relit_shadow_ms = 0;
+    // GPU methods: a frame after every light was dimmed by 0.1% alone (FrameChange::light_power: no
+    // shadow map redrawn).
+    double dimmed_ms = 0;
 };
 
 bench::ReferenceSpec reference_spec(const Options& options) {
@@ -80,11 +83,11 @@ bench::ReferenceSpec reference_spec(const Options& options) {
 void write_csv(const fs::path& path, const std::vector<Row>& rows) {
     std::ofstream out(path);
     out << "scene,method,preset,bounces,wall_ms,gpu_ms,passes_ms,resident_bytes,rel_mse,rmse,rel_mse_same_bounces,"
-           "mean_ratio,rays_per_second,cold_ms,relit_ms,cold_shadow_ms,relit_shadow_ms\n";
+           "mean_ratio,rays_per_second,cold_ms,relit_ms,cold_shadow_ms,relit_shadow_ms,dimmed_ms\n";
     for (const Row& r : rows) {
-        out << fmt::format("{},{},{},{},{:.3f},{:.3f},{},{},{:.6g},{:.6g},{:.6g},{:.5f},{:.4g},{:.3f},{:.3f},{:.3f},{:.3f}\n", r.scene, r.method,
+        out << fmt::format("{},{},{},{},{:.3f},{:.3f},{},{},{:.6g},{:.6g},{:.6g},{:.5f},{:.4g},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f}\n", r.scene, r.method,
                            r.preset, r.bounces, r.wall_ms, r.gpu_ms, r.passes, r.resident_bytes, r.rel_mse, r.rmse,
-                           r.rel_mse_same_bounces, r.mean_ratio, r.rays_per_second, r.cold_ms, r.relit_ms, r.cold_shadow_ms, r.relit_shadow_ms);
+                           r.rel_mse_same_bounces, r.mean_ratio, r.rays_per_second, r.cold_ms, r.relit_ms, r.cold_shadow_ms, r.relit_shadow_ms, r.dimmed_ms);
     }
 }
 
@@ -316,6 +319,10 @@ int main(int argc, char** argv) {
                     bench::change_every_light(relit_scene, bench_scene.scene.lights, 1);
                     const RenderResult relit = renderer.render(*resources, request);
                     relit_scene.lights = bench_scene.scene.lights;
+                    renderer.render(*resources, request);  // lit as they are again
+                    for (scene::Light& light : relit_scene.lights) light.intensity *= 1.001f;
+                    const double dimmed_ms = renderer.render(*resources, request).stats.render_ms;
+                    relit_scene.lights = bench_scene.scene.lights;
                     if (options.previews && preset == "medium") {
                         write_preview(*options.previews / fmt::format("{}-{}.png", bench_scene.name, method), median.frame);
                     }
@@ -330,6 +337,7 @@ int main(int argc, char** argv) {
                     row.gpu_ms = median.stats.gpu_ms;
                     row.cold_ms = cold.stats.render_ms;
                     row.relit_ms = relit.stats.render_ms;
+                    row.dimmed_ms = dimmed_ms;
                     const auto shadow_ms = [](const FrameStats& stats) {
                         double ms = 0.0;
                         for (const auto& pass : stats.passes) ms += pass.pass == "shadow_maps" ? pass.gpu_ms : 0.0;

@@ -156,7 +156,7 @@ double bounce_cost_bound(const std::string& method, const std::string& preset, i
 // warm frame at kChangePriorPixels, before the scene measured it: the most the bench measured
 // (bench/quality's relit_ms for lights, cold_ms for knobs, against wall_ms, every preset on the
 // corpus, 128x128, each cold frame right after the lights changed back: knobs_and_scene; for
-// light_power, the relit frames less their shadow maps, which a change of power does not redraw); knobs
+// light_power, dimmed_ms: every light dimmed alone, which redraws no shadow map); knobs
 // and a moved object as that, since either may rebuild what the knobs select (cssm rebakes an
 // object it took for static). `besides_maps`: less the shadow maps such frames drew, for a scene
 // that prices those from its own timings (SceneMeasurements::shadow_maps_ms): their cost follows
