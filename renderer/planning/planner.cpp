@@ -322,14 +322,9 @@ double change_cost_bound(const std::string& method, const std::string& preset, F
 PlanningInputs::ChangeOf changes_on(const SceneResources& resources) {
     const MethodState now = resources.state_now({});  // the scene's lights and geometry, hashed once
     return [&resources, now](const std::string& method, const std::string& preset, const methods::KnobValues& knobs) {
-        RenderRequest request;
-        request.method = method;
-        request.preset = preset;
-        request.knobs = knobs;
-        request.width = request.height = 1;  // any size: knobs resolve alike at every size
         try {
             MethodState next = now;
-            next.knobs = plan_frame(request).knobs;
+            next.knobs = methods::MethodRegistry::builtin().resolve(method, preset, knobs);  // as plan_frame does
             return resources.change_for(method, next);
         } catch (const InputError&) {
             return FrameChange::knobs_and_scene;

@@ -102,7 +102,8 @@ struct PlanningInputs {
 };
 
 // PlanningInputs::change for a scene's resources as the scene is now (its lights and geometry hashed
-// at the call: make it for each plan): each plan's knobs resolved as plan_frame resolves them, then
+// at the call: make it for each plan): each plan's knobs resolved as plan_frame resolves them (the
+// registry's preset with its overrides), then
 // SceneResources::change_for. Plans it cannot resolve count as built anew (knobs_and_scene).
 PlanningInputs::ChangeOf changes_on(const SceneResources& resources);
 
