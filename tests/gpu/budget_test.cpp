@@ -74,7 +74,10 @@ Measured plan_and_render(const scene::Scene& scene, const SceneAnalysis& analysi
 
 TEST(Budgets, ATargetErrorIsMetByTheGpuPlanChosenForIt) {
     const scene::Scene scene = scene::make_cornell_box();
-    const SceneAnalysis analysis = analyze_scene(scene);
+    SceneAnalysis analysis = analyze_scene(scene);
+    // The reference's cost is made up too: the analysis times a sample on this machine's threads,
+    // and on sixteen of them a 16-sample frame of this box (5.8 ms) undercut the made-up GPU costs.
+    for (double& ns : analysis.bounces.sample_ns) ns *= 1000.0;
     // The priors are the largest own errors over the bench corpus, so on this box no GPU plan is
     // predicted under 0.05: the targets are those some GPU plan is predicted to meet.
     for (const double target : {0.15, 0.1}) {

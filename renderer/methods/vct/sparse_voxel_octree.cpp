@@ -47,20 +47,30 @@ void set_cone_uniforms(const gpu::ShaderProgram& program, const ConeSettings& se
     program.set("u_ao_lambda", settings.ao_lambda);
 }
 
+// Lattice spacings between the scene bounds and the grid's first lattice point (grid_for).
+constexpr float kGridMargin = 2.3f;
+
 OctreeGrid grid_for(const scene::Aabb& bounds, int resolution) {
     if (bounds.empty()) BOUNCE_FAIL("the scene has no geometry to voxelize");
     const glm::vec3 extent = bounds.extent();
     const float largest = std::max({extent.x, extent.y, extent.z});
     OctreeGrid grid;
     grid.spacing = largest > 0.0f ? largest / static_cast<float>(resolution) : 1.0f;
-    // A two-voxel margin on each side keeps every surface voxel's neighbours inside the root.
-    const int intervals = resolution + 4;
+    // A margin of over two voxels on each side keeps every surface voxel's neighbours inside the
+    // root. It is not a whole number of voxels: voxelization and light injection bracket a surface
+    // between two lattice points by floor() along its normal, and a surface on a lattice point (the
+    // scene's bounding walls, with a whole margin) is bracketed by one pair or the next as rounding
+    // goes, so its area and its photons took different pairs at one scale and the same at another
+    // (vct's frame moved by 1% between scales, 2.5x at single pixels). 0.3 of a voxel puts
+    // surfaces at any binary fraction of a voxel from the bounds far from both floor()'s ties and
+    // round()'s, which picks the column across the normal.
+    const int intervals = resolution + 5;
     grid.leaf_level = std::max(1, static_cast<int>(std::ceil(std::log2(static_cast<double>(intervals)))) - 1);
     if (grid.leaf_level > kMaxLeafLevel) {
         throw InputError(fmt::format("vct resolution {} needs octree depth {}; at most {} levels are supported",
                                      resolution, grid.leaf_level, kMaxLeafLevel));
     }
-    grid.origin = bounds.min - 2.0f * grid.spacing;
+    grid.origin = bounds.min - kGridMargin * grid.spacing;
     return grid;
 }
 
@@ -94,7 +104,7 @@ void SparseVoxelOctree::build(const passes::PassContext& context, int resolution
     if (dense && grid_.leaf_level > kMaxDenseLeafLevel) {
         throw InputError(fmt::format("vct dense: resolution {} needs a {}^3 lattice; at most resolution {} ({}^3) is "
                                      "supported densely (the sparse octree has no such limit)",
-                                     resolution, grid_.lattice_max() + 1, (2 << kMaxDenseLeafLevel) - 4,
+                                     resolution, grid_.lattice_max() + 1, (2 << kMaxDenseLeafLevel) - 5,
                                      (2 << kMaxDenseLeafLevel) + 1));
     }
     if (!counters_) counters_ = gpu::CounterBuffer(VCT_COUNTERS);
