@@ -80,7 +80,7 @@ TEST_P(FrameChanges, EachFrameSaysWhatItRedidAsItsMethodCountsIt) {
 
 INSTANTIATE_TEST_SUITE_P(Methods, FrameChanges,
                          ::testing::Values(LightWork{"cssm", "atlas_solutions", true},
-                                           LightWork{"vct", "light_injections", false},
+                                           LightWork{"vct", "light_injections", true},
                                            LightWork{"isr", "vpl_tree_builds", false}),
                          [](const auto& info) { return std::string(info.param.method); });
 

@@ -344,6 +344,22 @@ TEST(Daemon, CssmBakeReportsProgressAndARestartedDaemonReusesItsCache) {
     EXPECT_EQ(stats.at("bakes_loaded").get<double>(), 1.0);
 }
 
+// vct's bake builds its octree and injects no light: the frame after it voxelizes nothing and redoes
+// the light alone.
+TEST(Daemon, VctBakeBuildsTheOctreeAndTheNextFrameRedoesOnlyTheLight) {
+    DaemonProcess daemon;
+    Client client(daemon.endpoint());
+    const json baked = client.request(MessageType::bake, {{"scene", "cornell"}, {"method", "vct"}, {"preset", "draft"}})
+                           .body.at("method_stats");
+    EXPECT_EQ(baked.at("octree_builds").get<double>(), 1.0);
+    EXPECT_EQ(baked.at("light_injections").get<double>(), 0.0);
+    const auto frame = client.request(MessageType::render, {{"scene", "cornell"}, {"method", "vct"}, {"preset", "draft"},
+                                                            {"width", 32}, {"height", 32}, {"format", "exr"}});
+    EXPECT_EQ(frame.body.at("method_stats").at("octree_builds").get<double>(), 1.0);
+    EXPECT_EQ(frame.body.at("method_stats").at("light_injections").get<double>(), 1.0);
+    EXPECT_EQ(frame.body.at("redid"), "lights");
+}
+
 TEST(Daemon, ObjectsDeclaredDynamicAtLoadMoveWithoutARebake) {
     DaemonProcess daemon;
     Client client(daemon.endpoint());

@@ -87,6 +87,14 @@ public:
         trace(frame, ambient_occlusion);
     }
 
+    // The octree for these knobs (resolution, dense) and this geometry, without the light: the
+    // next frame injects it (what a change of the lights redoes) instead of voxelizing too.
+    bool prepare(const FrameContext& frame) override {
+        if (frame.scene.world_bounds().empty()) return false;
+        update_octree(frame);
+        return true;
+    }
+
     std::vector<ResidentStructure> resident() const override {
         const auto& counts = octree_.counts();
         std::vector<ResidentStructure> structures = {
