@@ -186,6 +186,11 @@ DecodedImage decode_image(std::span<const std::uint8_t> bytes) {
     }
     const std::string filename = dummy_filename(format);
     const std::string_view name = image_format_name(format);
+    // Only the reader of the sniffed format sees the bytes: where it refuses them, OpenImageIO would
+    // otherwise hand a client's bytes to every reader it has (DICOM, camera raw, ffmpeg, OpenVDB),
+    // parsers Bounce never needs. scripts/check-pack-binaries fails if any of them is reached.
+    static const bool sniffed_reader_only = OIIO::attribute("try_all_readers", 0);
+    (void)sniffed_reader_only;
 
     OIIO::Filesystem::IOMemReader proxy(bytes.data(), bytes.size());
     // Keep stored values as they are: by default OIIO premultiplies PNG colour by alpha on read.

@@ -75,8 +75,8 @@ Measured plan_and_render(const scene::Scene& scene, const SceneAnalysis& analysi
 TEST(Budgets, ATargetErrorIsMetByTheGpuPlanChosenForIt) {
     const scene::Scene scene = scene::make_cornell_box();
     SceneAnalysis analysis = analyze_scene(scene);
-    // The reference's cost is made up too: the analysis times a sample on this machine's threads,
-    // and on sixteen of them a 16-sample frame of this box (5.8 ms) undercut the made-up GPU costs.
+    // The reference's cost is made up too, a thousand times what the analysis timed on this machine's
+    // threads: on sixteen of them a 16-sample frame of this box (5.8 ms) undercut the GPU costs above.
     for (double& ns : analysis.bounces.sample_ns) ns *= 1000.0;
     // The priors are the largest own errors over the bench corpus, so on this box no GPU plan is
     // predicted under 0.05: the targets are those some GPU plan is predicted to meet.

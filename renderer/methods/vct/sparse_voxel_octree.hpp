@@ -1,8 +1,9 @@
 // The sparse voxel octree of voxel cone tracing (paper §4), built and filled on the GPU.
 //
 // - Grid: leaf voxels (lattice points) `spacing` apart over the scene bounds plus a margin of
-//   2.3 voxels (off the lattice, so no bounding wall lies on a lattice point); the root spans 2^(D+1) lattice intervals, so D follows from the scene extent and the
-//   requested resolution. Nodes exist only where geometry is.
+//   2.3 voxels (off the lattice, so no bounding wall lies on a lattice point); the root spans
+//   2^(D+1) lattice intervals, so D follows from the scene extent and the requested resolution.
+//   Nodes exist only where geometry is.
 // - build(): voxelizes every triangle along its dominant axis into a fragment list (no full-size
 //   grid), subdivides level by level (nodes in 2x2x2 tiles from a preallocated pool, an atomic
 //   counter, the pool grown between levels to what the level flagged), and sums each fragment's
