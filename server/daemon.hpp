@@ -57,6 +57,7 @@ struct DaemonConfig {
     std::chrono::milliseconds ops_timeout{10000};  // to read an ops request and write its answer
     int network_threads = 2;
     int calibration_size = 64;  // the cost model's larger frame, pixels a side (--calibration-size)
+    int calibration_change_frames = 3;  // frames timed per change (--calibration-change-frames)
 };
 
 class Session;

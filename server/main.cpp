@@ -109,6 +109,10 @@ std::vector<Limit> daemon_limits() {
         {"--calibration-size", "pixels a side of the larger frame the device's cost model is measured at, for "
                                "budgets; the smaller is half [64]",
          8, 4096, false, [](auto v, Config& c) { c.calibration_size = static_cast<int>(v); }},
+        {"--calibration-change-frames", "frames the cost model times per change a frame may redo (lights moved or "
+                                        "dimmed, structures rebuilt), the median counting; 0: none, and changes "
+                                        "are priced by the bench's bounds [3]",
+         0, 15, false, [](auto v, Config& c) { c.calibration_change_frames = static_cast<int>(v); }},
         {"--drain-seconds", "on SIGTERM, finish in-flight work for at most N s, then cancel it; a second signal "
                             "exits at once [10]",
          0, 3600, false, [](auto v, Config& c) { c.drain_timeout = std::chrono::seconds(v); }},

@@ -670,6 +670,7 @@ void RequestHandlers::wait_for_calibration(const std::shared_ptr<Request>& reque
         planning::CalibrationSettings settings;
         settings.large_size = daemon_.config().calibration_size;
         settings.small_size = std::max(1, settings.large_size / 2);
+        settings.change_frames = daemon_.config().calibration_change_frames;
         log::info("planner", "calibrating the cost model for '{}' on the Cornell box, a preset at a time",
                   renderer.gpu_info().renderer);
         calibration_ = std::make_unique<planning::Calibration>(renderer, settings);

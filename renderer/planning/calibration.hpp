@@ -1,6 +1,8 @@
 // The device's cost lines (costs.hpp), measured: every GPU method at every preset renders the
 // built-in Cornell box at two sizes, warm (after a frame that builds its structures), and a line
-// goes through the two times, at the presets' own bounce counts. Runs on the render thread, once
+// goes through the two times, at the presets' own bounce counts. At the larger size it then times
+// what changes redo (ChangeCost): frames after the lights' power changed, after they moved, and
+// with the method's structures built anew. Runs on the render thread, once
 // per device, a step at a time (Calibration): the daemon caches the result in its cache folder
 // under the renderer's name.
 #pragma once
@@ -20,6 +22,10 @@ struct CalibrationSettings {
     int small_size = 32;  // the two frame sizes, in pixels per side
     int large_size = 64;
     int timed_frames = 1;  // per size, after one untimed frame; the fastest counts
+    // Frames per change timed (ChangeCost), the median counting; 0: none, and the planner prices
+    // changes by the bench's bound. On llvmpipe they are most of a calibration's time (126 s of
+    // 163 at 32 and 64 pixels, three frames each): what a change redoes does not shrink with the frame.
+    int change_frames = 3;
     std::vector<std::string> methods;  // the GPU methods to measure; empty: every one
 };
 
@@ -38,7 +44,11 @@ public:
     // The measured model; only once done().
     DeviceCosts result() const;
 
+    // Shadow maps' texels a side in frames that time changes (of methods that draw maps).
+    static constexpr int kChangeMapSize = 64;
+
 private:
+    ChangeCost measure_changes(Renderer& renderer, const std::string& method, const std::string& preset, double warm_ms);
     CalibrationSettings settings_;
     std::unique_ptr<scene::Scene> scene_;  // its resources read it every frame: a stable address
     std::unique_ptr<SceneResources> resources_;

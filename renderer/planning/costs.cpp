@@ -29,6 +29,28 @@ CostLine CostLine::through(double pixels_a, double ms_a, double pixels_b, double
     return line;
 }
 
+double ChangeCost::beyond_warm(FrameChange change) const {
+    switch (change) {
+    case FrameChange::none: return 0.0;
+    case FrameChange::light_power: return light_power;
+    case FrameChange::lights: return lights;
+    case FrameChange::objects:
+    case FrameChange::knobs:
+    case FrameChange::knobs_and_scene: return std::max(lights, rebuild);
+    }
+    return std::max(lights, rebuild);
+}
+
+void DeviceCosts::set_change_cost(const std::string& method, const std::string& preset, ChangeCost cost) {
+    changes_[{method, preset}] = cost;
+}
+
+std::optional<ChangeCost> DeviceCosts::change_cost(const std::string& method, const std::string& preset) const {
+    const auto it = changes_.find({method, preset});
+    if (it == changes_.end()) return std::nullopt;
+    return it->second;
+}
+
 void DeviceCosts::set(const std::string& method, const std::string& preset, CostLine line) {
     lines_[{method, preset}] = line;
 }
@@ -45,7 +67,13 @@ json DeviceCosts::to_json() const {
         lines.push_back({{"method", key.first}, {"preset", key.second}, {"fixed_ms", line.fixed_ms},
                          {"per_megapixel_ms", line.per_megapixel_ms}});
     }
-    return {{"version", kVersion}, {"renderer", renderer_}, {"calibration_ms", calibration_ms}, {"lines", lines}};
+    json changes = json::array();
+    for (const auto& [key, change] : changes_) {
+        changes.push_back({{"method", key.first}, {"preset", key.second}, {"pixels", change.pixels},
+                           {"light_power", change.light_power}, {"lights", change.lights}, {"rebuild", change.rebuild}});
+    }
+    return {{"version", kVersion}, {"renderer", renderer_}, {"calibration_ms", calibration_ms}, {"lines", lines},
+            {"changes", changes}};
 }
 
 DeviceCosts DeviceCosts::from_json(const json& document) {
@@ -61,6 +89,15 @@ DeviceCosts DeviceCosts::from_json(const json& document) {
                 throw Error("a cost line is negative or not a number");
             }
             costs.set(line.at("method").get<std::string>(), line.at("preset").get<std::string>(), cost);
+        }
+        for (const json& change : document.value("changes", json::array())) {
+            const ChangeCost cost{change.at("pixels").get<double>(), change.at("light_power").get<double>(),
+                                  change.at("lights").get<double>(), change.at("rebuild").get<double>()};
+            if (!(cost.pixels > 0.0) || !(cost.light_power >= 0.0) || !(cost.lights >= 0.0) || !(cost.rebuild >= 0.0) ||
+                !std::isfinite(cost.light_power + cost.lights + cost.rebuild)) {
+                throw Error("a change cost is negative, not a number, or measured at no size");
+            }
+            costs.set_change_cost(change.at("method").get<std::string>(), change.at("preset").get<std::string>(), cost);
         }
         return costs;
     } catch (const json::exception& error) {

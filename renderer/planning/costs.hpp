@@ -34,10 +34,27 @@ struct CostLine {
     static CostLine through(double pixels_a, double ms_a, double pixels_b, double ms_b);
 };
 
+// What a frame that redoes a change's work (frame_change.hpp) cost on this device beyond a warm
+// frame of its preset at the same size, as a multiple of that warm frame, less the shadow maps it
+// drew: measured by the calibration on its scene. Devices differ most here: on llvmpipe cssm's bake
+// cost under its warm frame at 128x128 (0.38 to 0.87 of it on the bench corpus), on an H200 3.5 to 6
+// times it, where warm frames are cheap and a bake's passes are many. The shadow maps are left out:
+// they follow a scene's triangles and lights, and a scene prices them from its own timings.
+struct ChangeCost {
+    double pixels = 0.0;        // the frame size it was measured at
+    double light_power = 0.0;   // every light dimmed: no map
+    double lights = 0.0;        // every light moved
+    double rebuild = 0.0;       // the method's structures built anew after the lights moved (knobs_and_scene)
+    // The multiple for `change`: a moved object and other knobs as a rebuild, which redoes the lights'
+    // work too (never priced under it); 0 for none.
+    double beyond_warm(FrameChange change) const;
+};
+
 class DeviceCosts {
 public:
     // Bumped whenever methods change what a preset costs: cached models of older versions are dropped.
-    static constexpr int kVersion = 3;
+    // 4: change costs.
+    static constexpr int kVersion = 4;
 
     DeviceCosts() = default;
     explicit DeviceCosts(std::string renderer) : renderer_(std::move(renderer)) {}
@@ -48,6 +65,9 @@ public:
     void set(const std::string& method, const std::string& preset, CostLine line);
     std::optional<CostLine> line(const std::string& method, const std::string& preset) const;
     bool empty() const { return lines_.empty(); }
+    void set_change_cost(const std::string& method, const std::string& preset, ChangeCost cost);
+    // nullopt for a model that did not measure it (a made-up one, or a method left out).
+    std::optional<ChangeCost> change_cost(const std::string& method, const std::string& preset) const;
 
     nlohmann::json to_json() const;
     // Throws Error naming what is wrong with the document.
@@ -63,6 +83,7 @@ public:
 private:
     std::string renderer_;
     std::map<std::pair<std::string, std::string>, CostLine> lines_;
+    std::map<std::pair<std::string, std::string>, ChangeCost> changes_;
 };
 
 // What frames of one scene measured: their times, against what the device's lines predicted and at

@@ -137,10 +137,13 @@ Plan plan(const PlanningInputs& inputs, const Budget& budget);
 // over every method, else 1); for the reference, the analysis' time to build the tracer and per
 // sample times the samples. For a GPU plan whose frame would redo work (PlanningInputs::change), plus
 // that work: what this scene's frames that redid the same measured beyond a warm frame's price at
-// their size (the median of the last), else the scene's timing of its shadow maps at the plan's map
-// size plus change_cost_bound(besides_maps) times the plan's warm frame at kChangePriorPixels, else
-// change_cost_bound() times that frame. The work is the scene's (shadow maps, an atlas, an octree),
-// not the frame's pixels: a smaller frame redoes as much.
+// their size (the median of the last); else the scene's timing of its shadow maps at the plan's map
+// size (none for light_power) plus the rest: where the device's calibration measured the change
+// (DeviceCosts::change_cost), its multiple of the plan's warm frame at the size it was measured at
+// plus change_margin() times that frame at kChangePriorPixels; else change_cost_bound(besides_maps)
+// times the frame at kChangePriorPixels. With no timing of the maps, change_cost_bound() times that
+// frame. The work is the scene's (shadow maps, an atlas, an octree), not the frame's pixels: a
+// smaller frame redoes as much.
 double predicted_ms(const PlanningInputs& inputs, const std::string& method, const std::string& preset,
                     const methods::KnobValues& knobs, std::string* basis = nullptr);
 
@@ -164,6 +167,10 @@ double bounce_cost_bound(const std::string& method, const std::string& preset, i
 // the scene's triangles and lights, not the warm frame's pixels. 0 for FrameChange::none and for
 // methods the bench has no figure of.
 inline constexpr double kChangePriorPixels = 128.0 * 128.0;
+// What a device's calibrated figure for a change fell short of the bench corpus's frames, at most, in
+// warm frames at kChangePriorPixels (bench/change_margins.py): added to it, since the calibration
+// scene is the lightest. 0 for none and for methods without a figure.
+double change_margin(const std::string& method, FrameChange change);
 double change_cost_bound(const std::string& method, const std::string& preset, FrameChange change,
                          bool besides_maps = false);
 

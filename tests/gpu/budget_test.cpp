@@ -201,12 +201,14 @@ TEST(Budgets, ACalibrationMeasuresOnePresetAStep) {
 }
 
 // Calibration measures a line per preset (two methods here, at small sizes, to keep the test short)
-// and caches it under the renderer's name: the second call reads the file instead of measuring.
+// and what changes redo, and caches both under the renderer's name: the second call reads the file
+// instead of measuring.
 TEST(Budgets, CalibrationMeasuresEveryPresetAndIsCachedForTheDevice) {
     const auto dir = std::filesystem::temp_directory_path() / ("bounce-calibration-" + std::to_string(::getpid()));
     planning::CalibrationSettings settings;
     settings.small_size = 8;
     settings.large_size = 16;
+    settings.change_frames = 1;
     settings.methods = {"direct", "vct"};
     const planning::DeviceCosts measured = planning::load_or_calibrate(shared_renderer(), dir, settings);
     EXPECT_EQ(measured.renderer(), shared_renderer().gpu_info().renderer);
@@ -215,6 +217,13 @@ TEST(Budgets, CalibrationMeasuresEveryPresetAndIsCachedForTheDevice) {
             const auto line = measured.line(method, preset);
             ASSERT_TRUE(line) << method << " " << preset;
             EXPECT_GT(line->at(16 * 16), 0.0) << method << " " << preset;  // a frame takes time
+            // What changes redo, timed at the larger size.
+            const auto change = measured.change_cost(method, preset);
+            ASSERT_TRUE(change) << method << " " << preset;
+            EXPECT_DOUBLE_EQ(change->pixels, 16.0 * 16.0);
+            for (const double multiple : {change->light_power, change->lights, change->rebuild}) {
+                EXPECT_TRUE(std::isfinite(multiple) && multiple >= 0.0) << method << " " << preset << ": " << multiple;
+            }
         }
     }
     EXPECT_FALSE(measured.line("cssm", "medium"));  // not asked for
@@ -222,6 +231,7 @@ TEST(Budgets, CalibrationMeasuresEveryPresetAndIsCachedForTheDevice) {
     const planning::DeviceCosts cached = planning::load_or_calibrate(shared_renderer(), dir, settings);
     EXPECT_DOUBLE_EQ(cached.calibration_ms, measured.calibration_ms);
     EXPECT_DOUBLE_EQ(cached.line("vct", "high")->fixed_ms, measured.line("vct", "high")->fixed_ms);
+    EXPECT_DOUBLE_EQ(cached.change_cost("vct", "high")->rebuild, measured.change_cost("vct", "high")->rebuild);
     std::filesystem::remove_all(dir);
 }
 

@@ -273,7 +273,7 @@ TEST(Budget, AFrameRenderedSmallerIsUpsampledToTheSizeAskedFor) {
 // mid-calibration says how far it is), and the model is saved in the cache folder.
 TEST(Budget, TheFirstBudgetCalibratesAPresetAtATimeWhileOthersAreServed) {
     const auto cache = std::filesystem::temp_directory_path() / ("bounce-calibrate-" + std::to_string(::getpid()));
-    DaemonProcess daemon{{"--cache-dir", cache.string(), "--calibration-size", "16"}};
+    DaemonProcess daemon{{"--cache-dir", cache.string(), "--calibration-size", "16", "--calibration-change-frames", "1"}};
     Client a(daemon.endpoint()), b(daemon.endpoint());
     EXPECT_EQ(b.request(MessageType::stats, json::object()).body["planner"]["cost_model"], "none");
     a.send_raw(frame_bytes(MessageType::render, 1,
@@ -295,7 +295,13 @@ TEST(Budget, TheFirstBudgetCalibratesAPresetAtATimeWhileOthersAreServed) {
     EXPECT_GE(progress, 20);  // one a step: 4 GPU methods x 5 presets
     EXPECT_EQ(b.request(MessageType::stats, json::object()).body["planner"]["cost_model"], "ready");
     const std::string renderer = b.hello()["renderer"].get<std::string>();
-    EXPECT_TRUE(planning::DeviceCosts::load(planning::DeviceCosts::cache_path(cache, renderer), renderer).has_value());
+    const auto saved = planning::DeviceCosts::load(planning::DeviceCosts::cache_path(cache, renderer), renderer);
+    ASSERT_TRUE(saved.has_value());
+    for (const char* method : {"direct", "vct", "isr", "cssm"}) {
+        const auto change = saved->change_cost(method, "low");  // what changes redo, timed at 16x16
+        ASSERT_TRUE(change) << method;
+        EXPECT_DOUBLE_EQ(change->pixels, 16.0 * 16.0) << method;
+    }
     std::filesystem::remove_all(cache);
 }
 

@@ -563,6 +563,58 @@ TEST(Planner, ShadowMapsArePricedFromTheScenesOwnTimingsOfThem) {
     EXPECT_NE(basis.find("colour or intensity"), std::string::npos) << basis;
 }
 
+// A device whose calibration timed frames after changes prices what a frame redoes from those
+// figures, as a multiple of the plan's warm frame at the size they were measured at, plus the
+// scene's own shadow maps; without the scene's maps it keeps the bench's bound, which holds them.
+TEST(Planner, ChangesArePricedFromTheDevicesCalibrationOfThem) {
+    const SceneAnalysis analysis = made_up_analysis();
+    DeviceCosts device("test");
+    device.set("cssm", "low", {2.0, 1.0e3});  // 2 ms + 1 ms per thousand pixels
+    device.set_change_cost("cssm", "low", {64.0 * 64.0, 0.25, 0.5, 6.0});
+    SceneMeasurements scene;
+    PlanningInputs inputs{analysis, device, &scene, 128, 128, std::nullopt};
+    FrameChange now = FrameChange::light_power;
+    inputs.change = [&](const std::string&, const std::string&, const methods::KnobValues&) { return now; };
+    const double warm_128 = 2.0 + 16.384, warm_64 = 2.0 + 4.096;
+    const auto margin = [&](FrameChange change) { return change_margin("cssm", change) * warm_128; };
+    std::string basis;
+    // A light dimmed draws no map: the device's figure at its size, and the margin for a heavier scene.
+    EXPECT_DOUBLE_EQ(predicted_ms(inputs, "cssm", "low", {}, &basis), warm_128 + 0.25 * warm_64 + margin(now));
+    EXPECT_NE(basis.find("as the device's calibration measured"), std::string::npos) << basis;
+    EXPECT_GT(change_margin("cssm", FrameChange::light_power), 0.0);
+    // The lights moved, before the scene timed its maps: the bench's bound, maps and all.
+    now = FrameChange::lights;
+    EXPECT_DOUBLE_EQ(predicted_ms(inputs, "cssm", "low", {}, &basis),
+                     warm_128 + change_cost_bound("cssm", "low", FrameChange::lights) * warm_128);
+    EXPECT_NE(basis.find("the most the bench measured"), std::string::npos) << basis;
+    const int map_size = static_cast<int>(methods::MethodRegistry::builtin().resolve("cssm", "low", {}).at("shadow_map_size"));
+    scene.record_shadow_maps(map_size, 30.0);
+    EXPECT_DOUBLE_EQ(predicted_ms(inputs, "cssm", "low", {}, &basis), warm_128 + 30.0 + 0.5 * warm_64 + margin(now));
+    EXPECT_NE(basis.find("as the device's calibration measured"), std::string::npos) << basis;
+    // A switch of knobs, or a moved object, rebuilds: its own figure, never under the lights'.
+    for (const FrameChange change : {FrameChange::knobs, FrameChange::knobs_and_scene, FrameChange::objects}) {
+        now = change;
+        EXPECT_DOUBLE_EQ(predicted_ms(inputs, "cssm", "low", {}), warm_128 + 30.0 + 6.0 * warm_64 + margin(change))
+            << to_string(change);
+        EXPECT_GE(change_margin("cssm", change), change_margin("cssm", FrameChange::lights));
+    }
+    device.set_change_cost("cssm", "low", {64.0 * 64.0, 0.25, 0.5, 0.1});
+    EXPECT_DOUBLE_EQ(predicted_ms(inputs, "cssm", "low", {}), warm_128 + 30.0 + 0.5 * warm_64 + margin(now));
+    // Frames of the change measured on the scene take over from the device's figure.
+    scene.record("cssm", "low", 1, warm_128 + 7.0, warm_128, 128.0 * 128.0, FrameChange::objects);
+    EXPECT_NEAR(predicted_ms(inputs, "cssm", "low", {}, &basis), warm_128 + 7.0, 1e-9);
+    EXPECT_NE(basis.find("as 1 such frame"), std::string::npos) << basis;
+    // Kept with the model, and refused when it makes no sense.
+    const DeviceCosts read = DeviceCosts::from_json(device.to_json());
+    ASSERT_TRUE(read.change_cost("cssm", "low"));
+    EXPECT_DOUBLE_EQ(read.change_cost("cssm", "low")->lights, 0.5);
+    EXPECT_DOUBLE_EQ(read.change_cost("cssm", "low")->pixels, 64.0 * 64.0);
+    EXPECT_FALSE(read.change_cost("cssm", "draft"));
+    nlohmann::json broken = device.to_json();
+    broken["changes"][0]["rebuild"] = -1.0;
+    EXPECT_THROW(DeviceCosts::from_json(broken), Error);
+}
+
 // Under a time budget, a plan that fits warm but not with what it would redo gives way to one that
 // fits as it would render now, and the plan says what its frame redoes.
 TEST(Planner, ATimeBudgetCountsWhatTheFrameWouldRedo) {

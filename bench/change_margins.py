@@ -1,0 +1,59 @@
+#!/usr/bin/python3
+"""How far the device's calibration of what changes redo (ChangeCost, measured on the Cornell box)
+fell short of what the bench corpus's frames redid, per method and change: the margin the planner
+adds, in warm frames at 128x128 of the scene (planner.cpp, kChangeMargin).
+
+    bench/change_margins.py FRAME_CHANGES_CSV COST_MODEL_JSON
+
+FRAME_CHANGES_CSV is bench/frame_changes.py's output (every corpus scene, method and preset, one row
+a run); COST_MODEL_JSON the cost model calibrated on the same machine (the daemon's or the bench's
+cache folder, cost-model/). Each row's time beyond its warm frame, less its shadow maps (a scene
+prices those from its own timings), is set against the calibration's multiple times the scene's warm
+frame at the calibration's size (the warm frame at 128x128 scaled by the device's line between the
+two sizes). Preset switches leave out draft, whose first frame in the bench also compiled its
+method's shaders, which a daemon does once."""
+import csv
+import json
+import math
+import sys
+from collections import defaultdict
+
+
+def main(frame_changes: str, cost_model: str) -> None:
+    model = json.load(open(cost_model))
+    lines = {(l["method"], l["preset"]): l for l in model["lines"]}
+    changes = {(c["method"], c["preset"]): c for c in model["changes"]}
+    at = lambda line, pixels: line["fixed_ms"] + line["per_megapixel_ms"] * pixels * 1e-6
+    short = defaultdict(list)  # (method, change) -> (shortfall in warm frames, preset, scene, run)
+    for r in csv.DictReader(open(frame_changes)):
+        key = (r["method"], r["preset"])
+        line, cost = lines[key], changes[key]
+        warm = float(r["warm_ms"])
+        warm_there = warm * at(line, cost["pixels"]) / at(line, 128 * 128)
+        measured = {"lights": float(r["relit_ms"]) - float(r["relit_shadow_ms"]) - warm,
+                    "knobs": float(r["cold_ms"]) - float(r["cold_shadow_ms"]) - warm}
+        predicted = {"lights": cost["lights"], "knobs": max(cost["lights"], cost["rebuild"])}
+        if r["dimmed_ms"]:
+            measured["light_power"] = float(r["dimmed_ms"]) - warm
+            predicted["light_power"] = cost["light_power"]
+        for change, ms in measured.items():
+            if change == "knobs" and r["preset"] == "draft":
+                continue
+            short[(r["method"], change)].append(((max(0.0, ms) - predicted[change] * warm_there) / warm,
+                                                 r["preset"], r["scene"], r["run"]))
+    print("largest shortfall, in warm frames at 128x128 (preset, scene, run); then the table, rounded up to 0.1")
+    margins = defaultdict(dict)
+    for (method, change), rows in sorted(short.items()):
+        worst = max(rows)
+        print(f"  {method:7} {change:12} {worst[0]:6.2f}  ({worst[1]}, {worst[2]}, run {worst[3]})")
+        margins[method][change] = max(0.0, math.ceil(worst[0] * 10 - 1e-9) / 10)
+    for method, m in margins.items():
+        # A switch redoes the lights' work too: never under their margin.
+        knobs = max(m.get("knobs", 0.0), m.get("lights", 0.0))
+        print(f'    {{"{method}", {m.get("lights", 0.0):.1f}, {knobs:.1f}, {m.get("light_power", 0.0):.1f}}},')
+
+
+if __name__ == "__main__":
+    if len(sys.argv) != 3:
+        sys.exit("usage: bench/change_margins.py FRAME_CHANGES_CSV COST_MODEL_JSON")
+    main(sys.argv[1], sys.argv[2])
