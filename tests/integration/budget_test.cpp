@@ -37,6 +37,9 @@ struct BudgetDaemon {
             costs.set("vct", preset, line(50.0));
             costs.set("isr", preset, line(80.0));
             costs.set("cssm", preset, line(std::string(preset) == "high" ? cssm_high_ms : 100.0));
+            for (const char* method : {"direct", "vct", "isr", "cssm"}) {
+                costs.set_change_cost(method, preset, {64.0 * 64.0, 0.5, 1.0, 2.0});  // as if calibrated
+            }
         }
         costs.save(planning::DeviceCosts::cache_path(cache, costs.renderer()));
     }
@@ -321,7 +324,8 @@ TEST(Budget, ThePlanReadsAnAnalysisOfTheCurrentLights) {
 
 // A method keeps its structures between frames: a plan says what its frame would redo and is priced
 // with it, and the frame says what it redid. After a light is dimmed, both say `light_power`; after
-// it moves, `lights`; the next frame redoes nothing.
+// it moves, `lights`; the next frame redoes nothing. The price is the device's calibration of such
+// frames, with the scene's own timing of its shadow maps once a frame measured here drew them.
 TEST(Budget, AFrameAfterALightChangeSaysWhatItRedoesAndIsPricedWithIt) {
     BudgetDaemon d;
     const json budget = {{"method", "vct"}, {"budget", {{"max_ms", 1.0e5}}}};
@@ -339,14 +343,28 @@ TEST(Budget, AFrameAfterALightChangeSaysWhatItRedoesAndIsPricedWithIt) {
               warm.body["method_stats"]["light_injections"].get<double>() + 1.0);
     EXPECT_NE(relit.body["plan"]["why"].get<std::string>().find("colour or intensity changed"), std::string::npos)
         << relit.body["plan"].dump();
+    EXPECT_NE(relit.body["plan"]["why"].get<std::string>().find("as the device's calibration measured"), std::string::npos)
+        << relit.body["plan"].dump();
     // Moved, the light's shadow maps are redrawn too.
     d.client.request(MessageType::light_set, {{"scene", "cornell"}, {"light", "ceiling_light"}, {"position", {0.27, 0.44, 0.28}}});
     const auto moved = d.render(budget);
     EXPECT_EQ(moved.body["plan"]["redoes"], "lights") << moved.body["plan"].dump();
     EXPECT_EQ(moved.body["redid"], "lights");
     EXPECT_TRUE(moved.body["timings_ms"]["passes"].contains("shadow_maps"));
+    // No frame measured here had drawn maps (the first did so measuring what upsampling loses): the
+    // bench's bound on all of it.
+    const std::string moved_why = moved.body["plan"]["why"].get<std::string>();
+    EXPECT_NE(moved_why.find("the most the bench measured"), std::string::npos) << moved_why;
     const auto after = d.render(budget);
     EXPECT_EQ(after.body["redid"], "none");
+    // Now that a frame drew them, a switch is priced with the maps as the scene's frames drew them,
+    // and the rest as the device's calibration measured it.
+    d.client.request(MessageType::light_set, {{"scene", "cornell"}, {"light", "ceiling_light"}, {"position", {0.27, 0.44, 0.29}}});
+    const auto switched = d.render({{"method", "isr"}, {"budget", {{"max_ms", 1.0e5}}}});
+    EXPECT_EQ(switched.body["plan"]["redoes"], "knobs_and_scene") << switched.body["plan"].dump();
+    const std::string switched_why = switched.body["plan"]["why"].get<std::string>();
+    EXPECT_NE(switched_why.find("of shadow maps as this scene's frames drew them"), std::string::npos) << switched_why;
+    EXPECT_NE(switched_why.find("as the device's calibration measured"), std::string::npos) << switched_why;
 }
 
 TEST(Budget, MalformedBudgetsAreRefusedNamingTheField) {
