@@ -5,6 +5,7 @@
 //
 //   none:     nothing: a warm frame, as the bench measures methods;
 //   light_power: a light's colour or intensity alone: what its power feeds (vct's injected light,
+//             which it scales where every light's power changed by one factor and no surface emits;
 //             cssm's atlas solve, isr's light views and VPL tree), not the shadow maps, which hold
 //             depths (passes::shadow_map_fingerprint);
 //   lights:   a light moved, turned, reshaped or was added or removed: that, and the shadow maps;

@@ -339,8 +339,11 @@ TEST(Budget, AFrameAfterALightChangeSaysWhatItRedoesAndIsPricedWithIt) {
     const auto relit = d.render(budget);
     EXPECT_EQ(relit.body["plan"]["redoes"], "light_power") << relit.body["plan"].dump();
     EXPECT_EQ(relit.body["redid"], "light_power");
-    EXPECT_EQ(relit.body["method_stats"]["light_injections"].get<double>(),
-              warm.body["method_stats"]["light_injections"].get<double>() + 1.0);
+    // The box's one lamp dimmed: vct scales the light it injected (docs/methods.md, vct).
+    EXPECT_EQ(relit.body["method_stats"]["light_updates"].get<double>(),
+              warm.body["method_stats"]["light_updates"].get<double>() + 1.0);
+    EXPECT_EQ(relit.body["method_stats"]["light_rescales"].get<double>(),
+              warm.body["method_stats"]["light_rescales"].get<double>() + 1.0);
     EXPECT_NE(relit.body["plan"]["why"].get<std::string>().find("colour or intensity changed"), std::string::npos)
         << relit.body["plan"].dump();
     EXPECT_NE(relit.body["plan"]["why"].get<std::string>().find("as the device's calibration measured"), std::string::npos)

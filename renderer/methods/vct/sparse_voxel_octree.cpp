@@ -384,6 +384,13 @@ void SparseVoxelOctree::inject(const passes::PassContext& context, const passes:
     bounces_ = 2;
 }
 
+void SparseVoxelOctree::scale_light(float factor) {
+    BOUNCE_CHECK(factor > 0.0f && std::isfinite(factor), "vct: light scaled by {}", factor);
+    if (!(counts_.max_radiance > 0.0f) || !std::isfinite(counts_.max_radiance)) return;  // nothing injected lit a voxel
+    counts_.max_radiance *= factor;
+    radiance_scale_ = 1.0f / counts_.max_radiance;
+}
+
 void SparseVoxelOctree::resolve_and_mipmap(const passes::PassContext& context) {
     const bool anisotropic = anisotropic_;
     const gpu::CounterValues counters = counters_.read();

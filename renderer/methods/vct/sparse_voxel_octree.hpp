@@ -84,6 +84,13 @@ public:
     // mipmaps are rebuilt, so a gather from the octree sees two bounces.
     void inject(const passes::PassContext& context, const passes::LightViewMaps& maps, bool anisotropic,
                 const ConeSettings* second_bounce);
+    // Every light's power scaled by `factor` (> 0) since the last injection, and nothing else changed
+    // (no surface emits: emission does not scale with the lights): light transport is linear in the
+    // lights' power, so the injected radiance and the bounce gathered from it scale by the factor too.
+    // The pool stores radiance relative to the brightest voxel, so only that scale changes: the
+    // same octree, to the last bit, as an injection at the new power would make up to the order its
+    // float atomics add in.
+    void scale_light(float factor);
     int bounces() const { return bounces_; }
     bool anisotropic() const { return anisotropic_; }
     bool built() const { return built_; }

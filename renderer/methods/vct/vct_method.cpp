@@ -75,14 +75,25 @@ public:
         const bool has_geometry = !frame.scene.world_bounds().empty();
         if (!has_geometry) return;
 
-        const bool rebuilt = update_octree(frame);
+        if (update_octree(frame)) lit_ = false;
         const bool maps_drawn = light_views_.render(frame, frame.knob_int("light_view_size"));
         const bool anisotropic = frame.knob_int("anisotropic") != 0;
         const int bounces = frame.knob_int("bounces");
-        if (rebuilt || maps_drawn || anisotropic != octree_.anisotropic() || bounces != octree_.bounces()) {
-            const ConeSettings cones = cone_settings(frame);
-            octree_.inject(frame, light_views_, anisotropic, bounces >= 2 ? &cones : nullptr);
-            ++injections_;
+        if (!lit_ || maps_drawn || anisotropic != octree_.anisotropic() || bounces != octree_.bounces()) {
+            const std::optional<float> scaled =
+                lit_ && anisotropic == octree_.anisotropic() && bounces == octree_.bounces() && !emits(frame.scene)
+                    ? common_power_scale(injected_lights_, frame.scene.lights)
+                    : std::nullopt;
+            if (scaled) {
+                octree_.scale_light(*scaled);
+                ++light_rescales_;
+            } else {
+                const ConeSettings cones = cone_settings(frame);
+                octree_.inject(frame, light_views_, anisotropic, bounces >= 2 ? &cones : nullptr);
+                ++injections_;
+            }
+            injected_lights_ = frame.scene.lights;
+            lit_ = true;
         }
         trace(frame, ambient_occlusion);
     }
@@ -91,7 +102,7 @@ public:
     // next frame injects it (what a change of the lights redoes) instead of voxelizing too.
     bool prepare(const FrameContext& frame) override {
         if (frame.scene.world_bounds().empty()) return false;
-        update_octree(frame);
+        if (update_octree(frame)) lit_ = false;
         return true;
     }
 
@@ -123,6 +134,8 @@ public:
                 {"dynamic_objects", static_cast<double>(std::count(dynamic_.begin(), dynamic_.end(), true))},
                 {"octree_dynamic_nodes", static_cast<double>(counts.dynamic_nodes)},
                 {"light_injections", static_cast<double>(injections_)},
+                {"light_rescales", static_cast<double>(light_rescales_)},
+                {"light_updates", static_cast<double>(injections_ + light_rescales_)},
                 {"octree_levels", static_cast<double>(octree_.grid().leaf_level + 1)},
                 {"dense", octree_.dense() ? 1.0 : 0.0},
                 {"octree_nodes", static_cast<double>(counts.nodes)},
@@ -199,6 +212,44 @@ private:
         return settings;
     }
 
+    // Whether any surface emits: its emission is in the octree's radiance, and does not scale with
+    // the lights.
+    static bool emits(const scene::Scene& scene) {
+        return std::any_of(scene.materials.begin(), scene.materials.end(),
+                           [](const scene::Material& material) { return material.emissive != glm::vec3(0.0f); });
+    }
+
+    // The one factor by which every light's power (colour times intensity, each channel) changed from
+    // `before` to `now`, where nothing else of any light did; nullopt otherwise, or where the factor
+    // is not positive and finite (a light turned off changes which views have photons).
+    static std::optional<float> common_power_scale(const std::vector<scene::Light>& before,
+                                                   const std::vector<scene::Light>& now) {
+        if (before.size() != now.size() || before.empty()) return std::nullopt;
+        std::optional<double> factor;
+        for (std::size_t i = 0; i < now.size(); ++i) {
+            const scene::Light& a = before[i];
+            const scene::Light& b = now[i];
+            if (a.type != b.type || a.position != b.position || a.direction != b.direction ||
+                a.inner_cone != b.inner_cone || a.outer_cone != b.outer_cone) {
+                return std::nullopt;
+            }
+            const glm::vec3 from = a.radiant(), to = b.radiant();
+            for (int c = 0; c < 3; ++c) {
+                if (from[c] == 0.0f) {
+                    if (to[c] != 0.0f) return std::nullopt;
+                    continue;
+                }
+                const double channel = static_cast<double>(to[c]) / static_cast<double>(from[c]);
+                if (!factor) factor = channel;
+                // Equal to float precision: colours given as numbers may round apart.
+                if (std::abs(channel - *factor) > 1e-6 * std::abs(*factor)) return std::nullopt;
+            }
+        }
+        // A factor of 1: the lights' power did not change, so something else did (the views' size).
+        if (!factor || *factor == 1.0 || !(*factor > 0.0) || !std::isfinite(*factor)) return std::nullopt;
+        return static_cast<float>(*factor);
+    }
+
     void trace(const FrameContext& frame, bool ambient_occlusion) {
         gpu::GpuTimers::Scope timing(frame.timers, "vct_cone_trace");
         std::vector<std::string> defines = octree_.program_defines();
@@ -239,6 +290,9 @@ private:
     std::size_t static_builds_ = 0;
     std::size_t dynamic_updates_ = 0;
     std::size_t injections_ = 0;
+    std::size_t light_rescales_ = 0;       // frames that scaled the injected light instead (scale_light)
+    bool lit_ = false;                     // the octree holds the light of injected_lights_
+    std::vector<scene::Light> injected_lights_;
 };
 
 }  // namespace
