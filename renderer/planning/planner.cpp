@@ -269,8 +269,9 @@ PlanningInputs at_pixels(const PlanningInputs& inputs, double pixels) {
     return sized;
 }
 
-// The most a frame that redid a change's work cost beyond a warm frame of its preset, as a multiple
-// of that warm frame, at 128x128 on the bench corpus, the largest over two runs (bench/quality
+// Where the device's calibration has no figure of a change (DeviceCosts::change_cost): the most a
+// frame that redid a change's work cost beyond a warm frame of its preset, as a multiple
+// of that warm frame, at 128x128 on the bench corpus on llvmpipe, the largest over two runs (bench/quality
 // --corpus, every light changed: relit_ms and cold_ms against wall_ms; dimmed_ms in the second;
 // bench/results/corpus/frame_changes.csv, bench/frame_changes.py): in all, and less
 // the shadow maps the frame drew (relit_shadow_ms, cold_shadow_ms), which a scene prices from its
