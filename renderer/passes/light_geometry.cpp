@@ -47,14 +47,18 @@ std::uint64_t geometry_fingerprint(const scene::Scene& scene) {
     return hash.value();
 }
 
-std::uint64_t light_view_fingerprint(const scene::Scene& scene, int size) {
+std::uint64_t light_view_fingerprint(const scene::Scene& scene, int size, bool with_power) {
     Hasher hash;
     hash.add(size);
     for (const scene::Light& light : scene.lights) {
         hash.add(light.type);
         hash.add(light.position);
         hash.add(light.direction);
-        hash.add(light.radiant());  // power 0 <-> > 0 decides whether a map exists
+        if (with_power) {
+            hash.add(light.radiant());
+        } else {
+            hash.add(has_power(light));  // power 0 <-> > 0 decides whether a map exists
+        }
         hash.add(light.inner_cone);
         hash.add(light.outer_cone);
     }

@@ -3,7 +3,8 @@
 // position, normal and diffuse albedo of the surface the light reaches first. Every texel is a
 // photon: `photon_flux` in shaders/common/light_view.glsl gives the flux it carries. Views whose
 // frustum misses the scene's bounds (cube faces looking out of a room's corner) are not drawn. Maps are kept while the
-// lights, the object transforms and the size stay the same.
+// lights, the object transforms and the size stay the same (a light's power aside, where the user
+// asks: the maps hold none).
 #pragma once
 
 #include "renderer/passes/pass_context.hpp"
@@ -26,6 +27,11 @@ public:
         float texel_measure = 0.0f;
     };
 
+    // `drawn_again_when_power_changes`: a light's colour or intensity alone redraws the maps too, for
+    // a user that takes their redrawing as the sign that the light changed (isr's VPL tree); vct
+    // compares the lights itself.
+    explicit LightViewMaps(bool drawn_again_when_power_changes = true) : with_power_(drawn_again_when_power_changes) {}
+
     // Draws the maps when anything they depend on changed; returns true when it drew.
     bool render(const PassContext& context, int size);
     const std::vector<View>& views() const { return views_; }
@@ -47,6 +53,7 @@ private:
     int size_ = 0;
     gpu::Texture position_, normal_, albedo_, depth_;
     gpu::Framebuffer framebuffer_;
+    bool with_power_ = true;
     std::uint64_t fingerprint_ = 0;
     std::size_t frames_drawn_ = 0;
     std::size_t views_culled_ = 0;

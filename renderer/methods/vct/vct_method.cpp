@@ -79,7 +79,8 @@ public:
         const bool maps_drawn = light_views_.render(frame, frame.knob_int("light_view_size"));
         const bool anisotropic = frame.knob_int("anisotropic") != 0;
         const int bounces = frame.knob_int("bounces");
-        if (!lit_ || maps_drawn || anisotropic != octree_.anisotropic() || bounces != octree_.bounces()) {
+        if (!lit_ || maps_drawn || !same_lights(injected_lights_, frame.scene.lights) ||
+            anisotropic != octree_.anisotropic() || bounces != octree_.bounces()) {
             const std::optional<float> scaled =
                 lit_ && anisotropic == octree_.anisotropic() && bounces == octree_.bounces() && !emits(frame.scene)
                     ? common_power_scale(injected_lights_, frame.scene.lights)
@@ -219,6 +220,16 @@ private:
                            [](const scene::Material& material) { return material.emissive != glm::vec3(0.0f); });
     }
 
+    // Whether every light is as it was, its power included (the light-view maps are not drawn again
+    // for a change of power alone: they hold none).
+    static bool same_lights(const std::vector<scene::Light>& before, const std::vector<scene::Light>& now) {
+        return before.size() == now.size() &&
+               std::equal(before.begin(), before.end(), now.begin(), [](const scene::Light& a, const scene::Light& b) {
+                   return a.type == b.type && a.position == b.position && a.direction == b.direction &&
+                          a.inner_cone == b.inner_cone && a.outer_cone == b.outer_cone && a.radiant() == b.radiant();
+               });
+    }
+
     // The one factor by which every light's power (colour times intensity, each channel) changed from
     // `before` to `now`, where nothing else of any light did; nullopt otherwise, or where the factor
     // is not positive and finite (a light turned off changes which views have photons).
@@ -280,7 +291,7 @@ private:
     passes::GBufferPass gbuffer_;
     passes::ShadowMaps shadows_;
     passes::DirectLightPass direct_light_;
-    passes::LightViewMaps light_views_;
+    passes::LightViewMaps light_views_{false};  // a change of power is seen by same_lights()
     SparseVoxelOctree octree_;
     passes::FullscreenTriangle triangle_;
     int resolution_ = 0;
