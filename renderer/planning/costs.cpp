@@ -45,10 +45,18 @@ void DeviceCosts::set_change_cost(const std::string& method, const std::string& 
     changes_[{method, preset}] = cost;
 }
 
-std::optional<ChangeCost> DeviceCosts::change_cost(const std::string& method, const std::string& preset) const {
-    const auto it = changes_.find({method, preset});
-    if (it == changes_.end()) return std::nullopt;
+namespace {
+template <typename Value>
+std::optional<Value> find_preset(const std::map<std::pair<std::string, std::string>, Value>& by_preset,
+                                 const std::string& method, const std::string& preset) {
+    const auto it = by_preset.find({method, preset});
+    if (it == by_preset.end()) return std::nullopt;
     return it->second;
+}
+}  // namespace
+
+std::optional<ChangeCost> DeviceCosts::change_cost(const std::string& method, const std::string& preset) const {
+    return find_preset(changes_, method, preset);
 }
 
 void DeviceCosts::set(const std::string& method, const std::string& preset, CostLine line) {
@@ -56,9 +64,7 @@ void DeviceCosts::set(const std::string& method, const std::string& preset, Cost
 }
 
 std::optional<CostLine> DeviceCosts::line(const std::string& method, const std::string& preset) const {
-    const auto it = lines_.find({method, preset});
-    if (it == lines_.end()) return std::nullopt;
-    return it->second;
+    return find_preset(lines_, method, preset);
 }
 
 json DeviceCosts::to_json() const {

@@ -6,6 +6,7 @@
 #include "renderer/methods/vct/vct_method.hpp"
 #include "renderer/methods/reference/path_tracer.hpp"
 #include "renderer/scene/builtin.hpp"
+#include "renderer/scene/gltf_import.hpp"
 #include "renderer/gpu/shader_program.hpp"
 
 #include "vct/vct_layout.h"
@@ -276,6 +277,18 @@ TEST(Vct, ALightDimmedScalesTheInjectedLightAndOtherLightChangesReinjectIt) {
     EXPECT_EQ(count(moved, "light_injections"), 3.0);
     EXPECT_EQ(count(moved, "light_rescales"), 2.0);
 
+    // At the extremes the stability tests ask of a frame, a million times brighter and a millionth:
+    // scaled, as injected afresh there.
+    for (const float extreme : {1e6f, 1e-12f}) {
+        scene.lights[0].intensity *= extreme;
+        const auto scaled = shared_renderer().render(*resources, request);
+        EXPECT_EQ(count(scaled, "light_injections"), 3.0) << extreme;
+        EXPECT_EQ(scaled.frame.non_finite_count(), 0u) << extreme;
+        const double difference = largest_relative_difference(scaled.frame, render_scene(scene, request).frame);
+        std::printf("intensity x%g: largest relative difference from a frame injected afresh %.3g\n", extreme, difference);
+        EXPECT_LE(difference, levels / 1024.0) << extreme;
+    }
+
     scene::Scene glowing = scene::make_cornell_box();
     glowing.materials[0].emissive = glm::vec3(0.05f);
     auto glowing_resources = shared_renderer().upload(glowing);
@@ -284,6 +297,28 @@ TEST(Vct, ALightDimmedScalesTheInjectedLightAndOtherLightChangesReinjectIt) {
     const auto glowing_dimmed = shared_renderer().render(*glowing_resources, request);
     EXPECT_EQ(count(glowing_dimmed, "light_injections"), 2.0);
     EXPECT_EQ(count(glowing_dimmed, "light_rescales"), 0.0);
+}
+
+// The same on a file as a CAD exporter writes it (assimp's sample 2CylinderEngine: 67 nodes, 65 of
+// them rotated, no light of its own; a sun is added): the sun halved is scaled, and matches a frame
+// injected afresh within a code per octree level.
+TEST(Vct, ASunHalvedOverARealFileIsScaledAsInjectedAfresh) {
+    scene::Scene file =
+        scene::import_gltf_file("/usr/share/assimp/models/glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb");
+    file.lights.push_back(directional_light(glm::normalize(glm::vec3(-0.3f, -1.0f, -0.5f)), 3.0f));
+    if (file.cameras.empty()) file.cameras.push_back(scene::framing_camera(file.world_bounds()));
+    auto resources = shared_renderer().upload(file);
+    const RenderRequest request = vct_request("low");
+    shared_renderer().render(*resources, request);
+    file.lights.back().intensity *= 0.5f;
+    const auto halved = shared_renderer().render(*resources, request);
+    EXPECT_EQ(halved.stats.method_statistics.at("light_rescales"), 1.0);
+    EXPECT_EQ(halved.stats.method_statistics.at("light_injections"), 1.0);
+    const double levels = halved.stats.method_statistics.at("octree_levels");
+    const double difference = largest_relative_difference(halved.frame, render_scene(file, request).frame);
+    std::printf("engine, sun halved: largest relative difference from a frame injected afresh %.3g (allowed %.3g)\n",
+                difference, levels / 1024.0);
+    EXPECT_LE(difference, levels / 1024.0);
 }
 
 // Moving the short block: the frame follows the reference with the block moved, as closely as the

@@ -384,11 +384,14 @@ void SparseVoxelOctree::inject(const passes::PassContext& context, const passes:
     bounces_ = 2;
 }
 
-void SparseVoxelOctree::scale_light(float factor) {
-    BOUNCE_CHECK(factor > 0.0f && std::isfinite(factor), "vct: light scaled by {}", factor);
-    if (!(counts_.max_radiance > 0.0f) || !std::isfinite(counts_.max_radiance)) return;  // nothing injected lit a voxel
-    counts_.max_radiance *= factor;
-    radiance_scale_ = 1.0f / counts_.max_radiance;
+bool SparseVoxelOctree::scale_light(float factor) {
+    if (!(factor > 0.0f) || !std::isfinite(factor)) return false;
+    if (!(counts_.max_radiance > 0.0f) || !std::isfinite(counts_.max_radiance)) return true;  // no voxel was lit
+    const float scaled = counts_.max_radiance * factor;
+    if (!std::isnormal(scaled) || !std::isnormal(1.0f / scaled)) return false;
+    counts_.max_radiance = scaled;
+    radiance_scale_ = 1.0f / scaled;
+    return true;
 }
 
 void SparseVoxelOctree::resolve_and_mipmap(const passes::PassContext& context) {

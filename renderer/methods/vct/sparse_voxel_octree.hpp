@@ -89,8 +89,10 @@ public:
     // lights' power, so the injected radiance and the bounce gathered from it scale by the factor too.
     // The pool stores radiance relative to the brightest voxel, so only that scale changes: the
     // same octree, to the last bit, as an injection at the new power would make up to the order its
-    // float atomics add in.
-    void scale_light(float factor);
+    // float atomics add in. False, changing nothing, where the scaled brightest radiance would not
+    // be a normal positive float (a factor far enough from 1 to underflow or overflow it): the
+    // light must then be injected.
+    bool scale_light(float factor);
     int bounces() const { return bounces_; }
     bool anisotropic() const { return anisotropic_; }
     bool built() const { return built_; }

@@ -3,6 +3,7 @@
 #include "renderer/base/hash.hpp"
 #include "renderer/methods/vct/sparse_voxel_octree.hpp"
 #include "renderer/passes/direct_light_pass.hpp"
+#include "renderer/passes/light_geometry.hpp"
 #include "renderer/passes/light_view_maps.hpp"
 #include "renderer/scene/shading.hpp"
 #include "vct/vct_layout.h"
@@ -85,8 +86,7 @@ public:
                 lit_ && anisotropic == octree_.anisotropic() && bounces == octree_.bounces() && !emits(frame.scene)
                     ? common_power_scale(injected_lights_, frame.scene.lights)
                     : std::nullopt;
-            if (scaled) {
-                octree_.scale_light(*scaled);
+            if (scaled && octree_.scale_light(*scaled)) {
                 ++light_rescales_;
             } else {
                 const ConeSettings cones = cone_settings(frame);
@@ -220,13 +220,15 @@ private:
                            [](const scene::Material& material) { return material.emissive != glm::vec3(0.0f); });
     }
 
+    // Where a light is and how it shines, not its power (passes::shadow_map_fingerprint's terms).
+    static std::uint64_t place(const scene::Light& light) { return passes::shadow_map_fingerprint(light, 0, 0); }
+
     // Whether every light is as it was, its power included (the light-view maps are not drawn again
     // for a change of power alone: they hold none).
     static bool same_lights(const std::vector<scene::Light>& before, const std::vector<scene::Light>& now) {
         return before.size() == now.size() &&
                std::equal(before.begin(), before.end(), now.begin(), [](const scene::Light& a, const scene::Light& b) {
-                   return a.type == b.type && a.position == b.position && a.direction == b.direction &&
-                          a.inner_cone == b.inner_cone && a.outer_cone == b.outer_cone && a.radiant() == b.radiant();
+                   return place(a) == place(b) && a.radiant() == b.radiant();
                });
     }
 
@@ -238,13 +240,8 @@ private:
         if (before.size() != now.size() || before.empty()) return std::nullopt;
         std::optional<double> factor;
         for (std::size_t i = 0; i < now.size(); ++i) {
-            const scene::Light& a = before[i];
-            const scene::Light& b = now[i];
-            if (a.type != b.type || a.position != b.position || a.direction != b.direction ||
-                a.inner_cone != b.inner_cone || a.outer_cone != b.outer_cone) {
-                return std::nullopt;
-            }
-            const glm::vec3 from = a.radiant(), to = b.radiant();
+            if (place(before[i]) != place(now[i])) return std::nullopt;
+            const glm::vec3 from = before[i].radiant(), to = now[i].radiant();
             for (int c = 0; c < 3; ++c) {
                 if (from[c] == 0.0f) {
                     if (to[c] != 0.0f) return std::nullopt;
