@@ -185,6 +185,17 @@ std::vector<SceneMeasurements::FrameTime> SceneMeasurements::changed_frames(cons
     return {it->second.begin(), it->second.end()};
 }
 
+std::vector<SceneMeasurements::ChangedFrame> SceneMeasurements::changed_frames_of(const std::string& method) const {
+    const std::lock_guard lock(mutex_);
+    std::vector<ChangedFrame> frames;
+    for (const auto& [key, kept] : changed_frames_) {
+        const auto& [preset_key, change] = key;
+        if (std::get<0>(preset_key) != method) continue;
+        for (const FrameTime& time : kept) frames.push_back({std::get<1>(preset_key), std::get<2>(preset_key), change, time});
+    }
+    return frames;
+}
+
 namespace {
 using FrameTime = SceneMeasurements::FrameTime;
 

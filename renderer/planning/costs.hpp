@@ -106,6 +106,15 @@ public:
     // (the planner prices that work as their time beyond a warm frame's).
     std::vector<FrameTime> changed_frames(const std::string& method, const std::string& preset, int bounces,
                                           FrameChange change) const;
+    // The last frames of every preset and bounce count of `method` that redid some change's work:
+    // how much more than the device's calibration this scene's changes redo (planner.cpp).
+    struct ChangedFrame {
+        std::string preset;
+        int bounces = -1;
+        FrameChange change = FrameChange::none;
+        FrameTime time;
+    };
+    std::vector<ChangedFrame> changed_frames_of(const std::string& method) const;
     // What frames measured at `measured_bounces` of a preset are raised by to price another count
     // (planner.cpp: a bound on what more bounces cost; 1 where the count asked is not more).
     using BounceRaise = std::function<double(const std::string& preset, int measured_bounces)>;

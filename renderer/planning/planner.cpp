@@ -318,6 +318,60 @@ struct ChangeMargin {
 constexpr ChangeMargin kChangeMargin[] = {
     {"cssm", 0.6, 0.8, 0.6}, {"direct", 0.9, 1.3, 0.6}, {"isr", 0.6, 0.6, 0.7}, {"vct", 1.4, 1.4, 1.7}};
 
+// A change's class in the device's calibration (ChangeCost::beyond_warm): a dimming, a move of the
+// lights, or structures built anew.
+int calibration_class(FrameChange change) {
+    return change == FrameChange::light_power ? 0 : change == FrameChange::lights ? 1 : 2;
+}
+
+// The shadow maps a frame of the preset draws after `change`: none for a change of power alone; the
+// scene's timing of them at the preset's map size; nullopt where the scene has none.
+std::optional<double> maps_redrawn_ms(const PlanningInputs& inputs, const std::string& method, const std::string& preset,
+                                      const methods::KnobValues& knobs, FrameChange change) {
+    if (change == FrameChange::light_power) return 0.0;
+    const methods::KnobValues resolved = methods::MethodRegistry::builtin().resolve(method, preset, knobs);
+    const auto map_size = resolved.find("shadow_map_size");
+    if (!inputs.scene || map_size == resolved.end()) return std::nullopt;
+    return inputs.scene->shadow_maps_ms(static_cast<int>(map_size->second));
+}
+
+// How many times what the device's calibration priced it this scene's frames of the method redid
+// after a change of the same class, less their shadow maps: the median over the method's frames of
+// other presets, bounce counts or kinds of the class (frames of the plan's own price it directly),
+// never under 1 (the calibration's box is the lightest scene). A scene's frames tell its weight
+// where no table can: cssm's bake redid 1.6 to 11 times the calibration's figure on the corpus, on
+// llvmpipe and on an H200 alike, and vct's rebuild 1.0 to 2.3, each scene within a third of its own
+// figure; the margin in warm frames (kChangeMargin), measured on llvmpipe, priced isr ultra's
+// switch in the atrium at 27 ms on an H200, where it took 15. Frames whose calibrated figure is
+// under a twentieth of their warm frame are left out: the noise of one frame would be their ratio.
+struct SceneScale {
+    double scale = 1.0;
+    std::size_t frames = 0;
+};
+std::optional<SceneScale> scene_scale_of_calibration(const PlanningInputs& inputs, const std::string& method,
+                                                     const std::string& preset, int bounces, FrameChange change) {
+    if (!inputs.scene) return std::nullopt;
+    std::vector<double> scales;
+    for (const SceneMeasurements::ChangedFrame& frame : inputs.scene->changed_frames_of(method)) {
+        if (calibration_class(frame.change) != calibration_class(change) || !(frame.time.pixels > 0.0)) continue;
+        if (frame.preset == preset && frame.bounces == bounces && frame.change == change) continue;
+        const auto calibrated = inputs.device.change_cost(method, frame.preset);
+        if (!calibrated) continue;
+        methods::KnobValues knobs;
+        if (frame.bounces >= 0 && bounces_knob(methods::MethodRegistry::builtin().resolve(method, frame.preset, {}))) {
+            knobs["bounces"] = frame.bounces;
+        }
+        const auto maps_ms = maps_redrawn_ms(inputs, method, frame.preset, knobs, frame.change);
+        const double warm_there = warm_ms(at_pixels(inputs, frame.time.pixels), method, frame.preset, knobs, nullptr);
+        const double priced = calibrated->beyond_warm(frame.change) *
+                              warm_ms(at_pixels(inputs, calibrated->pixels), method, frame.preset, knobs, nullptr);
+        if (!maps_ms || !std::isfinite(warm_there) || !std::isfinite(priced) || !(priced >= 0.05 * warm_there)) continue;
+        scales.push_back(std::max(0.0, frame.time.measured_ms - warm_there - *maps_ms) / priced);
+    }
+    if (scales.empty()) return std::nullopt;
+    return SceneScale{std::max(1.0, median(scales)), scales.size()};
+}
+
 }  // namespace
 
 double change_margin(const std::string& method, FrameChange change) {
@@ -381,31 +435,40 @@ double predicted_ms(const PlanningInputs& inputs, const std::string& method, con
     } else {
         // The shadow maps from this scene's own timings of them at the plan's map size, where it has
         // any, and the rest from the device's calibration of such frames as a multiple of a warm
-        // one; without the scene's maps, or without the device's figure, all from the bench's bound.
-        const auto& registry = methods::MethodRegistry::builtin();
-        const methods::KnobValues resolved = registry.resolve(method, preset, knobs);
-        const auto map_size = resolved.find("shadow_map_size");
+        // one, scaled as the scene's frames of the method's other presets measured it, else plus
+        // the margin for a heavier scene; without the scene's maps, or without the device's
+        // figure, all from the bench's bound.
         const bool maps_drawn = change != FrameChange::light_power;
-        const auto maps_ms = maps_drawn && inputs.scene && map_size != resolved.end()
-                                 ? inputs.scene->shadow_maps_ms(static_cast<int>(map_size->second))
-                                 : std::nullopt;
+        const auto maps_ms = maps_redrawn_ms(inputs, method, preset, knobs, change);
         const auto calibrated = inputs.device.change_cost(method, preset);
         const std::string maps_text =
-            maps_ms ? fmt::format("{:.1f} ms of shadow maps as this scene's frames drew them, and ", *maps_ms) : "";
-        if (calibrated && (maps_ms || !maps_drawn)) {
-            const double ratio = calibrated->beyond_warm(change), margin = change_margin(method, change);
-            extra = ratio * warm_ms(at_pixels(inputs, calibrated->pixels), method, preset, knobs, nullptr) +
-                    margin * warm_ms(at_pixels(inputs, kChangePriorPixels), method, preset, knobs, nullptr) +
-                    maps_ms.value_or(0.0);
-            source = fmt::format("{}{:.2g} x its warm frame at {:.0f} pixels besides, as the device's calibration "
-                                 "measured, + {:.2g} x it at 128x128 for a scene heavier than the calibration's",
-                                 maps_text, ratio, calibrated->pixels, margin);
+            maps_drawn && maps_ms ? fmt::format("{:.1f} ms of shadow maps as this scene's frames drew them, and ", *maps_ms)
+                                  : "";
+        if (calibrated && maps_ms) {
+            const double ratio = calibrated->beyond_warm(change);
+            const double at_calibration = ratio * warm_ms(at_pixels(inputs, calibrated->pixels), method, preset, knobs, nullptr);
+            const auto scene_scale = scene_scale_of_calibration(inputs, method, preset, bounces, change);
+            if (scene_scale) {
+                extra = scene_scale->scale * at_calibration + *maps_ms;
+                source = fmt::format("{}{:.2g} x {:.2g} x its warm frame at {:.0f} pixels besides: the device's "
+                                     "calibration, scaled as {} frame{} of the method's other presets measured here",
+                                     maps_text, scene_scale->scale, ratio, calibrated->pixels, scene_scale->frames,
+                                     scene_scale->frames == 1 ? "" : "s");
+            } else {
+                const double margin = change_margin(method, change);
+                extra = at_calibration + margin * warm_ms(at_pixels(inputs, kChangePriorPixels), method, preset, knobs, nullptr) +
+                        *maps_ms;
+                source = fmt::format("{}{:.2g} x its warm frame at {:.0f} pixels besides, as the device's calibration "
+                                     "measured, + {:.2g} x it at 128x128 for a scene heavier than the calibration's",
+                                     maps_text, ratio, calibrated->pixels, margin);
+            }
         } else {
             const double warm_at_prior = warm_ms(at_pixels(inputs, kChangePriorPixels), method, preset, knobs, nullptr);
-            const double bound = change_cost_bound(method, preset, change, maps_ms.has_value());
-            extra = bound * warm_at_prior + maps_ms.value_or(0.0);
+            const bool besides_maps = maps_drawn && maps_ms;
+            const double bound = change_cost_bound(method, preset, change, besides_maps);
+            extra = bound * warm_at_prior + (besides_maps ? *maps_ms : 0.0);
             source = fmt::format("{}{:.2g} x its warm frame at 128x128{}, the most the bench measured", maps_text, bound,
-                                 maps_ms ? " besides" : "");
+                                 besides_maps ? " besides" : "");
         }
     }
     if (basis) {

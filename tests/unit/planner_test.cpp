@@ -615,6 +615,63 @@ TEST(Planner, ChangesArePricedFromTheDevicesCalibrationOfThem) {
     EXPECT_THROW(DeviceCosts::from_json(broken), Error);
 }
 
+// Before a scene measured frames of a plan's own change, its frames of the method's other presets
+// after a change of the same class tell how much heavier than the calibration's box it is: the
+// device's figure is scaled by the median of what they measured against theirs (never under 1), in
+// place of the margin measured on the bench corpus.
+TEST(Planner, ASceneScalesTheCalibrationByItsFramesOfTheMethodsOtherPresets) {
+    const SceneAnalysis analysis = made_up_analysis();
+    DeviceCosts device("test");
+    device.set("cssm", "low", {2.0, 1.0e3});
+    device.set("cssm", "medium", {4.0, 2.0e3});
+    device.set_change_cost("cssm", "low", {64.0 * 64.0, 0.25, 0.5, 6.0});
+    device.set_change_cost("cssm", "medium", {64.0 * 64.0, 0.25, 0.5, 5.0});
+    SceneMeasurements scene;
+    const auto& registry = methods::MethodRegistry::builtin();
+    const auto map_size = [&](const char* preset) {
+        return static_cast<int>(registry.resolve("cssm", preset, {}).at("shadow_map_size"));
+    };
+    scene.record_shadow_maps(map_size("low"), 30.0);
+    const double maps_medium = scene.shadow_maps_ms(map_size("medium")).value();  // as the scene times them
+    PlanningInputs inputs{analysis, device, &scene, 128, 128, std::nullopt};
+    FrameChange now = FrameChange::knobs_and_scene;
+    inputs.change = [&](const std::string&, const std::string&, const methods::KnobValues&) { return now; };
+    const double low_128 = 2.0 + 16.384, low_64 = 2.0 + 4.096;
+    const double medium_128 = 4.0 + 32.768, medium_64 = 4.0 + 8.192;
+    const int medium_bounces = static_cast<int>(registry.resolve("cssm", "medium", {}).at("bounces"));
+    // Nothing of cssm measured here yet: the calibration plus the bench's margin.
+    const double unscaled = low_128 + 30.0 + 6.0 * low_64;
+    EXPECT_DOUBLE_EQ(predicted_ms(inputs, "cssm", "low", {}), unscaled + change_margin("cssm", now) * low_128);
+    // A switch to medium that redid three times its calibrated rebuild beyond its maps: low's is
+    // priced at three times its own.
+    scene.record("cssm", "medium", medium_bounces, medium_128 + maps_medium + 3.0 * 5.0 * medium_64, medium_128, 128.0 * 128.0,
+                 FrameChange::knobs);
+    std::string basis;
+    EXPECT_NEAR(predicted_ms(inputs, "cssm", "low", {}, &basis), low_128 + 30.0 + 3.0 * 6.0 * low_64, 1e-9);
+    EXPECT_NE(basis.find("scaled as 1 frame of the method's other presets measured here"), std::string::npos) << basis;
+    // The median of such frames: two more, at 5 and at 0.5 times (counted as 1).
+    scene.record("cssm", "medium", medium_bounces, medium_128 + maps_medium + 5.0 * 5.0 * medium_64, medium_128, 128.0 * 128.0,
+                 FrameChange::objects);
+    scene.record("cssm", "medium", medium_bounces, medium_128 + maps_medium + 0.5 * 5.0 * medium_64, medium_128, 128.0 * 128.0,
+                 FrameChange::knobs_and_scene);
+    EXPECT_NEAR(predicted_ms(inputs, "cssm", "low", {}), low_128 + 30.0 + 3.0 * 6.0 * low_64, 1e-9);
+    // A move of the lights is another class: its price keeps the margin.
+    now = FrameChange::lights;
+    EXPECT_DOUBLE_EQ(predicted_ms(inputs, "cssm", "low", {}),
+                     low_128 + 30.0 + 0.5 * low_64 + change_margin("cssm", now) * low_128);
+    // A scene lighter than the box (its frame under the calibration's figure) is priced at the figure.
+    scene.record("cssm", "medium", medium_bounces, medium_128 + maps_medium + 0.2 * 0.5 * medium_64, medium_128,
+                 128.0 * 128.0, FrameChange::lights);
+    EXPECT_NEAR(predicted_ms(inputs, "cssm", "low", {}), low_128 + 30.0 + 0.5 * low_64, 1e-9);
+    // A figure under a twentieth of the warm frame scales nothing: one frame's noise would be its ratio.
+    device.set_change_cost("cssm", "medium", {64.0 * 64.0, 0.25, 0.01, 5.0});
+    EXPECT_DOUBLE_EQ(predicted_ms(inputs, "cssm", "low", {}),
+                     low_128 + 30.0 + 0.5 * low_64 + change_margin("cssm", now) * low_128);
+    // Once the preset measured its own frame of the change, that prices it.
+    scene.record("cssm", "low", static_cast<int>(registry.resolve("cssm", "low", {}).at("bounces")), low_128 + 9.0, low_128, 128.0 * 128.0, FrameChange::lights);
+    EXPECT_NEAR(predicted_ms(inputs, "cssm", "low", {}), low_128 + 9.0, 1e-9);
+}
+
 // Under a time budget, a plan that fits warm but not with what it would redo gives way to one that
 // fits as it would render now, and the plan says what its frame redoes.
 TEST(Planner, ATimeBudgetCountsWhatTheFrameWouldRedo) {
