@@ -11,7 +11,12 @@ cache folder, cost-model/). Each row's time beyond its warm frame, less its shad
 prices those from its own timings), is set against the calibration's multiple times the scene's warm
 frame at the calibration's size (the warm frame at 128x128 scaled by the device's line between the
 two sizes). Preset switches leave out draft, whose first frame in the bench also compiled its
-method's shaders, which a daemon does once."""
+method's shaders, which a daemon does once.
+
+Then each row's time as a multiple of the calibration's price of it (the scale planner.cpp's
+scene_scale_of_calibration learns from a scene's frames of a method's other presets), per method and
+change, and per scene for switches; rows whose price is under a twentieth of their warm frame are
+left out, as the planner leaves them out."""
 import csv
 import json
 import math
@@ -24,6 +29,7 @@ def main(frame_changes: str, cost_model: str) -> None:
     lines = {(l["method"], l["preset"]): l for l in model["lines"]}
     changes = {(c["method"], c["preset"]): c for c in model["changes"]}
     at = lambda line, pixels: line["fixed_ms"] + line["per_megapixel_ms"] * pixels * 1e-6
+    scales, scene_scales = defaultdict(list), defaultdict(list)
     short = defaultdict(list)  # (method, change) -> (shortfall in warm frames, preset, scene, run)
     for r in csv.DictReader(open(frame_changes)):
         key = (r["method"], r["preset"])
@@ -39,6 +45,11 @@ def main(frame_changes: str, cost_model: str) -> None:
         for change, ms in measured.items():
             if change == "knobs" and r["preset"] == "draft":
                 continue
+            priced = predicted[change] * warm_there
+            if priced >= 0.05 * warm:
+                scales[(r["method"], change)].append((max(0.0, ms) / priced, r["preset"]))
+                if change == "knobs":
+                    scene_scales[(r["method"], r["scene"])].append((max(0.0, ms) / priced, r["preset"]))
             short[(r["method"], change)].append(((max(0.0, ms) - predicted[change] * warm_there) / warm,
                                                  r["preset"], r["scene"], r["run"]))
     print("largest shortfall, in warm frames at 128x128 (preset, scene, run); then the table, rounded up to 0.1")
@@ -51,6 +62,13 @@ def main(frame_changes: str, cost_model: str) -> None:
         # A switch redoes the lights' work too: never under their margin.
         knobs = max(m.get("knobs", 0.0), m.get("lights", 0.0))
         print(f'    {{"{method}", {m.get("lights", 0.0):.1f}, {knobs:.1f}, {m.get("light_power", 0.0):.1f}}},')
+    print("measured / the calibration's price, besides maps: smallest, median, largest (rows)")
+    for key, rows in sorted(scales.items()):
+        values = sorted(v for v, _ in rows)
+        print(f"  {key[0]:7} {key[1]:12} {values[0]:6.2f} {values[len(values) // 2]:6.2f} {values[-1]:6.2f}  ({len(values)})")
+    print("switches, per scene: preset initial and scale")
+    for (method, scene), rows in sorted(scene_scales.items()):
+        print(f"  {method:7} {scene:15} " + " ".join(f"{preset[0]}:{value:.1f}" for value, preset in rows))
 
 
 if __name__ == "__main__":

@@ -107,14 +107,18 @@ double noise_floor(const BudgetRow& row) {
 
 // A time budget T holds when the planned frame took at most 1.2 T, with error no worse than the most
 // accurate of `comparators` within T: by no more than two frames of one of the two plans differ by
-// chance (holds_strictly: by nothing).
+// chance (holds_strictly: by nothing). A planned frame of the comparator's own plan is no worse than
+// it whatever it read: after a change of the lights, direct medium in the furnished room read
+// 0.19384 as planned and as its comparator, apart by less than 5e-6, where the comparator's three
+// frames happened to lie closer still.
 void judge_time_budget(BudgetRow& row, double budget, const std::vector<Measured>& comparators) {
     row.met = row.planned.ms <= 1.2 * budget;
     for (const Measured& m : comparators) {
         if (m.ms <= budget && (!row.fixed || m.rel_mse < row.fixed->rel_mse)) row.fixed = m;
     }
     row.holds_strictly = row.met && (!row.fixed || row.planned.rel_mse <= row.fixed->rel_mse);
-    row.holds = row.met && (!row.fixed || row.planned.rel_mse <= row.fixed->rel_mse + noise_floor(row));
+    row.holds = row.met && (!row.fixed || row.planned.label == row.fixed->label ||
+                            row.planned.rel_mse <= row.fixed->rel_mse + noise_floor(row));
 }
 
 std::string error_text(const Measured& m) {
@@ -598,7 +602,10 @@ int main(int argc, char** argv) {
                                  r.fixed ? fmt::format("{}, {:.0f} / {}", r.fixed->label, r.fixed->comparator_ms(),
                                                        error_text(*r.fixed))
                                          : "none meets it",
-                                 r.holds ? (r.holds_strictly ? "yes" : "yes, within the noise floor") : "**no**");
+                                 r.holds ? (r.holds_strictly                      ? "yes"
+                                            : r.fixed && r.fixed->label == r.planned.label ? "yes, the same plan"
+                                                                                           : "yes, within the noise floor")
+                                         : "**no**");
             auto& [holds, strictly, count] = holding[r.pass];
             holds += r.holds ? 1 : 0;
             strictly += r.holds_strictly ? 1 : 0;
@@ -623,7 +630,8 @@ int main(int argc, char** argv) {
               "the frame takes at most 1.2 T with error no worse than the best fixed plan within T, by more than the "
               "noise floor: the spread of the relMSEs of one plan's frames (the reference's traced with other seeds, "
               "twice or more under 5 s, its relMSE the mean; a relit comparator's three frames, each after its own change of the "
-              "lights, its relMSE that of the frame of median time; `a ± b` is the mean and half the spread, shown from a spread of 0.001).\n"
+              "lights, its relMSE that of the frame of median time; `a ± b` is the mean and half the spread, shown from a spread of 0.001); "
+              "a frame of the comparator's own plan holds whatever it read.\n"
            << "- Frames under 0.5 s, fixed and planned, are rendered three times (under 20 ms, nine; references under 5 s, twice) "
               "and the median time kept (one frame of a "
               "few milliseconds on two loaded cores varies by more than the 1.2x the budgets are judged by); the "

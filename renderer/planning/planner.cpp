@@ -339,11 +339,12 @@ std::optional<double> maps_redrawn_ms(const PlanningInputs& inputs, const std::s
 // after a change of the same class, less their shadow maps: the median over the method's frames of
 // other presets, bounce counts or kinds of the class (frames of the plan's own price it directly),
 // never under 1 (the calibration's box is the lightest scene). A scene's frames tell its weight
-// where no table can: cssm's bake redid 1.6 to 11 times the calibration's figure on the corpus, on
-// llvmpipe and on an H200 alike, and vct's rebuild 1.0 to 2.3, each scene within a third of its own
-// figure; the margin in warm frames (kChangeMargin), measured on llvmpipe, priced isr ultra's
-// switch in the atrium at 27 ms on an H200, where it took 15. Frames whose calibrated figure is
-// under a twentieth of their warm frame are left out: the noise of one frame would be their ratio.
+// where no table can: on the corpus (bench/change_margins.py), cssm's switches redid a median 2.6
+// times the calibration's figure on llvmpipe and 2.8 on an H200, up to 11 on both (on the H200,
+// the outdoor scene's 1.6 to 2.1, the atrium's 1.6 to 10.9, rising with the preset); the margin in
+// llvmpipe's warm frames (kChangeMargin) priced isr ultra's switch in the atrium at 27 ms on the
+// H200, where it took 15. Frames whose calibrated figure is under a twentieth of their warm frame
+// are left out: the noise of one frame would be their ratio.
 struct SceneScale {
     double scale = 1.0;
     std::size_t frames = 0;
