@@ -338,13 +338,8 @@ int main(int argc, char** argv) {
                     row.cold_ms = cold.stats.render_ms;
                     row.relit_ms = relit.stats.render_ms;
                     row.dimmed_ms = dimmed_ms;
-                    const auto shadow_ms = [](const FrameStats& stats) {
-                        double ms = 0.0;
-                        for (const auto& pass : stats.passes) ms += pass.pass == "shadow_maps" ? pass.gpu_ms : 0.0;
-                        return ms;
-                    };
-                    row.cold_shadow_ms = shadow_ms(cold.stats);
-                    row.relit_shadow_ms = shadow_ms(relit.stats);
+                    row.cold_shadow_ms = cold.stats.pass_ms("shadow_maps");
+                    row.relit_shadow_ms = relit.stats.pass_ms("shadow_maps");
                     for (const auto& pass : median.stats.passes) {
                         row.passes += fmt::format("{}{}={:.2f}", row.passes.empty() ? "" : ";", pass.pass, pass.gpu_ms);
                     }

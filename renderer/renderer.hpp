@@ -27,6 +27,7 @@
 #include <optional>
 #include <set>
 #include <string>
+#include <string_view>
 
 namespace bounce {
 
@@ -53,6 +54,14 @@ struct FrameStats {
     std::size_t resident_bytes = 0;
     std::map<std::string, double> method_statistics;  // Method::statistics() after this frame
     FrameChange change = FrameChange::none;  // GPU frames: what it redid against its method's last frame
+
+    // The GPU time of the frame's passes named `name` (0 where none ran: shadow_maps runs only in
+    // frames that drew maps).
+    double pass_ms(std::string_view name) const {
+        double ms = 0.0;
+        for (const gpu::PassTiming& timing : passes) ms += timing.pass == name ? timing.gpu_ms : 0.0;
+        return ms;
+    }
 };
 
 struct RenderResult {

@@ -29,9 +29,9 @@ glm::mat4 directional_view(const glm::vec3& center, const glm::vec3& direction, 
 std::uint64_t geometry_fingerprint(const scene::Scene& scene);
 
 // The content hash of what light-view maps depend on: the lights, the geometry and the map size.
-// `with_power`: the lights' colour and intensity too (for users that take a redrawn map as the sign
-// that the light changed, isr's VPL tree and cssm's solution); else only whether each light has
-// power, which decides whether its views exist: the maps themselves hold none.
+// `with_power`: the lights' colour and intensity too (what isr's VPL tree and cssm's solution are
+// built from); else only whether each light has power, which decides whether its views exist: the
+// maps themselves hold none (LightViewMaps).
 std::uint64_t light_view_fingerprint(const scene::Scene& scene, int size, bool with_power = true);
 
 // The content hash of what one light's shadow map depends on: where the light is and how it shines

@@ -72,7 +72,7 @@ std::uint64_t LightViewMaps::bytes_for(const scene::Scene& scene, int size) {
 }
 
 bool LightViewMaps::render(const PassContext& context, int size) {
-    const std::uint64_t fingerprint = light_view_fingerprint(context.scene, size, with_power_);
+    const std::uint64_t fingerprint = light_view_fingerprint(context.scene, size, /*with_power=*/false);
     if (fingerprint == fingerprint_ && size == size_) return false;
     gpu::GpuTimers::Scope timing(context.timers, "light_view_maps");
     fingerprint_ = fingerprint;

@@ -27,12 +27,10 @@ public:
         float texel_measure = 0.0f;
     };
 
-    // `drawn_again_when_power_changes`: a light's colour or intensity alone redraws the maps too, for
-    // a user that takes their redrawing as the sign that the light changed (isr's VPL tree); vct
-    // compares the lights itself.
-    explicit LightViewMaps(bool drawn_again_when_power_changes = true) : with_power_(drawn_again_when_power_changes) {}
-
-    // Draws the maps when anything they depend on changed; returns true when it drew.
+    // Draws the maps when anything they depend on changed; returns true when it drew. A light's
+    // colour or intensity alone draws nothing: the maps hold places, normals and albedo, and their
+    // users take each light's power as they use them (vct's photons, isr's VPLs), so each compares
+    // the lights' power itself.
     bool render(const PassContext& context, int size);
     const std::vector<View>& views() const { return views_; }
     int size() const { return size_; }
@@ -53,7 +51,6 @@ private:
     int size_ = 0;
     gpu::Texture position_, normal_, albedo_, depth_;
     gpu::Framebuffer framebuffer_;
-    bool with_power_ = true;
     std::uint64_t fingerprint_ = 0;
     std::size_t frames_drawn_ = 0;
     std::size_t views_culled_ = 0;

@@ -11,12 +11,6 @@
 namespace bounce::planning {
 namespace {
 
-// A frame's shadow_maps pass, where it drew maps.
-double shadow_maps_ms(const FrameStats& stats) {
-    double ms = 0.0;
-    for (const auto& pass : stats.passes) ms += pass.pass == "shadow_maps" ? pass.gpu_ms : 0.0;
-    return ms;
-}
 
 // Every light moved by a thousandth of the scene's size, or turned by a thousandth of a radian: what
 // a frame sees as new light places (frame_change.hpp), by amounts no image shows. `sign` alternates.
@@ -99,7 +93,7 @@ ChangeCost Calibration::measure_changes(Renderer& renderer, const std::string& m
         for (int i = 0; i < settings_.change_frames; ++i) {
             change(i);
             const FrameStats stats = renderer.render(*resources_, request).stats;
-            extra.push_back(warm_ms > 0.0 ? std::max(0.0, stats.render_ms - shadow_maps_ms(stats) - warm_ms) / warm_ms : 0.0);
+            extra.push_back(warm_ms > 0.0 ? std::max(0.0, stats.render_ms - stats.pass_ms("shadow_maps") - warm_ms) / warm_ms : 0.0);
         }
         return median(std::move(extra));
     };

@@ -54,8 +54,9 @@ class DeviceCosts {
 public:
     // Bumped whenever methods change what a preset costs: cached models of older versions are dropped.
     // 4: change costs. 5: vct scales its injected light where every light dimmed alike. 6: vct's
-    // light-view maps are not drawn again for a change of power.
-    static constexpr int kVersion = 6;
+    // light-view maps are not drawn again for a change of power. 7: nor isr's (its VPL tree is
+    // rebuilt over them).
+    static constexpr int kVersion = 7;
 
     DeviceCosts() = default;
     explicit DeviceCosts(std::string renderer) : renderer_(std::move(renderer)) {}

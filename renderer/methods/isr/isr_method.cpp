@@ -45,10 +45,16 @@ public:
         if (frame.scene.world_bounds().empty()) return;
 
         mode_ = frame.knob_int("mode");
-        const bool maps_drawn = light_views_.render(frame, power_of_two_floor(frame.knob_int("rsm_size")));
-        const bool tree_built = tree_.build(frame, light_views_, maps_drawn,
+        const int rsm_size = power_of_two_floor(frame.knob_int("rsm_size"));
+        const bool maps_drawn = light_views_.render(frame, rsm_size);
+        // The maps hold places, normals and albedo; each VPL takes its flux from its light as the
+        // tree is built. So a change of the lights' colour or intensity alone rebuilds the tree over
+        // the kept maps, without drawing them again.
+        const std::uint64_t lights = passes::light_view_fingerprint(frame.scene, rsm_size);
+        const bool tree_built = tree_.build(frame, light_views_, maps_drawn || lights != tree_lights_,
                                             {static_cast<float>(frame.knob("depth_threshold")),
                                              static_cast<float>(frame.knob("normal_threshold"))});
+        tree_lights_ = lights;
         finest_level_ = std::max(0, tree_.top_level() - frame.knob_int("max_depth"));
         const IsmSettings ism{frame.knob_int("ism_size"), frame.knob_int("ism_points"), frame.knob_int("ism_levels_below_top")};
         visibility_ = ism.size > 0 && mode_ == ISR_MODE_HIERARCHICAL;
@@ -186,6 +192,7 @@ private:
     passes::DirectLightPass direct_light_;
     passes::LightViewMaps light_views_;
     VplTree tree_;
+    std::uint64_t tree_lights_ = 0;  // light_view_fingerprint() with power, as the tree was last built
     MultiresolutionBuffer multires_;
     ImperfectShadowMaps ism_;
     bool visibility_ = false;

@@ -33,11 +33,11 @@ std::uint64_t VplTree::bytes_for(std::uint64_t views, int size) {
     return nodes * (kNodeBytes + kVplBytes) + kCacheHeaderBytes + kInfoBytes;
 }
 
-bool VplTree::build(const passes::PassContext& context, const passes::LightViewMaps& maps, bool maps_changed,
+bool VplTree::build(const passes::PassContext& context, const passes::LightViewMaps& maps, bool inputs_changed,
                     const VplTreeSettings& settings) {
     const bool same_settings = settings.depth_threshold == settings_.depth_threshold &&
                                settings.normal_threshold == settings_.normal_threshold;
-    if (!maps_changed && same_settings && nodes_) return false;
+    if (!inputs_changed && same_settings && nodes_) return false;
     gpu::GpuTimers::Scope timing(context.timers, "isr_vpl_tree");
     settings_ = settings;
     ++builds_;

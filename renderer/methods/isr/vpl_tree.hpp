@@ -23,9 +23,9 @@ public:
     // What build() holds for `views` light views of `size`^2 texels: a node per texel of every
     // level up to the top patches, and the VPL cache.
     static std::uint64_t bytes_for(std::uint64_t views, int size);
-    // Rebuilds the tree from the maps (every view) when the maps or the settings changed; returns
-    // whether it did.
-    bool build(const passes::PassContext& context, const passes::LightViewMaps& maps, bool maps_changed,
+    // Rebuilds the tree from the maps (every view) when the maps, the lights' power or the settings
+    // changed (`inputs_changed`: the maps or the power); returns whether it did.
+    bool build(const passes::PassContext& context, const passes::LightViewMaps& maps, bool inputs_changed,
                const VplTreeSettings& settings);
     // Fills the VPL cache from level `finest_level` up: naive point samples or basic clusters.
     void select(const passes::PassContext& context, int mode, int finest_level);

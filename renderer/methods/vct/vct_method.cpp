@@ -288,7 +288,7 @@ private:
     passes::GBufferPass gbuffer_;
     passes::ShadowMaps shadows_;
     passes::DirectLightPass direct_light_;
-    passes::LightViewMaps light_views_{false};  // a change of power is seen by same_lights()
+    passes::LightViewMaps light_views_;  // a change of power is seen by same_lights()
     SparseVoxelOctree octree_;
     passes::FullscreenTriangle triangle_;
     int resolution_ = 0;
