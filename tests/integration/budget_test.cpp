@@ -276,7 +276,11 @@ TEST(Budget, AFrameRenderedSmallerIsUpsampledToTheSizeAskedFor) {
 // mid-calibration says how far it is), and the model is saved in the cache folder.
 TEST(Budget, TheFirstBudgetCalibratesAPresetAtATimeWhileOthersAreServed) {
     const auto cache = std::filesystem::temp_directory_path() / ("bounce-calibrate-" + std::to_string(::getpid()));
-    DaemonProcess daemon{{"--cache-dir", cache.string(), "--calibration-size", "16", "--calibration-change-frames", "1"}};
+    // Client b waits silent while the calibration runs (over 45 s with every test running at once
+    // on two cores), and the daemon drops a client silent for three heartbeats: a longer heartbeat
+    // keeps b, which this test is not about.
+    DaemonProcess daemon{{"--cache-dir", cache.string(), "--calibration-size", "16", "--calibration-change-frames", "1",
+                          "--heartbeat-ms", "120000"}};
     Client a(daemon.endpoint()), b(daemon.endpoint());
     EXPECT_EQ(b.request(MessageType::stats, json::object()).body["planner"]["cost_model"], "none");
     a.send_raw(frame_bytes(MessageType::render, 1,
