@@ -3,8 +3,8 @@
 // position, normal and diffuse albedo of the surface the light reaches first. Every texel is a
 // photon: `photon_flux` in shaders/common/light_view.glsl gives the flux it carries. Views whose
 // frustum misses the scene's bounds (cube faces looking out of a room's corner) are not drawn. Maps are kept while the
-// lights, the object transforms and the size stay the same (a light's power aside, where the user
-// asks: the maps hold none).
+// lights' places, the object transforms and the size stay the same: a light's colour or intensity
+// alone draws none (the maps hold no power; whether a light has any decides its views).
 #pragma once
 
 #include "renderer/passes/pass_context.hpp"

@@ -11,7 +11,6 @@
 namespace bounce::planning {
 namespace {
 
-
 // Every light moved by a thousandth of the scene's size, or turned by a thousandth of a radian: what
 // a frame sees as new light places (frame_change.hpp), by amounts no image shows. `sign` alternates.
 void move_every_light(scene::Scene& scene, float sign) {
