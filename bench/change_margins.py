@@ -69,6 +69,37 @@ def main(frame_changes: str, cost_model: str) -> None:
     print("switches, per scene: preset initial and scale")
     for (method, scene), rows in sorted(scene_scales.items()):
         print(f"  {method:7} {scene:15} " + " ".join(f"{preset[0]}:{value:.1f}" for value, preset in rows))
+    # A move of the lights priced as the planner prices it before the scene has a frame of one: the
+    # calibration scaled by the median of the scene's switches (of its run), at least 1, besides the
+    # maps; against the calibration plus the margin these frames measure (the most they fell short by).
+    switch_scale = defaultdict(list)
+    for r in csv.DictReader(open(frame_changes)):
+        key = (r["method"], r["preset"])
+        line, cost = lines[key], changes[key]
+        warm = float(r["warm_ms"])
+        priced = max(cost["lights"], cost["rebuild"]) * warm * at(line, cost["pixels"]) / at(line, 128 * 128)
+        if r["preset"] != "draft" and priced >= 0.05 * warm:
+            ms = float(r["cold_ms"]) - float(r["cold_shadow_ms"]) - warm
+            switch_scale[(r["method"], r["scene"], r["run"])].append(max(0.0, ms) / priced)
+    shortfalls = defaultdict(lambda: ([], []))
+    for r in csv.DictReader(open(frame_changes)):
+        key = (r["method"], r["preset"])
+        line, cost = lines[key], changes[key]
+        warm = float(r["warm_ms"])
+        figure = cost["lights"] * warm * at(line, cost["pixels"]) / at(line, 128 * 128)
+        ms = float(r["relit_ms"]) - float(r["relit_shadow_ms"]) - warm
+        found = switch_scale.get((r["method"], r["scene"], r["run"]))
+        scale = max(1.0, sorted(found)[len(found) // 2]) if found else 1.0
+        scaled, with_margin = shortfalls[r["method"]]
+        scaled.append((ms - scale * figure) / warm)
+        with_margin.append((ms - figure - margins[r["method"]]["lights"] * warm) / warm)
+    print("moves of the lights, in warm frames at 128x128: how far the price fell short, median and largest, "
+          "and how many by over 0.2; scaled as the scene's switches, then plus the margin above")
+    for method, (scaled, with_margin) in sorted(shortfalls.items()):
+        scaled, with_margin = sorted(scaled), sorted(with_margin)
+        print(f"  {method:7} scaled {scaled[len(scaled) // 2]:6.2f} {scaled[-1]:6.2f} "
+              f"({sum(v > 0.2 for v in scaled)} of {len(scaled)});  margin {with_margin[len(with_margin) // 2]:6.2f} "
+              f"{with_margin[-1]:6.2f} ({sum(v > 0.2 for v in with_margin)} of {len(with_margin)})")
 
 
 if __name__ == "__main__":

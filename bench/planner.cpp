@@ -60,7 +60,9 @@ struct Options {
     int analysis_size = AnalysisSettings{}.bounce_image_size;  // with --analysis-only: its frames' side
     bool references_only = false;  // render (or read) each scene's reference and stop: fills the cache
     int passes = 2;
-    bool relit = true;  // pass "relit": each time budget asked right after the lights change
+    // The relit passes: each time budget asked right after the lights change, after the same budget's
+    // frame, then after another budget's.
+    bool relit = true;
 };
 
 constexpr std::string_view kBegin = "<!-- planner: bench/planner writes it -->";
@@ -387,7 +389,7 @@ int main(int argc, char** argv) {
                 std::find(options.scenes.begin(), options.scenes.end(), bench_scene.name) == options.scenes.end()) {
                 continue;
             }
-            scene::Scene scene = bench_scene.scene;  // the relit pass changes its lights
+            scene::Scene scene = bench_scene.scene;  // the relit passes change its lights
             const std::vector<scene::Light> original_lights = scene.lights;
             int light_changes = 0;
             const methods::reference::PathTracer tracer(scene);
@@ -528,9 +530,12 @@ int main(int argc, char** argv) {
                 rows.push_back(row);
             }
             }
-            // The relit pass: each time budget asked right after the lights changed, the frame rendered as
+            // The relit passes: each time budget asked right after the lights changed, the frame rendered as
             // it comes (what it redoes, and a switch of method or preset, included); the comparator is
             // the most accurate fixed plan whose relit frame fits, timed and measured the same way.
+            // First as a client with a budget meets a change: its previous frame was the same budget's
+            // (the planner may keep that plan's structures or switch); then right after another budget's
+            // frame, where every plan but the last one's switches.
             if (options.relit && !options.budgets_ms.empty()) {
                 const double largest = *std::max_element(options.budgets_ms.begin(), options.budgets_ms.end());
                 std::vector<Measured> relit_fixed;
@@ -545,31 +550,52 @@ int main(int argc, char** argv) {
                     relit_fixed.push_back(relit);
                 }
                 planning::PlanningInputs relit_inputs = inputs;
-                for (const double budget : options.budgets_ms) {
-                    const double factor = change_lights(scene, original_lights, light_changes);
+                // The lights as the comparators' frames left them (their last change, set again: no change).
+                double light_factor =
+                    light_changes > 0 ? bench::change_every_light(scene, original_lights, light_changes) : 1.0;
+                // A frame as the daemon renders it for `budget`, with the lights as they are now.
+                const auto plan_and_render = [&](double budget) {
                     relit_inputs.change = planning::changes_on(*resources);  // of the scene as it is now
                     const planning::Plan plan = planning::plan(relit_inputs, {budget, std::nullopt});
-                    BudgetRow row;
-                    row.pass = options.passes + 1;
-                    row.scene = bench_scene.name;
-                    row.budget = fmt::format("≤ {:g} ms, relit", budget);
-                    row.plan = label(plan.chosen.method, plan.chosen.preset, plan.chosen.knobs) +
-                               (plan.chosen.scale != 1.0 ? fmt::format(" at 1/{:g} size", 1.0 / plan.chosen.scale) : "") +
-                               fmt::format(" (redoes {})", to_string(plan.chosen.redoes));
-                    row.predicted_ms = plan.chosen.predicted_ms;
-                    row.predicted_error = plan.chosen.predicted_error;
-                    row.why = plan.why;
-                    log::info("bench", "{} relit, {}: {}", bench_scene.name, row.budget, plan.why);
                     // The reference keeps nothing between frames: rendered as in the other passes (its
                     // error the mean over seeds); a GPU plan as it comes.
-                    row.planned = plan.chosen.method == "reference"
-                                      ? render_plan(renderer, *resources, scene, analysis, device, costs, plan.chosen.method,
-                                                    plan.chosen.preset, plan.chosen.knobs, options.size, truth, nullptr,
-                                                    1.0, nullptr, factor)
-                                      : render_as_it_comes(renderer, *resources, scene, analysis, device, costs,
-                                                           plan.chosen, options.size, truth, factor);
-                    judge_time_budget(row, budget, relit_fixed);
-                    rows.push_back(row);
+                    const Measured frame =
+                        plan.chosen.method == "reference"
+                            ? render_plan(renderer, *resources, scene, analysis, device, costs, plan.chosen.method,
+                                          plan.chosen.preset, plan.chosen.knobs, options.size, truth, nullptr, 1.0, nullptr,
+                                          light_factor)
+                            : render_as_it_comes(renderer, *resources, scene, analysis, device, costs, plan.chosen,
+                                                 options.size, truth, light_factor);
+                    return std::pair{plan, frame};
+                };
+                for (const bool after_its_own : {true, false}) {
+                    for (const double budget : options.budgets_ms) {
+                        // A client that has asked this budget a while: its frames, as they come, until one
+                        // redoes nothing (the comparators' frames moved the lights and switched presets
+                        // since pass 2), three at most.
+                        for (int before = 0; after_its_own && before < 3; ++before) {
+                            const auto [steady, frame] = plan_and_render(budget);
+                            log::info("bench", "{} before the change, ≤ {:g} ms: {} (redid {}, {:.1f} ms)",
+                                      bench_scene.name, budget, frame.label, to_string(steady.chosen.redoes), frame.ms);
+                            if (steady.chosen.redoes == FrameChange::none) break;
+                        }
+                        light_factor = change_lights(scene, original_lights, light_changes);
+                        const auto [plan, planned] = plan_and_render(budget);
+                        BudgetRow row;
+                        row.pass = options.passes + (after_its_own ? 1 : 2);
+                        row.scene = bench_scene.name;
+                        row.budget = fmt::format("≤ {:g} ms, relit{}", budget, after_its_own ? "" : " after another budget");
+                        row.plan = label(plan.chosen.method, plan.chosen.preset, plan.chosen.knobs) +
+                                   (plan.chosen.scale != 1.0 ? fmt::format(" at 1/{:g} size", 1.0 / plan.chosen.scale) : "") +
+                                   fmt::format(" (redoes {})", to_string(plan.chosen.redoes));
+                        row.predicted_ms = plan.chosen.predicted_ms;
+                        row.predicted_error = plan.chosen.predicted_error;
+                        row.why = plan.why;
+                        log::info("bench", "{} {}: {}", bench_scene.name, row.budget, plan.why);
+                        row.planned = planned;
+                        judge_time_budget(row, budget, relit_fixed);
+                        rows.push_back(row);
+                    }
                 }
                 scene.lights = original_lights;
             }
@@ -643,10 +669,13 @@ int main(int argc, char** argv) {
               "a reference plan (planning::probes), and reads what its spot checks measured: where the plan for a target error is the "
               "reference, the GPU plans it may replace are rendered first and compared with a reference traced at 1024 of the "
               "frame's pixel centres, and the first whose bound is within the target is sent (marked `spot-checked`; its time "
-              "includes the check's trace and every frame tried). Pass 2 asks for the same budgets again. The last pass "
-              "(`relit`) asks each time budget right after every light moved by about 1e-5 of the scene's extent, turned "
+              "includes the check's trace and every frame tried). Pass 2 asks for the same budgets again. The two last passes "
+              "(`relit`) ask each time budget right after every light moved by about 1e-5 of the scene's extent, turned "
               "by as many radians and brightened by 0.01% or more (bench::change_every_light: a change no comparison "
-              "sees, each frame scaled back by the brightening before it is measured, and no two alike): the planner "
+              "sees, each frame scaled back by the brightening before it is measured, and no two alike): first as a "
+              "client that keeps its budget meets the change, its previous frames the same budget's (rendered as "
+              "they come, with the lights before the change, until one redoes nothing, three at most); then right after another budget's frame (`relit after another "
+              "budget`), where a plan that differs from the last one switches. The planner "
               "prices what each plan's frame would redo (frame_change.hpp: the light's work, and every structure where "
               "it switches method or preset), and "
               "the frame is rendered as it comes, once, not warmed first; its comparator is the most accurate fixed "

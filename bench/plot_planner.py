@@ -1,8 +1,9 @@
 #!/usr/bin/python3
 """Plots bench/planner's results: per scene, relMSE against time of every fixed plan (one colour a
 method), their Pareto front (no plan both faster and more accurate), and the frames the planner
-planned for each budget, pass 1, pass 2 and the relit pass (time budgets right after a light
-change, frames rendered as they come), labelled by their budget."""
+planned for each budget, pass 1, pass 2 and the relit passes (time budgets right after a light
+change, frames rendered as they come: after the same budget's frame, then after another budget's),
+labelled by their budget."""
 import csv
 import os
 import sys
@@ -45,7 +46,8 @@ def main(results: str) -> None:
         for row in planned:
             if row["scene"] != scene or float(row["measured_rel_mse"]) <= 0:
                 continue
-            marker = "x" if row["pass"] == "1" else "^" if "relit" in row["budget"] else "+"
+            marker = ("x" if row["pass"] == "1" else "v" if "another budget" in row["budget"]
+                      else "^" if "relit" in row["budget"] else "+")
             colour = "black" if row["holds"] == "true" else "red"
             x, y = float(row["measured_ms"]), float(row["measured_rel_mse"])
             axis.scatter([x], [y], marker=marker, s=60, color=colour, linewidths=1.5)
@@ -54,6 +56,7 @@ def main(results: str) -> None:
         axis.scatter([], [], marker="x", color="black", label="planned, pass 1 (red: does not hold)")
         axis.scatter([], [], marker="+", color="black", label="planned, pass 2")
         axis.scatter([], [], marker="^", color="black", label="planned right after a light change")
+        axis.scatter([], [], marker="v", color="black", label="the same, after another budget's frame")
         axis.set_xscale("log")
         axis.set_yscale("log")
         axis.set_xlabel("render time (ms)")

@@ -345,32 +345,44 @@ std::optional<double> maps_redrawn_ms(const PlanningInputs& inputs, const std::s
 // llvmpipe's warm frames (kChangeMargin) priced isr ultra's switch in the atrium at 27 ms on the
 // H200, where it took 15. Frames whose calibrated figure is under a twentieth of their warm frame
 // are left out: the noise of one frame would be their ratio.
+// Where the scene has no frame of the class, its frames of the method after other changes (the
+// first of each preset builds its structures) scale it: the scene's weight is one for every class.
+// On the corpus the lights' moves priced so fell short by a median of -0.18 to 0.08 warm frames on
+// llvmpipe and -0.23 to -0.01 on an H200, by more than 0.2 in 30 of 200 frames and 7 of 100 (16 and
+// 6 of them direct's, whose maps are most of it), where llvmpipe's margin, the most its corpus fell
+// short by, overpriced them by a median of 0.6 to 1.6 warm frames (bench/change_margins.py).
 struct SceneScale {
     double scale = 1.0;
     std::size_t frames = 0;
+    bool other_classes = false;  // measured after changes of other classes
 };
 std::optional<SceneScale> scene_scale_of_calibration(const PlanningInputs& inputs, const std::string& method,
                                                      const std::string& preset, int bounces, FrameChange change) {
     if (!inputs.scene) return std::nullopt;
-    std::vector<double> scales;
-    for (const SceneMeasurements::ChangedFrame& frame : inputs.scene->changed_frames_of(method)) {
-        if (calibration_class(frame.change) != calibration_class(change) || !(frame.time.pixels > 0.0)) continue;
-        if (frame.preset == preset && frame.bounces == bounces && frame.change == change) continue;
-        const auto calibrated = inputs.device.change_cost(method, frame.preset);
-        if (!calibrated) continue;
-        methods::KnobValues knobs;
-        if (frame.bounces >= 0 && bounces_knob(methods::MethodRegistry::builtin().resolve(method, frame.preset, {}))) {
-            knobs["bounces"] = frame.bounces;
+    const std::vector<SceneMeasurements::ChangedFrame> changed = inputs.scene->changed_frames_of(method);
+    for (const bool same_class : {true, false}) {
+        std::vector<double> scales;
+        for (const SceneMeasurements::ChangedFrame& frame : changed) {
+            if ((calibration_class(frame.change) == calibration_class(change)) != same_class || !(frame.time.pixels > 0.0)) {
+                continue;
+            }
+            if (frame.preset == preset && frame.bounces == bounces && frame.change == change) continue;
+            const auto calibrated = inputs.device.change_cost(method, frame.preset);
+            if (!calibrated) continue;
+            methods::KnobValues knobs;
+            if (frame.bounces >= 0 && bounces_knob(methods::MethodRegistry::builtin().resolve(method, frame.preset, {}))) {
+                knobs["bounces"] = frame.bounces;
+            }
+            const auto maps_ms = maps_redrawn_ms(inputs, method, frame.preset, knobs, frame.change);
+            const double warm_there = warm_ms(at_pixels(inputs, frame.time.pixels), method, frame.preset, knobs, nullptr);
+            const double priced = calibrated->beyond_warm(frame.change) *
+                                  warm_ms(at_pixels(inputs, calibrated->pixels), method, frame.preset, knobs, nullptr);
+            if (!maps_ms || !std::isfinite(warm_there) || !std::isfinite(priced) || !(priced >= 0.05 * warm_there)) continue;
+            scales.push_back(std::max(0.0, frame.time.measured_ms - warm_there - *maps_ms) / priced);
         }
-        const auto maps_ms = maps_redrawn_ms(inputs, method, frame.preset, knobs, frame.change);
-        const double warm_there = warm_ms(at_pixels(inputs, frame.time.pixels), method, frame.preset, knobs, nullptr);
-        const double priced = calibrated->beyond_warm(frame.change) *
-                              warm_ms(at_pixels(inputs, calibrated->pixels), method, frame.preset, knobs, nullptr);
-        if (!maps_ms || !std::isfinite(warm_there) || !std::isfinite(priced) || !(priced >= 0.05 * warm_there)) continue;
-        scales.push_back(std::max(0.0, frame.time.measured_ms - warm_there - *maps_ms) / priced);
+        if (!scales.empty()) return SceneScale{std::max(1.0, median(scales)), scales.size(), !same_class};
     }
-    if (scales.empty()) return std::nullopt;
-    return SceneScale{std::max(1.0, median(scales)), scales.size()};
+    return std::nullopt;
 }
 
 }  // namespace
@@ -452,9 +464,10 @@ double predicted_ms(const PlanningInputs& inputs, const std::string& method, con
             if (scene_scale) {
                 extra = scene_scale->scale * at_calibration + *maps_ms;
                 source = fmt::format("{}{:.2g} x {:.2g} x its warm frame at {:.0f} pixels besides: the device's "
-                                     "calibration, scaled as {} frame{} of the method's other presets measured here",
+                                     "calibration, scaled as {} frame{} of the method{} measured here",
                                      maps_text, scene_scale->scale, ratio, calibrated->pixels, scene_scale->frames,
-                                     scene_scale->frames == 1 ? "" : "s");
+                                     scene_scale->frames == 1 ? "" : "s",
+                                     scene_scale->other_classes ? " after other changes" : "'s other presets");
             } else {
                 const double margin = change_margin(method, change);
                 extra = at_calibration + margin * warm_ms(at_pixels(inputs, kChangePriorPixels), method, preset, knobs, nullptr) +

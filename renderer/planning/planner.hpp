@@ -141,7 +141,8 @@ Plan plan(const PlanningInputs& inputs, const Budget& budget);
 // size (none for light_power) plus the rest: where the device's calibration measured the change
 // (DeviceCosts::change_cost), its multiple of the plan's warm frame at the size it was measured at,
 // times the scene's scale of the calibration where the scene's frames of the method's other
-// presets measured one (planner.cpp, scene_scale_of_calibration), else plus change_margin() times
+// presets measured one after a change of the class, else its frames after other changes did
+// (planner.cpp, scene_scale_of_calibration), else plus change_margin() times
 // that frame at kChangePriorPixels; else change_cost_bound(besides_maps)
 // times the frame at kChangePriorPixels. With no timing of the maps, change_cost_bound() times that
 // frame. The work is the scene's (shadow maps, an atlas, an octree), not the frame's pixels: a

@@ -618,7 +618,8 @@ TEST(Planner, ChangesArePricedFromTheDevicesCalibrationOfThem) {
 // Before a scene measured frames of a plan's own change, its frames of the method's other presets
 // after a change of the same class tell how much heavier than the calibration's box it is: the
 // device's figure is scaled by the median of what they measured against theirs (never under 1), in
-// place of the margin measured on the bench corpus.
+// place of the margin measured on the bench corpus; without such frames, its frames of the method
+// after other changes.
 TEST(Planner, ASceneScalesTheCalibrationByItsFramesOfTheMethodsOtherPresets) {
     const SceneAnalysis analysis = made_up_analysis();
     DeviceCosts device("test");
@@ -655,16 +656,20 @@ TEST(Planner, ASceneScalesTheCalibrationByItsFramesOfTheMethodsOtherPresets) {
     scene.record("cssm", "medium", medium_bounces, medium_128 + maps_medium + 0.5 * 5.0 * medium_64, medium_128, 128.0 * 128.0,
                  FrameChange::knobs_and_scene);
     EXPECT_NEAR(predicted_ms(inputs, "cssm", "low", {}), low_128 + 30.0 + 3.0 * 6.0 * low_64, 1e-9);
-    // A move of the lights is another class: its price keeps the margin.
+    // A move of the lights is another class: with no frame of it, the scene's frames after the
+    // other changes scale it (their median, 3), not the margin.
     now = FrameChange::lights;
-    EXPECT_DOUBLE_EQ(predicted_ms(inputs, "cssm", "low", {}),
-                     low_128 + 30.0 + 0.5 * low_64 + change_margin("cssm", now) * low_128);
-    // A scene lighter than the box (its frame under the calibration's figure) is priced at the figure.
+    EXPECT_NEAR(predicted_ms(inputs, "cssm", "low", {}, &basis), low_128 + 30.0 + 3.0 * 0.5 * low_64, 1e-9);
+    EXPECT_NE(basis.find("scaled as 3 frames of the method after other changes measured here"), std::string::npos) << basis;
+    // A frame of its own class takes over from them. A scene lighter than the box (its frame under
+    // the calibration's figure) is priced at the figure.
     scene.record("cssm", "medium", medium_bounces, medium_128 + maps_medium + 0.2 * 0.5 * medium_64, medium_128,
                  128.0 * 128.0, FrameChange::lights);
-    EXPECT_NEAR(predicted_ms(inputs, "cssm", "low", {}), low_128 + 30.0 + 0.5 * low_64, 1e-9);
-    // A figure under a twentieth of the warm frame scales nothing: one frame's noise would be its ratio.
-    device.set_change_cost("cssm", "medium", {64.0 * 64.0, 0.25, 0.01, 5.0});
+    EXPECT_NEAR(predicted_ms(inputs, "cssm", "low", {}, &basis), low_128 + 30.0 + 0.5 * low_64, 1e-9);
+    EXPECT_NE(basis.find("scaled as 1 frame of the method's other presets"), std::string::npos) << basis;
+    // A figure under a twentieth of the warm frame scales nothing: one frame's noise would be its
+    // ratio. With no other figure of the method either, the margin.
+    device.set_change_cost("cssm", "medium", {64.0 * 64.0, 0.01, 0.01, 0.01});
     EXPECT_DOUBLE_EQ(predicted_ms(inputs, "cssm", "low", {}),
                      low_128 + 30.0 + 0.5 * low_64 + change_margin("cssm", now) * low_128);
     // Once the preset measured its own frame of the change, that prices it.
