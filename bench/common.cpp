@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <ctime>
 #include <fstream>
+#include <sstream>
 #include <thread>
 
 namespace bounce::bench {
@@ -50,6 +51,13 @@ RenderRequest linear_request(const std::string& method, const std::string& prese
     request.width = request.height = size;
     request.make_display_image = false;
     return request;
+}
+
+std::vector<double> numbers(const std::string& text) {
+    std::vector<double> values;
+    std::stringstream in(text);
+    for (std::string item; std::getline(in, item, ',');) values.push_back(std::stod(item));
+    return values;
 }
 
 double change_every_light(scene::Scene& scene, const std::vector<scene::Light>& original, int change) {

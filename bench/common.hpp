@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace bounce::bench {
 
@@ -39,6 +40,9 @@ struct ReportPaths {
 // Reads the remaining flags as --out and --markdown; nullopt, after printing `usage` to stderr,
 // for any other flag.
 std::optional<ReportPaths> report_paths(Arguments& arguments, const char* usage);
+
+// A flag's comma-separated numbers ("0.1,0.05"); std::invalid_argument for one that is not.
+std::vector<double> numbers(const std::string& text);
 
 using Clock = std::chrono::steady_clock;
 

@@ -311,13 +311,6 @@ Measured relit_fixed_plan(Renderer& renderer, SceneResources& resources, scene::
     return relit;
 }
 
-std::vector<double> numbers(const std::string& text) {
-    std::vector<double> values;
-    std::stringstream in(text);
-    for (std::string item; std::getline(in, item, ',');) values.push_back(std::stod(item));
-    return values;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -332,8 +325,8 @@ int main(int argc, char** argv) {
         else if (flag == "--out") options.out = arguments.value();
         else if (flag == "--markdown") options.markdown = arguments.value();
         else if (flag == "--scene") options.scenes.push_back(arguments.value());
-        else if (flag == "--errors") options.errors = numbers(arguments.value());
-        else if (flag == "--budgets-ms") options.budgets_ms = numbers(arguments.value());
+        else if (flag == "--errors") options.errors = bench::numbers(arguments.value());
+        else if (flag == "--budgets-ms") options.budgets_ms = bench::numbers(arguments.value());
         else if (flag == "--analysis-only") options.analysis_only = true;
         else if (flag == "--analysis-spp") options.analysis_spp = std::max(2, static_cast<int>(arguments.number()));
         else if (flag == "--analysis-size") options.analysis_size = std::max(4, static_cast<int>(arguments.number()));

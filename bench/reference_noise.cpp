@@ -22,7 +22,6 @@
 
 #include <algorithm>
 #include <cstdio>
-#include <sstream>
 
 using namespace bounce;
 
@@ -30,8 +29,7 @@ namespace {
 
 std::vector<int> integers(const std::string& text) {
     std::vector<int> values;
-    std::stringstream in(text);
-    for (std::string item; std::getline(in, item, ',');) values.push_back(std::stoi(item));
+    for (const double value : bench::numbers(text)) values.push_back(static_cast<int>(value));
     return values;
 }
 
