@@ -16,7 +16,11 @@ method's shaders, which a daemon does once.
 Then each row's time as a multiple of the calibration's price of it (the scale planner.cpp's
 scene_scale_of_calibration learns from a scene's frames of a method's other presets), per method and
 change, and per scene for switches; rows whose price is under a twentieth of their warm frame are
-left out, as the planner leaves them out."""
+left out, as the planner leaves them out.
+
+Last, how far a move of the lights falls short of its price when the scene has no such frame yet:
+priced as the planner prices it, the calibration scaled by the scene's switches (the median, at least
+1), against the calibration plus the margin above."""
 import csv
 import json
 import math
@@ -31,11 +35,14 @@ def main(frame_changes: str, cost_model: str) -> None:
     at = lambda line, pixels: line["fixed_ms"] + line["per_megapixel_ms"] * pixels * 1e-6
     scales, scene_scales = defaultdict(list), defaultdict(list)
     short = defaultdict(list)  # (method, change) -> (shortfall in warm frames, preset, scene, run)
+    # Each row with its preset's calibrated figures, its warm frame, and that frame at the calibration's size.
+    frames = []
     for r in csv.DictReader(open(frame_changes)):
         key = (r["method"], r["preset"])
         line, cost = lines[key], changes[key]
         warm = float(r["warm_ms"])
-        warm_there = warm * at(line, cost["pixels"]) / at(line, 128 * 128)
+        frames.append((r, cost, warm, warm * at(line, cost["pixels"]) / at(line, 128 * 128)))
+    for r, cost, warm, warm_there in frames:
         measured = {"lights": float(r["relit_ms"]) - float(r["relit_shadow_ms"]) - warm,
                     "knobs": float(r["cold_ms"]) - float(r["cold_shadow_ms"]) - warm}
         predicted = {"lights": cost["lights"], "knobs": max(cost["lights"], cost["rebuild"])}
@@ -73,20 +80,14 @@ def main(frame_changes: str, cost_model: str) -> None:
     # calibration scaled by the median of the scene's switches (of its run), at least 1, besides the
     # maps; against the calibration plus the margin these frames measure (the most they fell short by).
     switch_scale = defaultdict(list)
-    for r in csv.DictReader(open(frame_changes)):
-        key = (r["method"], r["preset"])
-        line, cost = lines[key], changes[key]
-        warm = float(r["warm_ms"])
-        priced = max(cost["lights"], cost["rebuild"]) * warm * at(line, cost["pixels"]) / at(line, 128 * 128)
+    for r, cost, warm, warm_there in frames:
+        priced = max(cost["lights"], cost["rebuild"]) * warm_there
         if r["preset"] != "draft" and priced >= 0.05 * warm:
             ms = float(r["cold_ms"]) - float(r["cold_shadow_ms"]) - warm
             switch_scale[(r["method"], r["scene"], r["run"])].append(max(0.0, ms) / priced)
     shortfalls = defaultdict(lambda: ([], []))
-    for r in csv.DictReader(open(frame_changes)):
-        key = (r["method"], r["preset"])
-        line, cost = lines[key], changes[key]
-        warm = float(r["warm_ms"])
-        figure = cost["lights"] * warm * at(line, cost["pixels"]) / at(line, 128 * 128)
+    for r, cost, warm, warm_there in frames:
+        figure = cost["lights"] * warm_there
         ms = float(r["relit_ms"]) - float(r["relit_shadow_ms"]) - warm
         found = switch_scale.get((r["method"], r["scene"], r["run"]))
         scale = max(1.0, sorted(found)[len(found) // 2]) if found else 1.0

@@ -1,6 +1,7 @@
 #include "gpu_fixture.hpp"
 
 #include "renderer/scene/builtin.hpp"
+#include "renderer/scene/gltf_import.hpp"
 
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -66,6 +67,14 @@ scene::Light directional_light(const glm::vec3& direction, float irradiance) {
     light.direction = direction;
     light.intensity = irradiance;
     return light;
+}
+
+scene::Scene sunlit_engine() {
+    scene::Scene file =
+        scene::import_gltf_file("/usr/share/assimp/models/glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb");
+    file.lights.push_back(directional_light(glm::normalize(glm::vec3(-0.3f, -1.0f, -0.5f)), 3.0f));
+    if (file.cameras.empty()) file.cameras.push_back(scene::framing_camera(file.world_bounds()));
+    return file;
 }
 
 void add_square(scene::Scene& scene, const std::string& name, const glm::vec3& centre, float half_size,

@@ -41,6 +41,10 @@ scene::Material matte(const glm::vec3& albedo);
 // A directional light shining along `direction` (unit) with `irradiance` W/m^2 on a surface facing it.
 scene::Light directional_light(const glm::vec3& direction, float irradiance);
 
+// assimp's sample 2CylinderEngine, as a CAD exporter writes it (67 nodes, 65 of them rotated, no
+// light of its own), with a sun added and, where the file has no camera, one framing it.
+scene::Scene sunlit_engine();
+
 // Adds a one-primitive object: a square of `half_size` centred at `centre`, facing `normal`.
 void add_square(scene::Scene& scene, const std::string& name, const glm::vec3& centre, float half_size,
                 const glm::vec3& normal, int material);

@@ -7,7 +7,6 @@
 #include "renderer/image/metrics.hpp"
 #include "renderer/methods/reference/path_tracer.hpp"
 #include "renderer/scene/builtin.hpp"
-#include "renderer/scene/gltf_import.hpp"
 
 #include <glm/gtc/matrix_transform.hpp>
 #include <gtest/gtest.h>
@@ -349,10 +348,7 @@ TEST(Isr, ALightDimmedRebuildsTheVplTreeOverTheKeptMaps) {
 // light of its own: a sun is added): the sun halved rebuilds the tree over the kept maps, and the
 // frame's indirect light matches one rendered afresh (float noise: measured 0 on llvmpipe).
 TEST(Isr, ASunHalvedOverARealFileRebuildsTheTreeAsRenderedAfresh) {
-    scene::Scene file =
-        scene::import_gltf_file("/usr/share/assimp/models/glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb");
-    file.lights.push_back(directional_light(glm::normalize(glm::vec3(-0.3f, -1.0f, -0.5f)), 3.0f));
-    if (file.cameras.empty()) file.cameras.push_back(scene::framing_camera(file.world_bounds()));
+    scene::Scene file = sunlit_engine();
     auto resources = shared_renderer().upload(file);
     const RenderRequest request = isr_request("low");
     const auto first = shared_renderer().render(*resources, request);
@@ -545,11 +541,8 @@ TEST(Isr, ImperfectShadowMapsFollowObjectTransforms) {
 // VPL's term is multiplied by a visibility in [0, 1], and the eye-space upsampling is a weighted
 // mean, so no pixel may gain light from the maps (beyond float rounding, 1e-5 of the pixel).
 TEST(Isr, ImperfectShadowMapsOnlyTakeLightAwayOnARealFile) {
-    scene::Scene file =
-        scene::import_gltf_file("/usr/share/assimp/models/glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb");
+    const scene::Scene file = sunlit_engine();
     ASSERT_GT(file.objects.size(), 10u);
-    file.lights.push_back(directional_light(glm::normalize(glm::vec3(-0.3f, -1.0f, -0.5f)), 3.0f));
-    if (file.cameras.empty()) file.cameras.push_back(scene::framing_camera(file.world_bounds()));
     const auto open = render_isr(file, "draft");
     const auto shadowed = render_isr(file, "draft", kVisibility);
     EXPECT_EQ(shadowed.frame.non_finite_count(), 0u);

@@ -4,7 +4,6 @@
 #include "gpu_fixture.hpp"
 
 #include "renderer/image/metrics.hpp"
-#include "renderer/scene/gltf_import.hpp"
 
 #include <glm/gtc/matrix_transform.hpp>
 #include <gtest/gtest.h>
@@ -16,20 +15,10 @@ namespace {
 
 constexpr int kSize = 64;
 
-// assimp's sample 2CylinderEngine, as a CAD exporter writes it: 67 nodes, 65 of them rotated, no
-// light of its own (a sun is added).
-scene::Scene engine() {
-    scene::Scene file =
-        scene::import_gltf_file("/usr/share/assimp/models/glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb");
-    file.lights.push_back(directional_light(glm::normalize(glm::vec3(-0.3f, -1.0f, -0.5f)), 3.0f));
-    if (file.cameras.empty()) file.cameras.push_back(scene::framing_camera(file.world_bounds()));
-    return file;
-}
-
 // The world bounds are those of the vertices, not of each mesh box's corners transformed: a rotated
 // box holds space its mesh does not fill (on this file, 23 units more above the engine, of 273).
 TEST(Transforms, TheSceneBoundsAreThoseOfItsPlacedVertices) {
-    const scene::Scene file = engine();
+    const scene::Scene file = sunlit_engine();
     const scene::Scene baked = with_transforms_baked(file);
     const scene::Aabb placed = file.world_bounds(), exact = baked.world_bounds();
     // The same float products (transform times vertex) on both sides: equal, not near.
@@ -62,7 +51,7 @@ TEST(Transforms, TheSceneBoundsAreThoseOfItsPlacedVertices) {
 // sun's shadow map is fitted to the bounds), 2.5e-3 (vct), 1.4e-3 (isr) and 2.4e-4 (cssm) on
 // llvmpipe; fitted, by 2e-11 (cssm: 6e-7).
 TEST(Transforms, AFileRendersAsItsBakedCopyWithEveryMethod) {
-    const scene::Scene file = engine();
+    const scene::Scene file = sunlit_engine();
     const scene::Scene baked = with_transforms_baked(file);
     const double one_pixel = 1.0 / (kSize * kSize);
     for (const char* method : {"direct", "vct", "isr", "cssm"}) {

@@ -6,7 +6,6 @@
 #include "renderer/methods/vct/vct_method.hpp"
 #include "renderer/methods/reference/path_tracer.hpp"
 #include "renderer/scene/builtin.hpp"
-#include "renderer/scene/gltf_import.hpp"
 #include "renderer/gpu/shader_program.hpp"
 
 #include "vct/vct_layout.h"
@@ -303,10 +302,7 @@ TEST(Vct, ALightDimmedScalesTheInjectedLightAndOtherLightChangesReinjectIt) {
 // them rotated, no light of its own; a sun is added): the sun halved is scaled, and matches a frame
 // injected afresh within a code per octree level.
 TEST(Vct, ASunHalvedOverARealFileIsScaledAsInjectedAfresh) {
-    scene::Scene file =
-        scene::import_gltf_file("/usr/share/assimp/models/glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb");
-    file.lights.push_back(directional_light(glm::normalize(glm::vec3(-0.3f, -1.0f, -0.5f)), 3.0f));
-    if (file.cameras.empty()) file.cameras.push_back(scene::framing_camera(file.world_bounds()));
+    scene::Scene file = sunlit_engine();
     auto resources = shared_renderer().upload(file);
     const RenderRequest request = vct_request("low");
     shared_renderer().render(*resources, request);
