@@ -154,14 +154,20 @@ std::optional<double> FrameComparisons::calibrate_noise(const RenderResult& fewe
     // Frames of one seed share their first samples (a sample draws from the seed, the pixel and its
     // index alone): the larger holds the smaller, and their difference is the smaller's noise less
     // the larger's, not the sum of the two.
-    const double fewer_noise = fewer.stats.method_statistics.at("noise_per_sample");
+    const double more_noise = more.stats.method_statistics.at("noise_per_sample");
+    // Of one bounce count, the two frames' noise per sample is one quantity, and the frame of more
+    // samples reads it better: a frame's statistic reads high at few samples
+    // (SceneMeasurements::record_noise), and the scale measured against it would read low by as
+    // much, offsetting a ratio that reads high (the atrium: x 0.87 with 1.25).
+    const double fewer_noise =
+        fewer_bounces == more_bounces ? more_noise : fewer.stats.method_statistics.at("noise_per_sample");
     const bool same_seed = knob(fewer.stats, "seed", 0.0) == knob(more.stats, "seed", 1.0);
     // Of one seed and other bounce counts, the two share their first vertices' noise by an amount
     // neither statistic tells (one frame's bounce prefix and another's frame, say).
     if (same_seed && fewer_bounces != more_bounces) return std::nullopt;
     const bool nested = same_seed;
     const double statistic = nested ? fewer_noise * (1.0 / fewer_spp - 1.0 / more_spp)
-                                    : fewer_noise / fewer_spp + more.stats.method_statistics.at("noise_per_sample") / more_spp;
+                                    : fewer_noise / fewer_spp + more_noise / more_spp;
     // The bounce gap is the analysis' estimate, noisy itself: a pair whose difference is over a quarter
     // gap says too little of the noise.
     if (!(rel_mse >= 0.0) || !(statistic > kMinCalibrationStatistic) || gap > kMaxCalibrationGap * rel_mse) return std::nullopt;

@@ -242,7 +242,7 @@ std::optional<double> SceneMeasurements::ratio(const std::string& method, const 
     return median(std::move(others));
 }
 
-std::optional<SceneMeasurements::AffineTime> SceneMeasurements::reference_time() const {
+std::optional<SceneMeasurements::AffineTime> SceneMeasurements::reference_time(std::optional<int> bounces) const {
     const std::lock_guard lock(mutex_);
     // Weighted least squares with weights 1/measured^2: the residuals relative to each frame.
     double s = 0.0, sx = 0.0, sy = 0.0, sxx = 0.0, sxy = 0.0, smallest = 0.0, largest = 0.0;
@@ -275,6 +275,29 @@ std::optional<SceneMeasurements::AffineTime> SceneMeasurements::reference_time()
         fit.scale = sxy / sxx;
     }
     if (!(fit.scale > 0.0) || !std::isfinite(fit.scale) || !std::isfinite(fit.fixed_ms)) return std::nullopt;
+    if (!bounces) return fit;
+    std::map<int, std::vector<double>> ratios;  // measured over the fit, by bounce count
+    for (const auto& [key, by_size] : frames_) {
+        if (std::get<0>(key) != "reference" || std::get<2>(key) < 0) continue;
+        for (const auto& [pixels, kept] : by_size) {
+            for (const FrameTime& frame : kept) {
+                if (!(frame.baseline_ms > 0.0) || !(frame.measured_ms > 0.0)) continue;
+                ratios[std::get<2>(key)].push_back(frame.measured_ms / fit.at(frame.baseline_ms));
+            }
+        }
+    }
+    const auto at_count = [&](std::map<int, std::vector<double>>::const_iterator it) {
+        fit.bounce_ratio_of = it->first;
+        return median(it->second);
+    };
+    const auto above = ratios.lower_bound(*bounces);
+    if (above != ratios.end() && above->first == *bounces) {
+        fit.bounce_ratio = at_count(above);
+    } else if (!ratios.empty()) {
+        const double above_ratio = above != ratios.end() ? median(above->second) : 0.0;
+        const double below_ratio = above != ratios.begin() ? median(std::prev(above)->second) : 0.0;
+        fit.bounce_ratio = at_count(above_ratio >= below_ratio ? above : std::prev(above));
+    }
     return fit;
 }
 
@@ -335,26 +358,29 @@ std::optional<SceneMeasurements::PresetLine> SceneMeasurements::method_line(cons
     return found;
 }
 
-void SceneMeasurements::record_noise(int bounces, double noise_ratio) {
-    if (!(noise_ratio >= 0.0) || !std::isfinite(noise_ratio)) return;
+void SceneMeasurements::record_noise(int bounces, double noise_ratio, double spp) {
+    if (!(noise_ratio >= 0.0) || !std::isfinite(noise_ratio) || !(spp > 0.0)) return;
     const std::lock_guard lock(mutex_);
-    double& kept = noise_[bounces];
-    kept = std::max(kept, noise_ratio);
+    NoiseRatio& kept = noise_[bounces];
+    if (spp > kept.spp) kept = {noise_ratio, spp};
+    else if (spp == kept.spp) kept.ratio = std::max(kept.ratio, noise_ratio);
 }
 
 std::optional<double> SceneMeasurements::noise_ratio(int bounces) const {
     const std::lock_guard lock(mutex_);
     const auto above = noise_.lower_bound(bounces);
-    if (above != noise_.end() && above->first == bounces) return above->second;
-    if (above == noise_.begin()) return above == noise_.end() ? std::nullopt : std::optional(above->second);
+    if (above != noise_.end() && above->first == bounces) return above->second.ratio;
+    if (above == noise_.begin()) return above == noise_.end() ? std::nullopt : std::optional(above->second.ratio);
     const auto below = std::prev(above);
-    if (above == noise_.end() || bounces - below->first < above->first - bounces) return below->second;
-    return above->second;
+    if (above == noise_.end() || bounces - below->first < above->first - bounces) return below->second.ratio;
+    return above->second.ratio;
 }
 
 std::map<int, double> SceneMeasurements::noise_ratios() const {
     const std::lock_guard lock(mutex_);
-    return noise_;
+    std::map<int, double> ratios;
+    for (const auto& [bounces, kept] : noise_) ratios[bounces] = kept.ratio;
+    return ratios;
 }
 
 void SceneMeasurements::record_noise_scale(double scale) {

@@ -133,13 +133,21 @@ public:
     // whatever its length), where their predictions span kReferenceSpan or more; nullopt otherwise.
     // One ratio prices a one-sample frame as a thousandth of a thousand-sample one, where on 16
     // threads both carry the same few milliseconds of fixed cost.
+    //
+    // With `bounces`, the fit is then raised or lowered by what frames of that bounce count measured
+    // against it (the median of their ratios), or, where none were, by the larger of the nearest
+    // counts' below and above it: the analysis prices every vertex of a path alike, and in the atrium
+    // frames of 6 bounces took 1.12 to 1.34 times what the fit through every count priced, and frames
+    // of none 0.7 times.
     struct AffineTime {
         double fixed_ms = 0.0;
         double scale = 1.0;  // measured ms per predicted ms of samples
         int frames = 0;
-        double at(double baseline_ms) const { return fixed_ms + scale * baseline_ms; }
+        double bounce_ratio = 1.0;  // what frames of the bounce count measured against the fit
+        int bounce_ratio_of = -1;   // the bounce count whose frames gave it (-1: none)
+        double at(double baseline_ms) const { return (fixed_ms + scale * baseline_ms) * bounce_ratio; }
     };
-    std::optional<AffineTime> reference_time() const;
+    std::optional<AffineTime> reference_time(std::optional<int> bounces = std::nullopt) const;
     static constexpr double kReferenceSpan = 4.0;
     // The median over every GPU method measured here: how much heavier the scene is than the
     // calibration scene, for GPU methods not yet measured on it. nullopt when none was.
@@ -178,9 +186,13 @@ public:
 
     // A reference frame's noise per sample (methods::reference::noise_per_sample) at a bounce count,
     // as a multiple of what the analysis measured there: over a whole frame's samples it meets rare
-    // bright paths that the analysis' few samples miss.
-    void record_noise(int bounces, double noise_ratio);
-    // The largest ratio recorded at the nearest bounce count (the higher of two as near); nullopt when none.
+    // bright paths that the analysis' few samples miss. Of `spp` samples: a frame's statistic weighs
+    // each pixel's variance by its own neighbourhood's luminance, which few samples read low where
+    // a few paths carry the light, so it reads high at few samples (1.25 to 1.30 of the analysis' at
+    // 4 samples in the atrium and the furnished room, 0.96 to 1.04 at 64; bench/reference_noise).
+    void record_noise(int bounces, double noise_ratio, double spp);
+    // The ratio of the frames of most samples recorded at the nearest bounce count (the largest of
+    // them; the higher count of two as near); nullopt when none.
     std::optional<double> noise_ratio(int bounces) const;
     // Every bounce count's ratio recorded (for logs and the bench).
     std::map<int, double> noise_ratios() const;
@@ -227,7 +239,10 @@ private:
     mutable std::mutex mutex_;
     std::map<Key, std::map<double, std::deque<FrameTime>>> frames_;  // warm, by pixels
     std::map<std::pair<Key, FrameChange>, std::deque<FrameTime>> changed_frames_;
-    std::map<int, double> noise_;
+    struct NoiseRatio {
+        double ratio = 0.0, spp = 0.0;
+    };
+    std::map<int, NoiseRatio> noise_;
     std::map<int, std::deque<double>> shadow_maps_;  // by size
     std::deque<double> noise_scales_;
     std::map<std::tuple<std::string, std::string, int>, std::deque<double>> own_errors_;

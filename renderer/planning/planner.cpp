@@ -230,11 +230,16 @@ double warm_ms(const PlanningInputs& inputs, const std::string& method, const st
         if (const auto ms = scene_line_ms(inputs, method, preset, knobs, pixels, basis)) return *ms;
     }
     if (inputs.scene && method == "reference") {
-        if (const auto fit = inputs.scene->reference_time()) {
+        const int bounces = modelled_bounces(method, knobs);
+        if (const auto fit = inputs.scene->reference_time(bounces)) {
             if (basis) {
                 *basis = fmt::format("the analysis' times as this scene's {} reference frames measured them: "
                                      "{:.1f} ms + {:.2f}x",
                                      fit->frames, fit->fixed_ms, fit->scale);
+                if (fit->bounce_ratio_of >= 0 && std::abs(fit->bounce_ratio - 1.0) >= 0.005) {
+                    *basis += fmt::format(", x {:.2f} as its frames of {} bounce{} measured against that", fit->bounce_ratio,
+                                          fit->bounce_ratio_of, fit->bounce_ratio_of == 1 ? "" : "s");
+                }
             }
             return fit->at(*base);
         }
@@ -730,7 +735,7 @@ void record_reference_noise(SceneMeasurements& measurements, const SceneAnalysis
     if (noise != stats.method_statistics.end() && spp != stats.knobs.end() && spp->second >= 4 && analysis) {
         const int bounces = modelled_bounces(stats.method, stats.knobs);
         const double analysed = BounceEnergy::at(analysis->bounces.noise_per_sample, bounces);
-        if (analysed > 0.0) measurements.record_noise(bounces, noise->second / analysed);
+        if (analysed > 0.0) measurements.record_noise(bounces, noise->second / analysed, spp->second);
     }
 }
 

@@ -334,24 +334,28 @@ TEST(FrameComparisons, TheLastBouncesPartOfTheCrossTermGoesOnAsTheLaterLightDoes
 
 // Two reference frames of one view tell how much relMSE the noise statistic makes on the scene: here
 // the fewer-sample frame is off by +-0.3 in a checkerboard (relMSE 0.09 / 1.01 against the converged
-// one) while its statistic claimed 0.18 / 16 x 16 samples = 0.18: the scene's scale is a half, and it
-// halves the reference's predicted noise and the noise taken out of a GPU frame's comparison.
+// one) while the statistic per sample, 16 x 0.18, claims 0.18 at its 16 samples (and 16 x 0.18 / 4096
+// at the converged frame's): the scene's scale is about a half, and it halves the reference's
+// predicted noise and the noise taken out of a GPU frame's comparison. The fewer-sample frame's own
+// statistic reads a quarter high, as a frame's does at few samples: of one bounce count, the pair is
+// measured against the converged frame's.
 TEST(FrameComparisons, TwoReferenceFramesOfAViewMeasureWhatTheirNoiseStatisticMakes) {
     const SceneAnalysis analysis = made_up_analysis();
     SceneMeasurements measured;
     FrameComparisons comparisons;
-    auto noisy = std::make_shared<RenderResult>(*reference(16, 16.0 * 0.18));
+    const double per_sample = 16.0 * 0.18;
+    auto noisy = std::make_shared<RenderResult>(*reference(16, 1.25 * per_sample));
     for (int i = 0; i < 64; ++i) {
         const float offset = ((i % 8 + i / 8) % 2 == 0) ? 0.3f : -0.3f;
         for (int c = 0; c < 3; ++c) noisy->frame.rgba[4 * i + c] += offset;
     }
-    auto converged = std::make_shared<RenderResult>(*reference(4096, 0.0));
+    auto converged = std::make_shared<RenderResult>(*reference(4096, per_sample));
     converged->stats.knobs["seed"] = 2;  // another seed: the two frames' noise is independent
     comparisons.add(3, converged, &analysis, measured);
     EXPECT_FALSE(measured.noise_scale().has_value());
     comparisons.add(3, noisy, &analysis, measured);  // fewer samples: compared with the kept one, not kept
     ASSERT_TRUE(measured.noise_scale().has_value());
-    EXPECT_NEAR(*measured.noise_scale(), (0.09 / 1.01) / 0.18, 1e-6);
+    EXPECT_NEAR(*measured.noise_scale(), (0.09 / 1.01) / (per_sample / 16.0 + per_sample / 4096.0), 1e-6);
     // The error model's noise for the reference, and a comparison's, scale by it.
     const double analysed = analysis.bounces.noise_per_sample[4];
     EXPECT_NEAR(predict_error(analysis, "reference", "medium", {{"spp", 64}, {"bounces", 4}}, &measured).rel_mse,
@@ -364,12 +368,12 @@ TEST(FrameComparisons, TwoReferenceFramesOfAViewMeasureWhatTheirNoiseStatisticMa
                 analysis.bounces.stopped_error[4] + *measured.noise_scale() * 0.25 / 64.0, 1e-12);
     const auto made = comparisons.add(3, frame("cssm", "low", {{"bounces", 4}}, 2.0f), &analysis, measured);
     ASSERT_EQ(made.size(), 1u);
-    EXPECT_DOUBLE_EQ(made[0].reference_noise, 0.0);  // the kept reference's statistic is 0
+    EXPECT_NEAR(made[0].reference_noise, *measured.least_noise_scale() * per_sample / 4096.0, 1e-12);  // the kept reference's
     // Of one seed, the larger frame holds the smaller's 16 samples: their difference is the smaller's
     // noise less the larger's, 1/16 - 1/4096 of the statistic per sample.
     SceneMeasurements nested;
-    EXPECT_NEAR(*FrameComparisons::calibrate_noise(*noisy, *reference(4096, 0.0), &analysis, nested),
-                (0.09 / 1.01) / (16.0 * 0.18 * (1.0 / 16.0 - 1.0 / 4096.0)), 1e-6);
+    EXPECT_NEAR(*FrameComparisons::calibrate_noise(*noisy, *reference(4096, per_sample), &analysis, nested),
+                (0.09 / 1.01) / (per_sample * (1.0 / 16.0 - 1.0 / 4096.0)), 1e-6);
     // Not calibrated: references too few samples apart, of other pixel positions, or whose difference
     // is mostly the bounces one lacks.
     SceneMeasurements other;

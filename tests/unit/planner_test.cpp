@@ -124,12 +124,12 @@ TEST(ErrorModel, TheReferenceLacksItsMissingBouncesPlusNoiseOverItsSamples) {
     EXPECT_DOUBLE_EQ(at_64.rel_mse, 0.1 / 8.0 + 0.5 / 64.0);
     // Frames that measured three times the analysis' noise at 4 bounces raise it at 3 (the nearest).
     SceneMeasurements measured;
-    measured.record_noise(4, 3.0);
+    measured.record_noise(4, 3.0, 64);
     EXPECT_DOUBLE_EQ(predict_error(analysis, "reference", "medium", {{"spp", 64}, {"bounces", 3}}, &measured).rel_mse,
                      0.1 / 8.0 + 3.0 * 0.5 / 64.0);
     // A measured ratio under 1 lowers it as much: the view's statistic replaces the analysis' either way.
     SceneMeasurements quieter;
-    quieter.record_noise(3, 0.5);
+    quieter.record_noise(3, 0.5, 64);
     EXPECT_DOUBLE_EQ(predict_error(analysis, "reference", "medium", {{"spp", 64}, {"bounces", 3}}, &quieter).rel_mse,
                      0.1 / 8.0 + 0.5 * 0.5 / 64.0);
     // Where the analysis has the noise against its frame of every bounce, a prediction (what a target
@@ -414,6 +414,53 @@ TEST(Costs, ReferenceFramesFitAFixedPartAndAPartPerSample) {
     EXPECT_LT(through_origin->scale, 1.0);
 }
 
+// The analysis prices every vertex of a path alike; a scene's deeper vertices may cost more (in the
+// atrium frames of 6 bounces took 1.12 to 1.34 times what the fit through every count priced). A
+// bounce count's own frames scale the fit at that count; a count with none takes the larger of its
+// nearest measured neighbours', and counts whose frames sit on the fit are priced by it.
+TEST(Costs, AReferenceBounceCountIsPricedByItsOwnFramesAgainstTheFit) {
+    const SceneAnalysis analysis = made_up_analysis();
+    DeviceCosts device("test");
+    SceneMeasurements measured;
+    const PlanningInputs inputs{analysis, device, &measured, 64, 64, std::nullopt};
+    const double pixels = 64.0 * 64.0;
+    const auto baseline = [&](int bounces, double spp) { return 2.0 + 1000.0 * (bounces + 1) * 1e-6 * pixels * spp; };
+    const auto at = [&](int bounces, double spp) {
+        return predicted_ms(inputs, "reference", "medium", {{"spp", spp}, {"bounces", bounces}});
+    };
+    // Counts 0 and 2 on 3 ms + 1.1x; count 6 at 1.3 times that, at two lengths.
+    for (const double spp : {4.0, 64.0}) {
+        measured.record("reference", "medium", 0, 3.0 + 1.1 * baseline(0, spp), baseline(0, spp), pixels);
+        measured.record("reference", "medium", 2, 3.0 + 1.1 * baseline(2, spp), baseline(2, spp), pixels);
+    }
+    EXPECT_NEAR(at(2, 16.0), 3.0 + 1.1 * baseline(2, 16.0), 1e-9);
+    EXPECT_EQ(measured.reference_time(2)->bounce_ratio_of, 2);
+    for (const double spp : {8.0, 32.0}) {
+        measured.record("reference", "medium", 6, 1.3 * (3.0 + 1.1 * baseline(6, spp)), baseline(6, spp), pixels);
+    }
+    const auto fit = measured.reference_time();
+    ASSERT_TRUE(fit.has_value());
+    EXPECT_EQ(fit->frames, 6);
+    EXPECT_EQ(fit->bounce_ratio_of, -1);  // no count asked: the fit alone
+    // Count 6: the median of its frames against the fit, which they raised too.
+    const auto six = measured.reference_time(6);
+    ASSERT_TRUE(six.has_value());
+    EXPECT_EQ(six->bounce_ratio_of, 6);
+    const double first = 1.3 * (3.0 + 1.1 * baseline(6, 8.0)) / fit->at(baseline(6, 8.0));
+    const double second = 1.3 * (3.0 + 1.1 * baseline(6, 32.0)) / fit->at(baseline(6, 32.0));
+    EXPECT_NEAR(six->bounce_ratio, 0.5 * (first + second), 1e-12);
+    EXPECT_GT(six->bounce_ratio, 1.15);
+    EXPECT_NEAR(at(6, 64.0), fit->at(baseline(6, 64.0)) * six->bounce_ratio, 1e-9);
+    // The frames of 2 bounces sit under the raised fit: their count is priced lower than the fit, as measured.
+    EXPECT_LT(measured.reference_time(2)->bounce_ratio, 1.0);
+    // Unmeasured counts: 4 and 8 take count 6's (the larger neighbour, the only one above), 1 the
+    // larger of counts 0 and 2.
+    EXPECT_EQ(measured.reference_time(4)->bounce_ratio_of, 6);
+    EXPECT_EQ(measured.reference_time(8)->bounce_ratio_of, 6);
+    const auto one = measured.reference_time(1);
+    EXPECT_DOUBLE_EQ(one->bounce_ratio, std::max(measured.reference_time(0)->bounce_ratio, measured.reference_time(2)->bounce_ratio));
+}
+
 TEST(Costs, AReferenceFrameRecordsItsNoiseAgainstTheAnalysis) {
     const SceneAnalysis analysis = made_up_analysis();
     SceneMeasurements measured;
@@ -426,6 +473,21 @@ TEST(Costs, AReferenceFrameRecordsItsNoiseAgainstTheAnalysis) {
     record_frame(measured, &analysis, DeviceCosts("test"), stats, 32, 32);
     EXPECT_DOUBLE_EQ(*measured.noise_ratio(4), 4.0);  // 2.0 against the analysis' 0.5
     EXPECT_TRUE(measured.ratio("reference", "medium").has_value());
+    // A frame's statistic reads high at few samples: the frames of most samples say, the largest of
+    // them where several have as many.
+    stats.knobs["spp"] = 64;
+    stats.method_statistics["noise_per_sample"] = 1.0;
+    record_frame(measured, &analysis, DeviceCosts("test"), stats, 32, 32);
+    EXPECT_DOUBLE_EQ(*measured.noise_ratio(4), 2.0);
+    stats.knobs["spp"] = 8;
+    stats.method_statistics["noise_per_sample"] = 2.5;
+    record_frame(measured, &analysis, DeviceCosts("test"), stats, 32, 32);
+    EXPECT_DOUBLE_EQ(*measured.noise_ratio(4), 2.0);
+    stats.knobs["spp"] = 64;
+    stats.method_statistics["noise_per_sample"] = 1.2;
+    record_frame(measured, &analysis, DeviceCosts("test"), stats, 32, 32);
+    EXPECT_DOUBLE_EQ(*measured.noise_ratio(4), 2.4);
+    stats.method_statistics["noise_per_sample"] = 2.0;
     stats.knobs["spp"] = 2;  // too few samples to say
     SceneMeasurements few;
     record_frame(few, &analysis, DeviceCosts("test"), stats, 32, 32);
