@@ -47,15 +47,22 @@ namespace {
 // noise, and the light of the bounces the reference has and the frame lacks.
 std::pair<double, double> expected_parts(const FrameStats& gpu_frame, const FrameStats& reference,
                                          const SceneAnalysis* analysis, const SceneMeasurements& measurements) {
+    const int bounces = modelled_bounces(gpu_frame.method, gpu_frame.knobs);
+    const int reference_bounces = modelled_bounces("reference", reference.knobs);
+    // The frame's own statistic per sample, or what the scene's frames of most samples read at its
+    // bounce count where that is less: a frame's own reads high at few samples
+    // (SceneMeasurements::record_noise), and taking out too much would promise the GPU frame less
+    // error than it has.
+    double per_sample = reference.method_statistics.at("noise_per_sample");
+    if (const auto ratio = measurements.noise_ratio(reference_bounces); ratio && analysis) {
+        per_sample = std::min(per_sample, *ratio * BounceEnergy::at(analysis->bounces.noise_per_sample, reference_bounces));
+    }
     const double noise = measurements.least_noise_scale().value_or(FrameComparisons::kUncalibratedNoiseScale) *
-                         reference.method_statistics.at("noise_per_sample") /
-                         std::max(1.0, knob(reference, "spp", 1.0));
+                         per_sample / std::max(1.0, knob(reference, "spp", 1.0));
     // A reference with fewer bounces than the frame counts the frame's extra light as error. That is
     // not the safe side: a frame that lacks light agrees better with a reference that lacks it too
     // (in the glossy gallery cssm draft at 8 bounces read 0.021 against 3 bounces and measures 0.037).
     // compare() keeps such a comparison only where that light is small beside the relMSE.
-    const int bounces = modelled_bounces(gpu_frame.method, gpu_frame.knobs);
-    const int reference_bounces = modelled_bounces("reference", reference.knobs);
     const double gap = reference_bounces > bounces
                            ? std::max(0.0, stopped_at(analysis, bounces) - stopped_at(analysis, reference_bounces))
                            : 0.0;

@@ -402,6 +402,18 @@ TEST(FrameComparisons, TwoReferenceFramesOfAViewMeasureWhatTheirNoiseStatisticMa
     const auto compared = other_view.add(9, reference(64, 0.64), &analysis, other);
     ASSERT_EQ(compared.size(), 1u);
     EXPECT_DOUBLE_EQ(compared[0].reference_noise, 0.6 * 0.64 / 64.0);
+    // A frame's own statistic reads high at few samples: where the scene's frames of most samples
+    // read less per sample at its bounce count (0.8 x the analysis' 0.5 = 0.4), the less is taken out.
+    other.record_noise(4, 0.8, 256);
+    FrameComparisons read_lower;
+    read_lower.add(10, frame("cssm", "low", {{"bounces", 4}}, 2.0f), &analysis, other);
+    const auto lower = read_lower.add(10, reference(64, 0.64), &analysis, other);
+    ASSERT_EQ(lower.size(), 1u);
+    EXPECT_DOUBLE_EQ(lower[0].reference_noise, 0.6 * 0.4 / 64.0);
+    other.record_noise(4, 2.0, 512);  // reading more: the frame's own is the less
+    FrameComparisons read_higher;
+    read_higher.add(11, frame("cssm", "low", {{"bounces", 4}}, 2.0f), &analysis, other);
+    EXPECT_DOUBLE_EQ(read_higher.add(11, reference(64, 0.64), &analysis, other).at(0).reference_noise, 0.6 * 0.64 / 64.0);
 }
 
 // The noise taken out is uncertain by about its size: where it would be over a quarter of the
