@@ -74,6 +74,33 @@ std::uint64_t shadow_map_fingerprint(const scene::Light& light, std::uint64_t ge
     return hash.value();
 }
 
+std::optional<float> common_power_scale(const std::vector<scene::Light>& before, const std::vector<scene::Light>& now) {
+    if (before.size() != now.size()) return std::nullopt;
+    std::optional<double> factor;
+    for (std::size_t i = 0; i < now.size(); ++i) {
+        if (shadow_map_fingerprint(before[i], 0, 0) != shadow_map_fingerprint(now[i], 0, 0)) return std::nullopt;
+        const glm::vec3 from = before[i].radiant(), to = now[i].radiant();
+        for (int c = 0; c < 3; ++c) {
+            if (from[c] == 0.0f) {
+                if (to[c] != 0.0f) return std::nullopt;
+                continue;
+            }
+            const double channel = static_cast<double>(to[c]) / static_cast<double>(from[c]);
+            if (!factor) factor = channel;
+            // Equal to float precision: colours given as numbers may round apart.
+            if (std::abs(channel - *factor) > 1e-6 * std::abs(*factor)) return std::nullopt;
+        }
+    }
+    if (!factor) return 1.0f;  // no light with power, before or now
+    if (!(*factor > 0.0) || !std::isfinite(*factor)) return std::nullopt;
+    return static_cast<float>(*factor);
+}
+
+bool emits_light(const scene::Scene& scene) {
+    return std::any_of(scene.materials.begin(), scene.materials.end(),
+                       [](const scene::Material& material) { return material.emissive != glm::vec3(0.0f); });
+}
+
 void set_light_uniforms(const gpu::ShaderProgram& program, const scene::Light& light) {
     program.set("u_light_type", static_cast<int>(light.type));
     program.set("u_light_position", light.position);

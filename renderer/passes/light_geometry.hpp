@@ -7,6 +7,8 @@
 #include "renderer/scene/scene.hpp"
 
 #include <cstdint>
+#include <optional>
+#include <vector>
 
 namespace bounce::passes {
 
@@ -38,6 +40,17 @@ std::uint64_t light_view_fingerprint(const scene::Scene& scene, int size, bool w
 // (not its colour or intensity: a depth map holds none, save whether it has power at all), the
 // geometry (occluders, and the bounds a directional map is fitted to) and the map size.
 std::uint64_t shadow_map_fingerprint(const scene::Light& light, std::uint64_t geometry, int size);
+
+// The one factor by which every light's power (colour times intensity, each channel) changed from
+// `before` to `now`, where nothing else of any light did: light transport is linear in it, so a
+// method may scale the light it computed instead of computing it again (vct's injected light, cssm's
+// atlas solution), where no surface emits (emits_light). 1 where no light's power changed; nullopt
+// where the lights differ otherwise (in number, place or shape), or by no one positive, finite
+// factor (a light turned off changes which views have photons).
+std::optional<float> common_power_scale(const std::vector<scene::Light>& before, const std::vector<scene::Light>& now);
+
+// Whether any surface emits: emission is light that does not scale with the lights'.
+bool emits_light(const scene::Scene& scene);
 
 // Sets u_light_type, u_light_position, u_light_direction, u_light_radiant, u_light_cos_inner and
 // u_light_cos_outer.

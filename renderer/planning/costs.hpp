@@ -55,8 +55,8 @@ public:
     // Bumped whenever methods change what a preset costs: cached models of older versions are dropped.
     // 4: change costs. 5: vct scales its injected light where every light dimmed alike. 6: vct's
     // light-view maps are not drawn again for a change of power. 7: nor isr's (its VPL tree is
-    // rebuilt over them).
-    static constexpr int kVersion = 7;
+    // rebuilt over them). 8: cssm scales its atlas solution where every light dimmed alike.
+    static constexpr int kVersion = 8;
 
     DeviceCosts() = default;
     explicit DeviceCosts(std::string renderer) : renderer_(std::move(renderer)) {}

@@ -11,6 +11,7 @@ layout(binding = BOUNCE_UNIT_GBUFFER_EMISSIVE) uniform sampler2D u_gbuffer_emiss
 layout(binding = BOUNCE_UNIT_GBUFFER_SPECULAR) uniform sampler2D u_gbuffer_specular;
 
 uniform vec3 u_camera_position;
+uniform float u_indirect_scale;  // the lights' power over what the atlas solution was solved for
 
 SurfaceMaterial g_material;
 vec3 g_n, g_v;
@@ -45,5 +46,5 @@ void main() {
     uint under = u_csm_count > 0u ? texel_near(position.xyz, g_n) : CSSM_NONE;
     Gathered g = gather_cut(position.xyz, g_n, under);
     count_gather(g);
-    out_radiance = vec4(finite_or_zero(g.irradiance), 0.0);
+    out_radiance = vec4(finite_or_zero(u_indirect_scale * g.irradiance), 0.0);
 }

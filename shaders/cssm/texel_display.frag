@@ -17,6 +17,7 @@ layout(binding = BOUNCE_UNIT_GBUFFER_SPECULAR) uniform sampler2D u_gbuffer_specu
 layout(std430, binding = CSSM_BINDING_TEXEL_INDIRECT) readonly buffer CssmTexelIndirect { vec4 texel_indirect[]; };
 
 uniform vec3 u_camera_position;
+uniform float u_indirect_scale;  // the lights' power over what the atlas solution was solved for
 
 out vec4 out_radiance;
 
@@ -47,5 +48,5 @@ void main() {
     vec3 irradiance = weight > 0.0 ? sum / weight : vec3(0.0);
     vec3 v = normalize(u_camera_position - p);
     vec3 reflectance = diffuse_reflectance_toward(material, max(dot(n, v), 1e-4));
-    out_radiance = vec4(finite_or_zero(reflectance * INV_PI * irradiance), 0.0);
+    out_radiance = vec4(finite_or_zero(u_indirect_scale * reflectance * INV_PI * irradiance), 0.0);
 }

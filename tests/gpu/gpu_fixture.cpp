@@ -5,6 +5,7 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 
@@ -43,6 +44,15 @@ MeasuredMean mean_over_two_seeds(const std::function<std::vector<double>(std::ui
     const double n = static_cast<double>(a.size());
     // The two-seed mean's variance: one render's summed variance / n^2, halved.
     return {sum / (2.0 * n), std::sqrt(noise / 2.0) / n};
+}
+
+double largest_relative_difference(const image::Frame& test, const image::Frame& expected) {
+    double largest = 0.0;
+    for (std::size_t i = 0; i < expected.rgba.size(); ++i) {
+        if (i % 4 == 3 || expected.rgba[i] <= 0.0f) continue;
+        largest = std::max(largest, std::abs(static_cast<double>(test.rgba[i]) / expected.rgba[i] - 1.0));
+    }
+    return largest;
 }
 
 RenderResult render_scene(const scene::Scene& scene, const RenderRequest& request) {

@@ -33,6 +33,10 @@ struct MeasuredMean {
 };
 MeasuredMean mean_over_two_seeds(const std::function<std::vector<double>(std::uint64_t seed)>& sample);
 
+// The largest difference of any colour channel of `test` from `expected`, relative to that channel
+// (channels that are 0 in `expected` left out).
+double largest_relative_difference(const image::Frame& test, const image::Frame& expected);
+
 // Renders `scene` once with fresh resources.
 RenderResult render_scene(const scene::Scene& scene, const RenderRequest& request);
 

@@ -202,16 +202,6 @@ TEST(Vct, AmbientOcclusionMatchesTheReference) {
     EXPECT_NEAR(error.mean_test, error.mean_reference, 0.10 * error.mean_reference);
 }
 
-// The largest difference of any colour channel of `test` from `expected`, relative to that channel.
-double largest_relative_difference(const image::Frame& test, const image::Frame& expected) {
-    double largest = 0.0;
-    for (std::size_t i = 0; i < expected.rgba.size(); ++i) {
-        if (i % 4 == 3 || expected.rgba[i] <= 0.0f) continue;
-        largest = std::max(largest, std::abs(static_cast<double>(test.rgba[i]) / expected.rgba[i] - 1.0));
-    }
-    return largest;
-}
-
 // A light change redoes the light in the resident octree; the octree is built once. Where every
 // light's power changed by one factor and nothing else did, light transport being linear in it, the
 // frame scales the injected light instead of injecting it again: the frame after doubling the lamp

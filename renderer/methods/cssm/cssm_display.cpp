@@ -9,13 +9,13 @@
 namespace bounce::methods::cssm {
 
 void CssmDisplay::draw(const FrameContext& frame, const GatherTree& tree, const gpu::Buffer& indirect,
-                       const GatherSettings& settings, std::uint64_t lighting) {
+                       const GatherSettings& settings, std::uint64_t solution, float scale) {
     if (settings.per_texel) {
-        texel_display(frame, tree, indirect, settings.pcf);
+        texel_display(frame, tree, indirect, settings.pcf, scale);
     } else if (settings.jitter_frames > 1) {
-        jittered_final_gather(frame, tree, settings, lighting);
+        jittered_final_gather(frame, tree, settings, solution, scale);
     } else {
-        final_gather(frame, tree, frame.output, settings.final_threshold, settings.pcf, 0);
+        final_gather(frame, tree, frame.output, settings.final_threshold, settings.pcf, 0, scale);
     }
 }
 
@@ -26,12 +26,13 @@ void CssmDisplay::add_into(const FrameContext& frame, const gpu::Framebuffer& ta
 }
 
 void CssmDisplay::final_gather(const FrameContext& frame, const GatherTree& tree, const gpu::Framebuffer& target,
-                               float threshold, int pcf, unsigned jitter_seed) const {
+                               float threshold, int pcf, unsigned jitter_seed, float scale) const {
     gpu::GpuTimers::Scope timing(frame.timers, "cssm_final_gather");
     const gpu::ShaderProgram& program = frame.shaders.get({"common/fullscreen.vert", "cssm/final_gather.frag", {}});
     program.use();
     tree.bind(program, pcf, threshold);
     program.set("u_jitter_seed", jitter_seed);
+    program.set("u_indirect_scale", scale);
     program.set("u_camera_position", frame.camera.position);
     gbuffer_.bind_textures();
     add_into(frame, target);
@@ -45,10 +46,10 @@ void CssmDisplay::final_gather(const FrameContext& frame, const GatherTree& tree
 }
 
 void CssmDisplay::jittered_final_gather(const FrameContext& frame, const GatherTree& tree, const GatherSettings& settings,
-                                        std::uint64_t lighting) {
+                                        std::uint64_t solution, float scale) {
     // What the accumulated mean depends on: a change of any of it starts the mean anew.
     Hasher hash;
-    hash.add(lighting).add(settings.final_threshold).add(settings.pcf).add(frame.width).add(frame.height);
+    hash.add(solution).add(settings.final_threshold).add(settings.pcf).add(frame.width).add(frame.height);
     hash.add(frame.view_projection);
     const std::uint64_t view = hash.value();
     if (!jitter_mean_ || jitter_mean_.width() != frame.width || jitter_mean_.height() != frame.height) {
@@ -71,7 +72,7 @@ void CssmDisplay::jittered_final_gather(const FrameContext& frame, const GatherT
         ++jittered_frames_;
         glClearTexImage(jitter_frame_.id(), 0, GL_RGBA, GL_FLOAT, nullptr);
         final_gather(frame, tree, jitter_target_, settings.final_threshold, settings.pcf,
-                     static_cast<unsigned>(jittered_frames_));
+                     static_cast<unsigned>(jittered_frames_), 1.0f);
         gpu::GpuTimers::Scope timing(frame.timers, "cssm_accumulate");
         const gpu::ShaderProgram& accumulate = frame.shaders.get(gpu::ProgramSource::compute_shader("cssm/accumulate.comp"));
         accumulate.use();
@@ -84,17 +85,19 @@ void CssmDisplay::jittered_final_gather(const FrameContext& frame, const GatherT
     }
     const gpu::ShaderProgram& composite = frame.shaders.get({"common/fullscreen.vert", "cssm/composite.frag", {}});
     composite.use();
+    composite.set("u_indirect_scale", scale);
     glBindTextureUnit(BOUNCE_UNIT_HDR_INPUT, jitter_mean_.id());
     add_into(frame, frame.output);
     triangle_.draw();
 }
 
 void CssmDisplay::texel_display(const FrameContext& frame, const GatherTree& tree, const gpu::Buffer& indirect,
-                                int pcf) const {
+                                int pcf, float scale) const {
     gpu::GpuTimers::Scope timing(frame.timers, "cssm_texel_display");
     const gpu::ShaderProgram& program = frame.shaders.get({"common/fullscreen.vert", "cssm/texel_display.frag", {}});
     program.use();
     program.set("u_camera_position", frame.camera.position);
+    program.set("u_indirect_scale", scale);
     tree.bind(program, pcf, 0.0f);
     gpu::bind_storage(CSSM_BINDING_TEXEL_INDIRECT, indirect);
     gbuffer_.bind_textures();

@@ -16,6 +16,8 @@
 
 #include <fmt/format.h>
 
+#include <optional>
+#include <vector>
 
 namespace bounce::methods::cssm {
 namespace {
@@ -36,23 +38,37 @@ public:
         ensure_bake(frame);
         if (!bake_ || bake_.bake().texel_count() == 0) return;
         settings_ = GatherSettings::of(frame);
-        // What the atlas solution depends on: a change of any of it solves again.
+        // What the atlas solution depends on, but the lights' power: a change of any of it solves again.
         Hasher hash;
-        hash.add(passes::light_view_fingerprint(frame.scene, frame.knob_int("shadow_map_size")));
+        hash.add(passes::light_view_fingerprint(frame.scene, frame.knob_int("shadow_map_size"), /*with_power=*/false));
         hash.add(settings_.bounces).add(settings_.per_texel).add(settings_.pcf).add(settings_.threshold);
         hash.add(bake_.generation());
         const std::uint64_t lighting = hash.value();
         batches_.update(settings_.pcf, bake_, placement_);
         const GatherTree tree{bake_, placement_, batches_, counters_};
-        if (lighting != lighting_) {
+        // The solution is linear in the lights' power: where every light's changed by one factor and
+        // nothing else did, the display scales it instead of solving again, unless a surface emits
+        // (its emission is in the solution and does not scale with the lights).
+        std::optional<float> power_scale =
+            lighting == lighting_ ? passes::common_power_scale(solved_lights_, frame.scene.lights) : std::nullopt;
+        if (power_scale && *power_scale != 1.0f && passes::emits_light(frame.scene)) power_scale.reset();
+        if (!power_scale) {
             counters_.reset();
             solve_.solve(frame, tree, shadows_, settings_);
             lighting_ = lighting;
+            solved_lights_ = frame.scene.lights;
+            solution_scale_ = 1.0f;
             ++atlas_solutions_;
             atlas_counts_ = GatherCounts::read(counters_);  // kept: frames that reuse the solution report the one made
+        } else if (*power_scale != solution_scale_) {
+            solution_scale_ = *power_scale;
+            ++solution_rescales_;
         }
         counters_.reset();
-        display_.draw(frame, tree, solve_.indirect(), settings_, lighting);
+        // The solution, not its lighting: a change of colour solves again for the same lights' places.
+        Hasher solution;
+        solution.add(lighting_).add(atlas_solutions_);
+        display_.draw(frame, tree, solve_.indirect(), settings_, solution.value(), solution_scale_);
         pixel_counts_ = GatherCounts::read(counters_);
     }
 
@@ -70,7 +86,9 @@ public:
     std::map<std::string, double> statistics() const override {
         std::map<std::string, double> stats = {{"per_texel", settings_.per_texel ? 1.0 : 0.0},
                                                {"jittered_frames", static_cast<double>(display_.jittered_frames())},
-                                               {"atlas_solutions", static_cast<double>(atlas_solutions_)}};
+                                               {"atlas_solutions", static_cast<double>(atlas_solutions_)},
+                                               {"solution_rescales", static_cast<double>(solution_rescales_)},
+                                               {"light_updates", static_cast<double>(atlas_solutions_ + solution_rescales_)}};
         bake_.add_statistics(stats);
         if (!bake_) return stats;
         placement_.add_statistics(stats, bake_.bake());
@@ -141,7 +159,10 @@ private:
     const scene::Scene* scene_ = nullptr;  // the last frame's: names the objects it holds
     GatherSettings settings_;
     std::uint64_t lighting_ = 0;
+    std::vector<scene::Light> solved_lights_;  // the lights the atlas solution was solved for
+    float solution_scale_ = 1.0f;              // the lights' power now over theirs
     std::size_t atlas_solutions_ = 0;
+    std::size_t solution_rescales_ = 0;  // frames that scaled the solution instead of solving again
     GatherCounts atlas_counts_, pixel_counts_;
 };
 

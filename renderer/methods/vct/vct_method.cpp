@@ -82,11 +82,12 @@ public:
         const int bounces = frame.knob_int("bounces");
         if (!lit_ || maps_drawn || !same_lights(injected_lights_, frame.scene.lights) ||
             anisotropic != octree_.anisotropic() || bounces != octree_.bounces()) {
+            // A factor of 1: the lights' power did not change, so something else did (the views' size).
             const std::optional<float> scaled =
-                lit_ && anisotropic == octree_.anisotropic() && bounces == octree_.bounces() && !emits(frame.scene)
-                    ? common_power_scale(injected_lights_, frame.scene.lights)
+                lit_ && anisotropic == octree_.anisotropic() && bounces == octree_.bounces() && !passes::emits_light(frame.scene)
+                    ? passes::common_power_scale(injected_lights_, frame.scene.lights)
                     : std::nullopt;
-            if (scaled && octree_.scale_light(*scaled)) {
+            if (scaled && *scaled != 1.0f && octree_.scale_light(*scaled)) {
                 ++light_rescales_;
             } else {
                 const ConeSettings cones = cone_settings(frame);
@@ -213,13 +214,6 @@ private:
         return settings;
     }
 
-    // Whether any surface emits: its emission is in the octree's radiance, and does not scale with
-    // the lights.
-    static bool emits(const scene::Scene& scene) {
-        return std::any_of(scene.materials.begin(), scene.materials.end(),
-                           [](const scene::Material& material) { return material.emissive != glm::vec3(0.0f); });
-    }
-
     // Where a light is and how it shines, not its power (passes::shadow_map_fingerprint's terms).
     static std::uint64_t place(const scene::Light& light) { return passes::shadow_map_fingerprint(light, 0, 0); }
 
@@ -230,32 +224,6 @@ private:
                std::equal(before.begin(), before.end(), now.begin(), [](const scene::Light& a, const scene::Light& b) {
                    return place(a) == place(b) && a.radiant() == b.radiant();
                });
-    }
-
-    // The one factor by which every light's power (colour times intensity, each channel) changed from
-    // `before` to `now`, where nothing else of any light did; nullopt otherwise, or where the factor
-    // is not positive and finite (a light turned off changes which views have photons).
-    static std::optional<float> common_power_scale(const std::vector<scene::Light>& before,
-                                                   const std::vector<scene::Light>& now) {
-        if (before.size() != now.size() || before.empty()) return std::nullopt;
-        std::optional<double> factor;
-        for (std::size_t i = 0; i < now.size(); ++i) {
-            if (place(before[i]) != place(now[i])) return std::nullopt;
-            const glm::vec3 from = before[i].radiant(), to = now[i].radiant();
-            for (int c = 0; c < 3; ++c) {
-                if (from[c] == 0.0f) {
-                    if (to[c] != 0.0f) return std::nullopt;
-                    continue;
-                }
-                const double channel = static_cast<double>(to[c]) / static_cast<double>(from[c]);
-                if (!factor) factor = channel;
-                // Equal to float precision: colours given as numbers may round apart.
-                if (std::abs(channel - *factor) > 1e-6 * std::abs(*factor)) return std::nullopt;
-            }
-        }
-        // A factor of 1: the lights' power did not change, so something else did (the views' size).
-        if (!factor || *factor == 1.0 || !(*factor > 0.0) || !std::isfinite(*factor)) return std::nullopt;
-        return static_cast<float>(*factor);
     }
 
     void trace(const FrameContext& frame, bool ambient_occlusion) {
