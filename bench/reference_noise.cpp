@@ -8,7 +8,13 @@
 //   - the same variance over the truth's luminance (what the error against the truth holds of noise),
 //     over the samples;
 //   - the scene analysis' statistics at the count (noise_per_sample, noise_against_whole) over the
-//     samples, and its stopped error.
+//     samples, and its stopped error;
+//   - against the same seed's frame of the sample count before (at most half as many, the smaller:
+//     it holds their samples), the noise scale the planner would read off the pair
+//     (FrameComparisons::calibrate_noise: their relMSE over the statistic per sample, the larger
+//     frame's, times 1/fewer - 1/more), with image::compare and with FrameComparisons::pair_rel_mse,
+//     and the one the truth reads: the fall of the two frames' relMSE against the truth, over the
+//     same (their missing bounces cancel).
 // Prints CSV on stdout.
 #include "bench/common.hpp"
 #include "bench/corpus.hpp"
@@ -16,12 +22,15 @@
 #include "renderer/base/error.hpp"
 #include "renderer/image/metrics.hpp"
 #include "renderer/methods/reference/path_tracer.hpp"
+#include "renderer/planning/comparisons.hpp"
 #include "renderer/scene_analysis.hpp"
 
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <cstdio>
+#include <map>
+#include <utility>
 
 using namespace bounce;
 
@@ -64,13 +73,19 @@ int main(int argc, char** argv) {
             if (bounces < 0 || bounces > max_bounces) throw InputError(fmt::format("bounce count {} outside 0..{}", bounces, max_bounces));
         }
         fmt::print("scene,bounces,spp,seed,rel_mse,own_statistic,against_truth_statistic,analysis_own,analysis_whole,"
-                   "analysis_stopped\n");
+                   "analysis_stopped,pair_spp,pair_scale,pair_scale_smoothed,truth_scale\n");
         for (const bench::BenchScene& bench_scene : bench::corpus_scenes()) {
             if (!scenes.empty() && std::find(scenes.begin(), scenes.end(), bench_scene.name) == scenes.end()) continue;
             const methods::reference::PathTracer tracer(bench_scene.scene);
             const image::Frame truth =
                 bench::reference_image(bench_scene, tracer, {size, truth_spp, true, cache}, truth_bounces);
             const SceneAnalysis analysis = analyze_scene(bench_scene.scene);
+            struct Earlier {
+                int spp = 0;
+                image::Frame frame;
+                double rel_mse = 0.0;
+            };
+            std::map<std::pair<int, int>, Earlier> earlier;  // by seed and bounce count
             for (const int spp : spps) {
                 for (int seed = 0; seed < seeds; ++seed) {
                     methods::reference::Accumulator accumulator(size, size, max_bounces);
@@ -86,11 +101,22 @@ int main(int argc, char** argv) {
                                                  : accumulator.prefix_noise_per_sample(bounces);
                         const std::string against_truth =
                             whole ? "" : fmt::format("{:.5f}", accumulator.prefix_noise_per_sample(bounces, truth) / spp);
-                        fmt::print("{},{},{},{},{:.5f},{:.5f},{},{:.5f},{:.5f},{:.5f}\n", bench_scene.name, bounces, spp,
-                                   settings.seed, image::compare(frame, truth).rel_mse, own / spp, against_truth,
+                        const double rel_mse = image::compare(frame, truth).rel_mse;
+                        std::string pair = ",,,";
+                        const auto before = earlier.find({seed, bounces});
+                        if (before != earlier.end() && spp >= 2 * before->second.spp && own > 0.0) {
+                            const double statistic = own * (1.0 / before->second.spp - 1.0 / spp);
+                            pair = fmt::format("{},{:.4f},{:.4f},{:.4f}", before->second.spp,
+                                               image::compare(before->second.frame, frame).rel_mse / statistic,
+                                               planning::FrameComparisons::pair_rel_mse(before->second.frame, frame) / statistic,
+                                               (before->second.rel_mse - rel_mse) / statistic);
+                        }
+                        fmt::print("{},{},{},{},{:.5f},{:.5f},{},{:.5f},{:.5f},{:.5f},{}\n", bench_scene.name, bounces, spp,
+                                   settings.seed, rel_mse, own / spp, against_truth,
                                    BounceEnergy::at(analysis.bounces.noise_per_sample, bounces) / spp,
                                    BounceEnergy::at(analysis.bounces.noise_against_whole, bounces) / spp,
-                                   BounceEnergy::at(analysis.bounces.stopped_error, bounces));
+                                   BounceEnergy::at(analysis.bounces.stopped_error, bounces), pair);
+                        earlier[{seed, bounces}] = Earlier{spp, frame, rel_mse};
                         std::fflush(stdout);
                     }
                 }

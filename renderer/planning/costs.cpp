@@ -383,11 +383,15 @@ std::map<int, double> SceneMeasurements::noise_ratios() const {
     return ratios;
 }
 
-void SceneMeasurements::record_noise_scale(double scale) {
-    if (!(scale > 0.0) || !std::isfinite(scale)) return;
+void SceneMeasurements::record_noise_scale(double scale, double compared_scale) {
     const std::lock_guard lock(mutex_);
-    noise_scales_.push_back(scale);
-    if (noise_scales_.size() > kKept) noise_scales_.pop_front();
+    const auto keep = [](std::deque<double>& kept, double value) {
+        if (!(value > 0.0) || !std::isfinite(value)) return;
+        kept.push_back(value);
+        if (kept.size() > kKept) kept.pop_front();
+    };
+    keep(noise_scales_, scale);
+    keep(compared_noise_scales_, compared_scale);
 }
 
 // The largest, as for own errors: a target error is a promise.
@@ -399,8 +403,8 @@ std::optional<double> SceneMeasurements::noise_scale() const {
 
 std::optional<double> SceneMeasurements::least_noise_scale() const {
     const std::lock_guard lock(mutex_);
-    if (noise_scales_.empty()) return std::nullopt;
-    return *std::min_element(noise_scales_.begin(), noise_scales_.end());
+    if (compared_noise_scales_.empty()) return std::nullopt;
+    return *std::min_element(compared_noise_scales_.begin(), compared_noise_scales_.end());
 }
 
 void SceneMeasurements::record_own_error(const std::string& method, const std::string& preset, int bounces, double rel_mse) {

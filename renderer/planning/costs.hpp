@@ -199,13 +199,15 @@ public:
 
     // How much relMSE a reference frame's noise statistic (noise_per_sample over its samples) makes
     // against a converged frame, on this scene: measured from two reference frames of one view
-    // (comparisons.hpp). The statistic is a luminance variance over a neighbourhood's value; relMSE
-    // weighs each channel by its own value, and the two part on scenes of coloured or high-contrast
-    // light (pairs of frames measure 0.5 to 0.9 of it on the bench corpus). noise_scale(): the
-    // largest of the last kKept, for a reference's predicted error (a target error is a promise);
-    // least_noise_scale(): the smallest, for the noise a comparison takes out of a GPU frame's relMSE
-    // (taking out too much would promise the frame less error than it has). nullopt until measured.
-    void record_noise_scale(double scale);
+    // (comparisons.hpp, calibrate_noise). The statistic is a luminance variance over a neighbourhood's
+    // value; relMSE weighs each channel by its own value, and the two part on scenes of coloured or
+    // high-contrast light (the foliage's frames measure about a half of it). `scale` is for a
+    // reference's predicted error (noise_scale(): the largest of the last kKept, as a target error is
+    // a promise); `compared_scale` for the noise a comparison takes out of a GPU frame's relMSE
+    // against a noisy reference frame, which weighs it by that frame's own values
+    // (least_noise_scale(): the smallest of the last kKept, since taking out too much would promise
+    // the frame less error than it has). nullopt until measured.
+    void record_noise_scale(double scale, double compared_scale);
     std::optional<double> noise_scale() const;
     std::optional<double> least_noise_scale() const;
 
@@ -244,7 +246,7 @@ private:
     };
     std::map<int, NoiseRatio> noise_;
     std::map<int, std::deque<double>> shadow_maps_;  // by size
-    std::deque<double> noise_scales_;
+    std::deque<double> noise_scales_, compared_noise_scales_;
     std::map<std::tuple<std::string, std::string, int>, std::deque<double>> own_errors_;
     std::set<std::pair<std::string, std::string>> compared_;
 };

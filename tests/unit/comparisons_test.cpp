@@ -3,6 +3,7 @@
 // reference's noise and the bounces between them are taken out (exact arithmetic on constant
 // frames), which frames may be compared, how the error model uses what was measured, which probes
 // the planner renders beside a reference plan, and plans rendered smaller and upsampled.
+#include "renderer/image/metrics.hpp"
 #include "renderer/methods/registry.hpp"
 #include "renderer/planning/comparisons.hpp"
 #include "renderer/planning/error_model.hpp"
@@ -11,6 +12,8 @@
 #include "renderer/base/error.hpp"
 
 #include <gtest/gtest.h>
+
+#include <limits>
 
 #include <algorithm>
 #include <cmath>
@@ -394,14 +397,17 @@ TEST(FrameComparisons, TwoReferenceFramesOfAViewMeasureWhatTheirNoiseStatisticMa
     EXPECT_FALSE(other.noise_scale().has_value());
     // The scale is the largest of the last five measured: a target error is a promise. What a
     // comparison takes out of a GPU frame's relMSE is the smallest, for the same reason.
-    for (const double scale : {0.6, 0.9, 0.7}) other.record_noise_scale(scale);
+    // Each pair gives two: one for predictions, one for comparisons (calibrate_noise).
+    for (const auto& [scale, compared] : {std::pair{0.6, 0.5}, std::pair{0.9, 0.8}, std::pair{0.7, 0.6}}) {
+        other.record_noise_scale(scale, compared);
+    }
     EXPECT_DOUBLE_EQ(*other.noise_scale(), 0.9);
-    EXPECT_DOUBLE_EQ(*other.least_noise_scale(), 0.6);
+    EXPECT_DOUBLE_EQ(*other.least_noise_scale(), 0.5);
     FrameComparisons other_view;
     other_view.add(9, frame("cssm", "low", {{"bounces", 4}}, 2.0f), &analysis, other);
     const auto compared = other_view.add(9, reference(64, 0.64), &analysis, other);
     ASSERT_EQ(compared.size(), 1u);
-    EXPECT_DOUBLE_EQ(compared[0].reference_noise, 0.6 * 0.64 / 64.0);
+    EXPECT_DOUBLE_EQ(compared[0].reference_noise, 0.5 * 0.64 / 64.0);
     // A frame's own statistic reads high at few samples: where the scene's frames of most samples
     // read less per sample at its bounce count (0.8 x the analysis' 0.5 = 0.4), the less is taken out.
     other.record_noise(4, 0.8, 256);
@@ -409,11 +415,40 @@ TEST(FrameComparisons, TwoReferenceFramesOfAViewMeasureWhatTheirNoiseStatisticMa
     read_lower.add(10, frame("cssm", "low", {{"bounces", 4}}, 2.0f), &analysis, other);
     const auto lower = read_lower.add(10, reference(64, 0.64), &analysis, other);
     ASSERT_EQ(lower.size(), 1u);
-    EXPECT_DOUBLE_EQ(lower[0].reference_noise, 0.6 * 0.4 / 64.0);
+    EXPECT_DOUBLE_EQ(lower[0].reference_noise, 0.5 * 0.4 / 64.0);
     other.record_noise(4, 2.0, 512);  // reading more: the frame's own is the less
     FrameComparisons read_higher;
     read_higher.add(11, frame("cssm", "low", {{"bounces", 4}}, 2.0f), &analysis, other);
-    EXPECT_DOUBLE_EQ(read_higher.add(11, reference(64, 0.64), &analysis, other).at(0).reference_noise, 0.6 * 0.64 / 64.0);
+    EXPECT_DOUBLE_EQ(read_higher.add(11, reference(64, 0.64), &analysis, other).at(0).reference_noise, 0.5 * 0.64 / 64.0);
+}
+
+// A rare bright path in a frame of few samples is in the frame of more samples of its seed too, a
+// quarter as bright at four times the samples: image::compare weighs the pair's difference there by
+// the brighter value and reads the noise low (6^2 / (3^2 + 0.01) where the converged value 1 says
+// 6^2 / 1.01); pair_rel_mse weighs it by the neighbourhood's median, as the truth would.
+TEST(FrameComparisons, APairWeighsItsDifferenceByTheNeighbourhoodsMedian) {
+    auto fewer = std::make_shared<RenderResult>(*reference(16, 1.0));
+    auto more = std::make_shared<RenderResult>(*reference(64, 1.0));
+    const std::size_t outlier = 4 * (3 * 8 + 5);
+    for (int c = 0; c < 3; ++c) {
+        fewer->frame.rgba[outlier + c] = 9.0f;
+        more->frame.rgba[outlier + c] = 3.0f;
+    }
+    EXPECT_NEAR(image::compare(fewer->frame, more->frame).rel_mse, 36.0 / 9.01 / 64.0, 1e-7);
+    EXPECT_NEAR(FrameComparisons::pair_rel_mse(fewer->frame, more->frame), 36.0 / 1.01 / 64.0, 1e-7);
+    // Non-finite values are left out, as image::compare leaves them.
+    fewer->frame.rgba[0] = std::numeric_limits<float>::quiet_NaN();
+    EXPECT_NEAR(FrameComparisons::pair_rel_mse(fewer->frame, more->frame), 36.0 / 1.01 / 63.0, 1e-7);
+    // calibrate_noise reads the pair by it for predictions, by image::compare for comparisons.
+    SceneMeasurements measured;
+    const SceneAnalysis analysis = made_up_analysis();
+    more->frame.rgba[0] = fewer->frame.rgba[0] = 1.0f;
+    const auto scale = FrameComparisons::calibrate_noise(*fewer, *more, &analysis, measured);
+    ASSERT_TRUE(scale.has_value());
+    const double statistic = 1.0 * (1.0 / 16.0 - 1.0 / 64.0);  // one seed: nested
+    EXPECT_NEAR(*scale, 36.0 / 1.01 / 64.0 / statistic, 1e-6);
+    EXPECT_NEAR(*measured.noise_scale(), *scale, 1e-12);
+    EXPECT_NEAR(*measured.least_noise_scale(), 36.0 / 9.01 / 64.0 / statistic, 1e-6);
 }
 
 // The noise taken out is uncertain by about its size: where it would be over a quarter of the
