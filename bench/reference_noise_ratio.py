@@ -17,7 +17,14 @@ every bounce, over the samples) is set against the frames' relMSE against the tr
 Without the noise scale that pairs of frames measure (comparisons.cpp, calibrate_noise): the scale
 takes out what the luminance statistic and relMSE's channels part by (the foliage's coloured light,
 about a half), and is the same for either rule. The glossy gallery is left out: its rare bright paths
-make a frame's statistic a draw of its own (bench/reference_noise's section in docs/benchmarks.md)."""
+make a frame's statistic a draw of its own (bench/reference_noise's section in docs/benchmarks.md).
+
+Then the noise scale the planner reads off a pair of one seed's frames (calibrate_noise), per pair of
+sample counts, with image::compare and with the neighbourhoods' medians as weights (pair_rel_mse),
+against the scale the truth reads (the fall of the two frames' relMSE against it, over the same
+statistic), put in the frames' own terms (times the analysis' statistic over its own frame, over
+its statistic against every bounce, as the pair's relMSE is against the larger frame): the mean over
+bounce counts 1 to 8 and seeds, and the least and the most."""
 import csv
 import sys
 from collections import defaultdict
@@ -69,6 +76,25 @@ def main():
     for scene, rules in sorted(by_scene.items()):
         spans = [f"{min(v):.2f} to {max(v):.2f}" for v in rules.values()]
         print(f"| {scene} | {spans[0]} | {spans[1]} |")
+
+
+    print()
+    print("Noise scales of a pair of one seed's frames, per pair of sample counts (mean [least, most]):")
+    print()
+    print("| scene | samples | image::compare | neighbourhoods' medians | the truth |")
+    print("|---|---|---|---|---|")
+    pairs = defaultdict(lambda: defaultdict(list))
+    for row in rows:
+        if not row.get("pair_spp") or row["scene"] == "glossy_gallery" or row["bounces"] == "0":
+            continue
+        key = (row["scene"], int(row["pair_spp"]), int(row["spp"]))
+        pairs[key]["compare"].append(float(row["pair_scale"]))
+        pairs[key]["smoothed"].append(float(row["pair_scale_smoothed"]))
+        own_terms = float(row["analysis_own"]) / float(row["analysis_whole"])
+        pairs[key]["truth"].append(float(row["truth_scale"]) * own_terms)
+    for (scene, fewer, more), scales in sorted(pairs.items()):
+        cells = [f"{mean(v):.2f} [{min(v):.2f}, {max(v):.2f}]" for v in (scales["compare"], scales["smoothed"], scales["truth"])]
+        print(f"| {scene} | {fewer} against {more} | {cells[0]} | {cells[1]} | {cells[2]} |")
 
 
 if __name__ == "__main__":
