@@ -12,7 +12,7 @@
 //   - against the same seed's frame of the sample count before (at most half as many, the smaller:
 //     it holds their samples), the noise scale the planner would read off the pair
 //     (FrameComparisons::calibrate_noise: their relMSE over the statistic per sample, the larger
-//     frame's, times 1/fewer - 1/more), with image::compare and with FrameComparisons::pair_rel_mse,
+//     frame's, times 1/fewer - 1/more), weighed by the larger frame's own values and by its neighbourhoods' medians (image::Weight),
 //     and the one the truth reads: the fall of the two frames' relMSE against the truth, over the
 //     same (their missing bounces cancel).
 // Prints CSV on stdout.
@@ -22,7 +22,6 @@
 #include "renderer/base/error.hpp"
 #include "renderer/image/metrics.hpp"
 #include "renderer/methods/reference/path_tracer.hpp"
-#include "renderer/planning/comparisons.hpp"
 #include "renderer/scene_analysis.hpp"
 
 #include <fmt/format.h>
@@ -108,7 +107,7 @@ int main(int argc, char** argv) {
                             const double statistic = own * (1.0 / before->second.spp - 1.0 / spp);
                             pair = fmt::format("{},{:.4f},{:.4f},{:.4f}", before->second.spp,
                                                image::compare(before->second.frame, frame).rel_mse / statistic,
-                                               planning::FrameComparisons::pair_rel_mse(before->second.frame, frame) / statistic,
+                                               image::compare(before->second.frame, frame, image::Weight::neighbourhood_median).rel_mse / statistic,
                                                (before->second.rel_mse - rel_mse) / statistic);
                         }
                         fmt::print("{},{},{},{},{:.5f},{:.5f},{},{:.5f},{:.5f},{:.5f},{}\n", bench_scene.name, bounces, spp,

@@ -20,7 +20,7 @@ about a half), and is the same for either rule. The glossy gallery is left out: 
 make a frame's statistic a draw of its own (bench/reference_noise's section in docs/benchmarks.md).
 
 Then the noise scale the planner reads off a pair of one seed's frames (calibrate_noise), per pair of
-sample counts, with image::compare and with the neighbourhoods' medians as weights (pair_rel_mse),
+sample counts, weighed by the larger frame's own values and by its neighbourhoods' medians (image::Weight),
 against the scale the truth reads (the fall of the two frames' relMSE against it, over the same
 statistic), put in the frames' own terms (times the analysis' statistic over its own frame, over
 its statistic against every bounce, as the pair's relMSE is against the larger frame): the mean over

@@ -9,9 +9,25 @@
 namespace bounce::image {
 namespace {
 bool finite_rgb(const float* p) { return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]); }
+
+// The median of channel `c` of `frame` over pixel (x, y)'s 3x3 neighbourhood (clamped at the edges),
+// of its finite values; the pixel's own value must be finite.
+float neighbourhood_median(const Frame& frame, int x, int y, int c) {
+    float window[9];
+    int n = 0;
+    for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) {
+            const int sx = std::clamp(x + dx, 0, frame.width - 1), sy = std::clamp(y + dy, 0, frame.height - 1);
+            const float value = frame.rgba[(static_cast<std::size_t>(sy) * frame.width + sx) * 4 + c];
+            if (std::isfinite(value)) window[n++] = value;
+        }
+    }
+    std::nth_element(window, window + n / 2, window + n);
+    return window[n / 2];
+}
 }  // namespace
 
-ErrorMetrics compare(const Frame& test, const Frame& reference) {
+ErrorMetrics compare(const Frame& test, const Frame& reference, Weight weight) {
     BOUNCE_CHECK(test.width == reference.width && test.height == reference.height,
                  "cannot compare a {}x{} image with a {}x{} reference", test.width, test.height, reference.width,
                  reference.height);
@@ -30,7 +46,11 @@ ErrorMetrics compare(const Frame& test, const Frame& reference) {
         if (!t_ok || !r_ok) continue;
         for (int c = 0; c < 3; ++c) {
             const double d = static_cast<double>(t[c]) - r[c];
-            rel += d * d / (static_cast<double>(r[c]) * r[c] + 0.01);
+            const double w = weight == Weight::own_value
+                                 ? r[c]
+                                 : neighbourhood_median(reference, static_cast<int>(i % static_cast<std::size_t>(reference.width)),
+                                                        static_cast<int>(i / static_cast<std::size_t>(reference.width)), c);
+            rel += d * d / (w * w + 0.01);
             squared += d * d;
             sum_test += t[c];
             sum_reference += r[c];

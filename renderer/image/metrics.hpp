@@ -18,9 +18,16 @@ struct ErrorMetrics {
     std::size_t non_finite_reference = 0;
 };
 
+// What weighs a difference in relMSE: the reference's own value (the metric as defined above), or
+// the median of the reference's channel over the pixel's 3x3 neighbourhood (its finite values). The
+// second is for two noisy frames of one view (planning::FrameComparisons::calibrate_noise): a rare
+// bright path in the reference raises its own pixel's weight exactly where the difference is largest,
+// and a neighbourhood's median does not follow one pixel's outlier.
+enum class Weight { own_value, neighbourhood_median };
+
 // Compares `test` with `reference`; throws Error if their sizes differ. Pixels where either image
 // is non-finite are counted and left out of the error sums.
-ErrorMetrics compare(const Frame& test, const Frame& reference);
+ErrorMetrics compare(const Frame& test, const Frame& reference, Weight weight = Weight::own_value);
 
 // Light leaking into regions the reference proves dark: the test's mean RGB radiance over the
 // pixels where the reference has geometry (alpha > 0) and exactly zero radiance, relative to the

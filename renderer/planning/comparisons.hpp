@@ -87,13 +87,6 @@ public:
     // a quarter of the relMSE. add() calls it whenever a reference frame meets the view's kept one.
     static std::optional<double> calibrate_noise(const RenderResult& fewer, const RenderResult& more,
                                                  const SceneAnalysis* analysis, SceneMeasurements& measurements);
-    // The relMSE calibrate_noise measures a pair by: image::compare's, each value of `more` (the
-    // weight) replaced by the median of its channel over the pixel's 3x3 neighbourhood. A pixel's
-    // own noise raises its own weight's denominator exactly where its difference is largest (a rare
-    // bright path, which a frame of one seed and more samples holds too), so image::compare between
-    // two frames reads the noise low where a few paths carry the light, against a converged frame's
-    // smooth values; the neighbourhood's median does not follow one pixel's outlier.
-    static double pair_rel_mse(const image::Frame& fewer, const image::Frame& more);
     static constexpr double kCalibrationSpan = 2.0;
     static constexpr double kMaxCalibrationGap = 0.25;
     // Pairs whose statistic is under this say nothing of the noise: frames with next to none (a

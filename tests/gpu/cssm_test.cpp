@@ -242,6 +242,24 @@ TEST(Cssm, ALightDimmedScalesTheSolutionAndOtherLightChangesSolveAgain) {
     EXPECT_EQ(stat(glowing_dimmed, "solution_rescales"), 0.0);
 }
 
+// The same on a file as a CAD exporter writes it (assimp's sample 2CylinderEngine: 67 nodes, 65 of
+// them rotated, no light of its own; a sun is added): the sun dimmed by 0.37 (not a power of two,
+// so the scaled and the afresh solutions round apart) scales the solution, and the frame matches one
+// solved afresh within the same single-precision rounding.
+TEST(Cssm, ASunDimmedOverARealFileScalesTheSolutionAsSolvedAfresh) {
+    scene::Scene file = sunlit_engine();
+    auto resources = shared_renderer().upload(file);
+    const RenderRequest request = method_request("cssm", "draft", kSize);
+    shared_renderer().render(*resources, request);
+    file.lights.back().intensity *= 0.37f;
+    const RenderResult dimmed = shared_renderer().render(*resources, request);
+    EXPECT_EQ(stat(dimmed, "atlas_solutions"), 1.0);
+    EXPECT_EQ(stat(dimmed, "solution_rescales"), 1.0);
+    const double difference = largest_relative_difference(dimmed.frame, render_scene(file, request).frame);
+    std::printf("cssm engine, sun dimmed by 0.37: largest relative difference from a frame solved afresh %.3g\n", difference);
+    EXPECT_LE(difference, 1e-4);  // single-precision rounding, as on the Cornell box above
+}
+
 TEST(Cssm, PerTexelDisplayReadsEveryBounceFromTheAtlas) {
     const scene::Scene scene = scene::make_cornell_box();
     for (int bounces : {1, 2}) {

@@ -42,6 +42,30 @@ TEST(Metrics, MatchesTheDefinition) {
     EXPECT_NEAR(compare(off, black).rel_mse, 0.09 / 0.01 / 3.0, 1e-6);
 }
 
+// A rare bright path in a frame of few samples is in the frame of more samples of its seed too, a
+// quarter as bright at four times the samples: weighed by the reference's own value the difference
+// there counts 6^2 / (3^2 + 0.01), where the converged value 1 says 6^2 / 1.01; weighed by the
+// neighbourhood's median it counts as the converged value would weigh it. A non-finite neighbour
+// is left out of the median; a non-finite pixel out of the sums, as with the own value.
+TEST(Metrics, ANeighbourhoodMedianWeightDoesNotFollowOnePixelsOutlier) {
+    Frame fewer = constant(8, 8, 1.0f), more = constant(8, 8, 1.0f);
+    const std::size_t outlier = 4 * (3 * 8 + 5);
+    for (int c = 0; c < 3; ++c) {
+        fewer.rgba[outlier + c] = 9.0f;
+        more.rgba[outlier + c] = 3.0f;
+    }
+    EXPECT_NEAR(compare(fewer, more).rel_mse, 36.0 / 9.01 / 64.0, 1e-7);
+    EXPECT_NEAR(compare(fewer, more, Weight::neighbourhood_median).rel_mse, 36.0 / 1.01 / 64.0, 1e-7);
+    more.rgba[4 * (2 * 8 + 5)] = std::numeric_limits<float>::infinity();  // a neighbour above, red
+    fewer.rgba[0] = std::numeric_limits<float>::quiet_NaN();
+    const ErrorMetrics weighed = compare(fewer, more, Weight::neighbourhood_median);
+    EXPECT_NEAR(weighed.rel_mse, 36.0 / 1.01 / 62.0, 1e-7);  // the two non-finite pixels left out
+    EXPECT_EQ(weighed.non_finite_test, 1u);
+    EXPECT_EQ(weighed.non_finite_reference, 1u);
+    // At a frame's edges and in a one-pixel frame the neighbourhood is clamped.
+    EXPECT_NEAR(compare(constant(1, 1, 2.0f), constant(1, 1, 1.0f), Weight::neighbourhood_median).rel_mse, 1.0 / 1.01, 1e-7);
+}
+
 TEST(Metrics, NonFinitePixelsAreCountedAndLeftOut) {
     const Frame reference = constant(2, 1, 1.0f);
     Frame test = reference;

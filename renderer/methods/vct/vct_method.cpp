@@ -80,14 +80,15 @@ public:
         const bool maps_drawn = light_views_.render(frame, frame.knob_int("light_view_size"));
         const bool anisotropic = frame.knob_int("anisotropic") != 0;
         const int bounces = frame.knob_int("bounces");
-        if (!lit_ || maps_drawn || !same_lights(injected_lights_, frame.scene.lights) ||
-            anisotropic != octree_.anisotropic() || bounces != octree_.bounces()) {
-            // A factor of 1: the lights' power did not change, so something else did (the views' size).
-            const std::optional<float> scaled =
-                lit_ && anisotropic == octree_.anisotropic() && bounces == octree_.bounces() && !passes::emits_light(frame.scene)
-                    ? passes::common_power_scale(injected_lights_, frame.scene.lights)
-                    : std::nullopt;
-            if (scaled && *scaled != 1.0f && octree_.scale_light(*scaled)) {
+        // 1 where every light is as it was injected, its power included (the light-view maps are not
+        // drawn again for a change of power alone: they hold none); nullopt where one moved.
+        const std::optional<float> power_scale = passes::common_power_scale(injected_lights_, frame.scene.lights);
+        if (!lit_ || maps_drawn || power_scale != 1.0f || anisotropic != octree_.anisotropic() ||
+            bounces != octree_.bounces()) {
+            // A factor of 1 here: the lights' power did not change, so something else did (the views' size).
+            const bool scalable = lit_ && !maps_drawn && anisotropic == octree_.anisotropic() &&
+                                  bounces == octree_.bounces() && !passes::emits_light(frame.scene);
+            if (scalable && power_scale && *power_scale != 1.0f && octree_.scale_light(*power_scale)) {
                 ++light_rescales_;
             } else {
                 const ConeSettings cones = cone_settings(frame);
@@ -212,18 +213,6 @@ private:
         settings.max_distance = glm::length(frame.scene.world_bounds().extent());
         settings.ao_lambda = static_cast<float>(frame.knob("ao_lambda"));
         return settings;
-    }
-
-    // Where a light is and how it shines, not its power (passes::shadow_map_fingerprint's terms).
-    static std::uint64_t place(const scene::Light& light) { return passes::shadow_map_fingerprint(light, 0, 0); }
-
-    // Whether every light is as it was, its power included (the light-view maps are not drawn again
-    // for a change of power alone: they hold none).
-    static bool same_lights(const std::vector<scene::Light>& before, const std::vector<scene::Light>& now) {
-        return before.size() == now.size() &&
-               std::equal(before.begin(), before.end(), now.begin(), [](const scene::Light& a, const scene::Light& b) {
-                   return place(a) == place(b) && a.radiant() == b.radiant();
-               });
     }
 
     void trace(const FrameContext& frame, bool ambient_occlusion) {
