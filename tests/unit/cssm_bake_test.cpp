@@ -19,6 +19,8 @@
 #include <fstream>
 #include <functional>
 #include <random>
+#include <set>
+#include <tuple>
 #include <unistd.h>
 
 namespace bounce::methods::cssm {
@@ -81,6 +83,69 @@ scene::Scene quad_with_uv1(const std::vector<glm::vec2>& uv1) {
     object.mesh = 0;
     scene.objects.push_back(object);
     return scene;
+}
+
+// A chart that no texel centre falls in (a slab's edges, a table leg's faces at a coarse atlas) gets
+// one texel at its centroid carrying its whole area: no surface stops sending light. Every object's
+// texels hold its true area, whatever the texel size.
+TEST(CssmAtlas, AChartNarrowerThanATexelKeepsItsArea) {
+    scene::Scene scene;
+    scene.materials.push_back(scene::Material{});
+    scene::add_box(scene, "slab", {0.0f, 0.0f, 0.0f}, {1.0f, 0.01f, 1.0f}, 0);
+    scene::add_box(scene, "leg", {2.0f, 0.0f, 0.0f}, {2.03f, 0.7f, 0.03f}, 0);
+    for (const float texel_size : {0.05f, 0.2f, 0.8f}) {
+        AtlasSettings settings;
+        settings.texel_size = texel_size;
+        const SurfaceAtlas atlas = build_surface_atlas(scene, {0, 1}, settings);
+        for (std::uint32_t object : {0u, 1u}) {
+            double area = 0.0;
+            for (const AtlasTexel& t : atlas.texels) area += t.object == object ? t.area : 0.0;
+            const double truth = surface_area(scene, {object});
+            EXPECT_NEAR(area, truth, 1e-5 * truth) << scene.objects[object].name << " at texel " << texel_size;
+        }
+        EXPECT_TRUE(std::all_of(atlas.texels.begin(), atlas.texels.end(), [](const AtlasTexel& t) { return t.area > 0.0f; }));
+    }
+}
+
+// A double-sided surface is two surfaces: every texel of its front has a twin at its place facing
+// the other way, in charts of its own, so that each side is lit and seen on its own; the texels'
+// area counts both sides. With a second UV set and with the atlas's own charts alike.
+TEST(CssmAtlas, ADoubleSidedSurfaceHasTexelsOnBothSides) {
+    AtlasSettings settings;
+    settings.texel_size = 1.0f / 16.0f;
+    for (const bool with_uv1 : {true, false}) {
+        scene::Scene scene = quad_with_uv1(with_uv1 ? std::vector<glm::vec2>{{0, 0}, {0.5f, 0}, {0.5f, 0.5f}, {0, 0.5f}}
+                                                    : std::vector<glm::vec2>{});
+        scene::Material sheet;
+        sheet.double_sided = true;
+        scene.materials.push_back(sheet);
+        scene.meshes[0].primitives[0].material = 0;
+        EXPECT_NEAR(double_sided_area(scene, {0}), 1.0, 1e-6);
+        const SurfaceAtlas atlas = build_surface_atlas(scene, {0}, settings);
+        EXPECT_EQ(atlas.uv1_objects.size(), with_uv1 ? 1u : 0u);
+        std::vector<std::tuple<float, float, float>> fronts, backs;
+        std::set<std::uint32_t> front_charts, back_charts;
+        double area = 0.0;
+        for (std::size_t i = 0; i < atlas.texels.size(); ++i) {
+            const AtlasTexel& t = atlas.texels[i];
+            ASSERT_EQ(atlas.at(t.x, t.y), static_cast<std::int32_t>(i));
+            area += t.area;
+            const bool front = t.normal.z > 0.999f;
+            EXPECT_TRUE(front || t.normal.z < -0.999f) << t.normal.z;
+            (front ? fronts : backs).emplace_back(t.position.x, t.position.y, t.position.z);
+            (front ? front_charts : back_charts).insert(t.chart);
+        }
+        EXPECT_GT(fronts.size(), 200u) << with_uv1;  // about 16^2 on the unit quad
+        std::sort(fronts.begin(), fronts.end());
+        std::sort(backs.begin(), backs.end());
+        EXPECT_EQ(fronts, backs) << with_uv1;
+        for (std::uint32_t chart : back_charts) EXPECT_EQ(front_charts.count(chart), 0u) << chart;
+        EXPECT_NEAR(area, 2.0, 2e-4) << with_uv1;
+    }
+    // One-sided, the same quad has its front alone.
+    const SurfaceAtlas one_sided = build_surface_atlas(quad_with_uv1({}), {0}, settings);
+    EXPECT_TRUE(std::all_of(one_sided.texels.begin(), one_sided.texels.end(),
+                            [](const AtlasTexel& t) { return t.normal.z > 0.999f; }));
 }
 
 TEST(CssmAtlas, UsesAValidSecondUvSetAndRejectsAnOverlappingOne) {

@@ -24,7 +24,7 @@ namespace bounce::methods::cssm {
 namespace {
 
 // Format 04: XXH3 checksums and keys (03 had FNV-1a); files of another format are stale.
-constexpr char kMagic[8] = {'B', 'N', 'C', 'S', 'S', 'M', '0', '4'};
+constexpr char kMagic[8] = {'B', 'N', 'C', 'S', 'S', 'M', '0', '5'};
 
 class Writer {
 public:
@@ -244,6 +244,7 @@ std::string group_key(const scene::Scene& scene, const std::vector<std::uint32_t
             hash.add_span<glm::vec2>(primitive.uv1);
             hash.add_span<std::uint32_t>(primitive.indices);
             hash.add(primitive.material);
+            hash.add(static_cast<std::uint8_t>(scene.material(primitive.material).double_sided ? 1 : 0));  // its back's texels
         }
     }
     return fmt::format("{:016x}", hash.value());

@@ -148,7 +148,8 @@ CssmBake bake_scene(const scene::Scene& scene, const BakeParameters& parameters,
             }
         }
         // Work estimate: one unit per cube map or CSM map.
-        progress.total += static_cast<std::uint64_t>(surface_area(scene, group.objects) / (bake.texel_size * bake.texel_size)) +
+        const float covered = surface_area(scene, group.objects) + double_sided_area(scene, group.objects);
+        progress.total += static_cast<std::uint64_t>(covered / (bake.texel_size * bake.texel_size)) +
                           (group.moving ? static_cast<std::uint64_t>(parameters.csm_directions) : 0u);
     }
     progress.total = std::max<std::uint64_t>(progress.total, 1);

@@ -16,6 +16,8 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <numeric>
 #include <optional>
 #include <vector>
 
@@ -167,13 +169,21 @@ private:
 };
 
 // The atlas holds about atlas_resolution^2 texels (texel edge = sqrt(area) / atlas_resolution; chart
-// padding adds some). Each texel costs on the GPU its CssmTexel, about two radiosity-tree nodes with
+// padding adds some), more by the share of the area that is double-sided (both sides have texels). Each texel costs on the GPU its CssmTexel, about two radiosity-tree nodes with
 // their radiance and five vec4 solve buffers; on the host its atlas entry and the bake's arrays. The
 // compressed depth runs depend on the scene: at least one run per cube-map pixel per group (the
 // static objects, and each moving one), and the bake's chunk of 32 uncompressed maps on the host.
 MemoryEstimate estimate(const EstimateInput& input) {
     MemoryEstimate estimate = direct_light_estimate(input);
-    const auto texels = static_cast<std::uint64_t>(input.knob("atlas_resolution") * input.knob("atlas_resolution"));
+    double both_sides = 1.0;
+    if (std::any_of(input.scene.materials.begin(), input.scene.materials.end(),
+                    [](const scene::Material& material) { return material.double_sided; })) {
+        std::vector<std::uint32_t> objects(input.scene.objects.size());
+        std::iota(objects.begin(), objects.end(), 0u);
+        const double area = surface_area(input.scene, objects);
+        if (area > 0.0) both_sides += double_sided_area(input.scene, objects) / area;
+    }
+    const auto texels = static_cast<std::uint64_t>(input.knob("atlas_resolution") * input.knob("atlas_resolution") * both_sides);
     constexpr std::uint64_t kGpuPerTexel = sizeof(glsl::CssmTexel) + 2 * (sizeof(glsl::CssmNode) + 16) + 5 * 16;
     constexpr std::uint64_t kHostPerTexel = sizeof(AtlasTexel) + 6 * sizeof(glm::vec3) + 3 * sizeof(std::uint32_t);
     estimate.push_back({"atlas_texels", texels * (kGpuPerTexel + kHostPerTexel), "atlas_resolution"});

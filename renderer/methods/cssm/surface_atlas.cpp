@@ -254,6 +254,7 @@ std::vector<PackItem> automatic_charts(const scene::Scene& scene, std::uint32_t 
                 // A chart smaller than a texel still gets one, at its centroid, so no surface is lost.
                 const TriangleRef triangle{&primitive, seed};
                 AtlasTexel texel = texel_from(triangle, glm::vec3(1.0f / 3.0f), object_index, 0, 0, 0);
+                texel.area = 1.0f;  // the chart's whole area, below
                 item.width = item.height = 1;
                 item.texels.push_back(texel);
             }
@@ -264,6 +265,39 @@ std::vector<PackItem> automatic_charts(const scene::Scene& scene, std::uint32_t 
     return items;
 }
 
+// The back of `item`'s double-sided charts: each texel copied, facing the other way, in charts of
+// its own (numbered anew from 0) at the same places.
+PackItem back_of(const scene::Scene& scene, const PackItem& item) {
+    PackItem back;
+    back.width = item.width;
+    back.height = item.height;
+    std::map<std::uint32_t, std::uint32_t> chart_of;  // the item's chart -> the back's
+    for (const AtlasTexel& texel : item.texels) {
+        if (!scene.material(texel.material).double_sided) continue;
+        AtlasTexel flipped = texel;
+        flipped.normal = -texel.normal;
+        flipped.chart = chart_of.emplace(texel.chart, static_cast<std::uint32_t>(chart_of.size())).first->second;
+        back.texels.push_back(flipped);
+    }
+    back.charts = static_cast<std::uint32_t>(chart_of.size());
+    return back;
+}
+
+// The area of the triangles of `objects` whose material passes `counts`.
+template <typename Counts>
+float area_where(const scene::Scene& scene, const std::vector<std::uint32_t>& objects, Counts&& counts) {
+    float area = 0.0f;
+    for (std::uint32_t o : objects) {
+        const scene::Object& object = scene.objects[o];
+        if (object.mesh < 0) continue;
+        for (const scene::Primitive& primitive : scene.meshes[object.mesh].primitives) {
+            if (!counts(scene.material(primitive.material))) continue;
+            for (std::uint32_t t = 0; t < primitive.triangle_count(); ++t) area += scene::world_triangle_area(object.transform, primitive, t);
+        }
+    }
+    return area;
+}
+
 }  // namespace
 
 float texel_size_for(float area, float texels_per_side) {
@@ -271,14 +305,11 @@ float texel_size_for(float area, float texels_per_side) {
 }
 
 float surface_area(const scene::Scene& scene, const std::vector<std::uint32_t>& objects) {
-    float area = 0.0f;
-    for (std::uint32_t o : objects) {
-        const scene::Object& object = scene.objects[o];
-        if (object.mesh < 0) continue;
-        for (const scene::Primitive& primitive : scene.meshes[object.mesh].primitives)
-            for (std::uint32_t t = 0; t < primitive.triangle_count(); ++t) area += scene::world_triangle_area(object.transform, primitive, t);
-    }
-    return area;
+    return area_where(scene, objects, [](const scene::Material&) { return true; });
+}
+
+float double_sided_area(const scene::Scene& scene, const std::vector<std::uint32_t>& objects) {
+    return area_where(scene, objects, [](const scene::Material& material) { return material.double_sided; });
 }
 
 SurfaceAtlas build_surface_atlas(const scene::Scene& scene, const std::vector<std::uint32_t>& objects,
@@ -289,8 +320,8 @@ SurfaceAtlas build_surface_atlas(const scene::Scene& scene, const std::vector<st
     SurfaceAtlas atlas;
     atlas.objects = objects;
     atlas.surface_area = surface_area(scene, objects);
-    if (static_cast<double>(atlas.surface_area) / (static_cast<double>(settings.texel_size) * settings.texel_size) >
-        static_cast<double>(max_texels)) {
+    const double covered = static_cast<double>(atlas.surface_area) + double_sided_area(scene, objects);
+    if (covered / (static_cast<double>(settings.texel_size) * settings.texel_size) > static_cast<double>(max_texels)) {
         throw InputError(fmt::format("cssm: an atlas of texel size {:g} over {:g} m^2 would exceed {} texels",
                                      settings.texel_size, atlas.surface_area, max_texels));
     }
@@ -306,6 +337,10 @@ SurfaceAtlas build_surface_atlas(const scene::Scene& scene, const std::vector<st
             }
         }
         for (PackItem& item : automatic_charts(scene, o, settings)) items.push_back(std::move(item));
+    }
+    for (std::size_t i = 0, fronts = items.size(); i < fronts; ++i) {
+        PackItem back = back_of(scene, items[i]);
+        if (!back.texels.empty()) items.push_back(std::move(back));
     }
 
     // Shelf packing, tallest first, into a width near the square root of the texels needed.

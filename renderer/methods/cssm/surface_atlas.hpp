@@ -7,6 +7,11 @@
 // inside [0,1], no two triangles covering the same texel), otherwise from our own segmentation:
 // edge-connected triangles of one primitive whose normals stay within a cone of the chart's first
 // triangle, projected onto that triangle's plane (so no chart folds over itself), packed by shelves.
+//
+// A double-sided material's surface is two surfaces, each lit and seen on its own side: a
+// lampshade's inside, lit by its bulb, lights the ceiling while its outside stays dim. Its charts
+// are copied facing the other way (charts of their own, at the same places), so every texel
+// receives and sends on one side, as the radiosity solve assumes.
 #pragma once
 
 #include "renderer/scene/scene.hpp"
@@ -47,7 +52,7 @@ struct SurfaceAtlas {
     std::vector<std::int32_t> texel_at;  // width * height: texel index or -1
     std::vector<std::uint32_t> objects;  // the objects it covers
     std::vector<std::string> uv1_objects;  // objects whose charts came from their second UV set
-    float surface_area = 0.0f;  // of the covered triangles, world units
+    float surface_area = 0.0f;  // of the covered triangles, world units (a double-sided one once)
 
     std::int32_t at(int x, int y) const {
         return x < 0 || y < 0 || x >= width || y >= height ? -1 : texel_at[static_cast<std::size_t>(y) * width + x];
@@ -64,5 +69,7 @@ float texel_size_for(float area, float texels_per_side);
 
 // The world-space surface area of `objects`.
 float surface_area(const scene::Scene& scene, const std::vector<std::uint32_t>& objects);
+// The part of it whose material is double-sided: the atlas covers it twice, once per side.
+float double_sided_area(const scene::Scene& scene, const std::vector<std::uint32_t>& objects);
 
 }  // namespace bounce::methods::cssm
