@@ -19,6 +19,8 @@
 #define CSSM_BINDING_CSM_NEAREST 14  // uint[]: each CSM's direction table (6 x CSM_TABLE_FACE^2)
 
 #define CSSM_BINDING_TEXEL_INDIRECT 15  // vec4[texels]: irradiance of every bounce, summed (per-texel display)
+#define CSSM_BINDING_TEXEL_SAMPLES 16   // vec4[texels * CSSM_TEXEL_SAMPLES]: world points of each texel's surface
+#define CSSM_TEXEL_SAMPLES 16           // where its direct light is sampled (AtlasTexel::samples)
 
 #define CSSM_TABLE_FACE 16
 

@@ -107,6 +107,53 @@ TEST(CssmAtlas, AChartNarrowerThanATexelKeepsItsArea) {
     }
 }
 
+// A texel's direct light is sampled at its 4x4 sub-cells' centres that lie on its surface: on the
+// quad's plane, within the texel's cell, all different where the cell is inside the quad; a chart
+// narrower than a texel spreads its samples over its length rather than one point of it.
+TEST(CssmAtlas, ATexelSamplesItsLightOverItsOwnSurface) {
+    AtlasSettings settings;
+    settings.texel_size = 1.0f / 8.0f;
+    const SurfaceAtlas atlas = build_surface_atlas(quad_with_uv1({}), {0}, settings);  // the unit quad at z = 0
+    ASSERT_GT(atlas.texels.size(), 40u);
+    std::size_t inside = 0;
+    for (const AtlasTexel& t : atlas.texels) {
+        std::set<std::pair<float, float>> distinct;
+        for (const glm::vec3& sample : t.samples) {
+            EXPECT_NEAR(sample.z, 0.0f, 1e-6f);
+            EXPECT_TRUE(sample.x >= -1e-6f && sample.x <= 1.0f + 1e-6f && sample.y >= -1e-6f && sample.y <= 1.0f + 1e-6f);
+            EXPECT_LE(std::abs(sample.x - t.position.x), 0.5f * settings.texel_size + 1e-5f);
+            EXPECT_LE(std::abs(sample.y - t.position.y), 0.5f * settings.texel_size + 1e-5f);
+            distinct.emplace(sample.x, sample.y);
+        }
+        const bool whole = t.position.x > settings.texel_size && t.position.x < 1.0f - settings.texel_size &&
+                           t.position.y > settings.texel_size && t.position.y < 1.0f - settings.texel_size;
+        if (whole) {
+            ++inside;
+            EXPECT_EQ(distinct.size(), static_cast<std::size_t>(kTexelSamples));
+        }
+    }
+    EXPECT_GT(inside, 20u);
+
+    // A strip 1 m long and 1 cm wide, at texels of 0.25 m: one texel; its samples span the strip.
+    scene::Scene strip;
+    strip.materials.push_back(scene::Material{});
+    scene::add_box(strip, "strip", {0.0f, 0.0f, 0.0f}, {1.0f, 0.01f, 0.01f}, 0);
+    settings.texel_size = 0.25f;
+    const SurfaceAtlas strips = build_surface_atlas(strip, {0}, settings);
+    int long_faces = 0;
+    for (const AtlasTexel& t : strips.texels) {
+        if (std::abs(t.normal.y) < 0.999f) continue;  // the top and bottom faces: 1 m by 1 cm
+        ++long_faces;
+        float lowest = 2.0f, highest = -1.0f;
+        for (const glm::vec3& sample : t.samples) {
+            lowest = std::min(lowest, sample.x);
+            highest = std::max(highest, sample.x);
+        }
+        EXPECT_GT(highest - lowest, 0.5f) << "a strip's samples span its length";
+    }
+    EXPECT_EQ(long_faces, 2);
+}
+
 // A double-sided surface is two surfaces: every texel of its front has a twin at its place facing
 // the other way, in charts of its own, so that each side is lit and seen on its own; the texels'
 // area counts both sides. With a second UV set and with the atlas's own charts alike.

@@ -24,7 +24,7 @@ namespace bounce::methods::cssm {
 namespace {
 
 // Format 04: XXH3 checksums and keys (03 had FNV-1a); files of another format are stale.
-constexpr char kMagic[8] = {'B', 'N', 'C', 'S', 'S', 'M', '0', '5'};
+constexpr char kMagic[8] = {'B', 'N', 'C', 'S', 'S', 'M', '0', '6'};
 
 class Writer {
 public:

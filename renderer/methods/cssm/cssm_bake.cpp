@@ -177,6 +177,7 @@ void place_texels(const scene::Scene& scene, CssmBake& bake) {
     bake.albedo.clear();
     bake.emission.clear();
     bake.areas.clear();
+    bake.samples.clear();
     bake.texel_group.clear();
     bake.group_first_texel.clear();
     for (std::uint32_t g = 0; g < bake.groups.size(); ++g) {
@@ -187,6 +188,9 @@ void place_texels(const scene::Scene& scene, CssmBake& bake) {
             const AtlasTexel& texel = group.atlas.texels[t];
             const glm::mat4& transform = scene.objects[texel.object].transform;
             bake.positions.push_back(glm::vec3(to_world * glm::vec4(group.maps.origins[t], 1.0f)));
+            // In the group's frame as the bake placed its texels: a moving object's own space, else the world then.
+            const glm::mat4 to_frame = group.moving ? glm::mat4(1.0f) : bake.baked_transforms[texel.object];
+            for (const glm::vec3& sample : texel.samples) bake.samples.push_back(glm::vec3(to_world * to_frame * glm::vec4(sample, 1.0f)));
             bake.normals.push_back(glm::normalize(glm::transpose(glm::inverse(glm::mat3(transform))) * texel.normal));
             // The material with its textures at the texel's centre (a texel averages nothing finer).
             const scene::TexturedMaterial material = scene::textured_material(scene, scene.material(texel.material), texel.uv0, texel.uv1);

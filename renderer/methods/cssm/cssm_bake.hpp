@@ -47,6 +47,7 @@ struct CssmBake {
     std::vector<std::uint32_t> group_first_texel;  // + end
     std::vector<glm::vec3> positions, normals, albedo, emission;
     std::vector<float> areas;
+    std::vector<glm::vec3> samples;  // kTexelSamples per texel: where its direct light is sampled (AtlasTexel)
     RadiosityTree tree;
 
     std::size_t texel_count() const { return positions.size(); }

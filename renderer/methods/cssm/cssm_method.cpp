@@ -169,10 +169,12 @@ private:
 };
 
 // The atlas holds about atlas_resolution^2 texels (texel edge = sqrt(area) / atlas_resolution; chart
-// padding adds some), more by the share of the area that is double-sided (both sides have texels). Each texel costs on the GPU its CssmTexel, about two radiosity-tree nodes with
-// their radiance and five vec4 solve buffers; on the host its atlas entry and the bake's arrays. The
-// compressed depth runs depend on the scene: at least one run per cube-map pixel per group (the
-// static objects, and each moving one), and the bake's chunk of 32 uncompressed maps on the host.
+// padding adds some), more by the share of the area that is double-sided (both sides have texels).
+// Each texel costs on the GPU its CssmTexel and its direct light's sample points, about two
+// radiosity-tree nodes with their radiance and five vec4 solve buffers; on the host its atlas entry
+// and the bake's arrays. The compressed depth runs depend on the scene: at least one run per cube-map
+// pixel per group (the static objects, and each moving one), and the bake's chunk of 32 uncompressed
+// maps on the host.
 MemoryEstimate estimate(const EstimateInput& input) {
     MemoryEstimate estimate = direct_light_estimate(input);
     double both_sides = 1.0;
@@ -184,8 +186,9 @@ MemoryEstimate estimate(const EstimateInput& input) {
         if (area > 0.0) both_sides += double_sided_area(input.scene, objects) / area;
     }
     const auto texels = static_cast<std::uint64_t>(input.knob("atlas_resolution") * input.knob("atlas_resolution") * both_sides);
-    constexpr std::uint64_t kGpuPerTexel = sizeof(glsl::CssmTexel) + 2 * (sizeof(glsl::CssmNode) + 16) + 5 * 16;
-    constexpr std::uint64_t kHostPerTexel = sizeof(AtlasTexel) + 6 * sizeof(glm::vec3) + 3 * sizeof(std::uint32_t);
+    constexpr std::uint64_t kGpuPerTexel = sizeof(glsl::CssmTexel) + kTexelSamples * 16 + 2 * (sizeof(glsl::CssmNode) + 16) + 5 * 16;
+    constexpr std::uint64_t kHostPerTexel =
+        sizeof(AtlasTexel) + (6 + kTexelSamples) * sizeof(glm::vec3) + 3 * sizeof(std::uint32_t);
     estimate.push_back({"atlas_texels", texels * (kGpuPerTexel + kHostPerTexel), "atlas_resolution"});
     std::uint64_t groups = 1;
     for (const scene::Object& object : input.scene.objects) groups += object.mesh >= 0 && object.dynamic ? 1 : 0;

@@ -4,6 +4,7 @@
 #include "renderer/scene/mesh_utils.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <map>
 #include <numeric>
@@ -72,7 +73,65 @@ AtlasTexel texel_from(const TriangleRef& triangle, const glm::vec3& barycentric,
     texel.material = primitive.material;
     texel.x = x;
     texel.y = y;
+    texel.samples.fill(texel.position);
     return texel;
+}
+
+glm::vec3 surface_point(const TriangleRef& triangle, const glm::vec3& barycentric) {
+    glm::vec3 point(0.0f);
+    for (int c = 0; c < 3; ++c) point += barycentric[c] * triangle.primitive->positions[triangle.vertex(c)];
+    return point;
+}
+
+// A texel's sub-cells found so far: bit i for sub-cell i (x + kTexelSamplesPerSide y within the texel).
+using SubCells = std::vector<std::uint16_t>;
+static_assert(kTexelSamples <= 16);
+
+// Rasterizes `triangle` (at `q`, texel units of its chart) at kTexelSamplesPerSide times the
+// resolution: each sub-cell centre it covers becomes a sample of the texel whose cell holds it
+// (`texel_at`: its index in `texels`, or -1), once.
+template <typename TexelAt>
+void sample_sub_cells(const TriangleRef& triangle, const glm::vec2 (&q)[3], std::vector<AtlasTexel>& texels,
+                      SubCells& found, TexelAt&& texel_at) {
+    constexpr int kSide = kTexelSamplesPerSide;
+    const glm::vec2 finer[3] = {static_cast<float>(kSide) * q[0], static_cast<float>(kSide) * q[1], static_cast<float>(kSide) * q[2]};
+    rasterize(finer, false, [&](int x, int y, const glm::vec3& barycentric) {
+        if (x < 0 || y < 0) return;
+        const std::int32_t t = texel_at(x / kSide, y / kSide);
+        if (t < 0) return;
+        const auto bit = static_cast<std::uint16_t>(1u << ((y % kSide) * kSide + x % kSide));
+        if (found[static_cast<std::size_t>(t)] & bit) return;
+        found[static_cast<std::size_t>(t)] |= bit;
+        const int slot = std::popcount(static_cast<unsigned>(found[static_cast<std::size_t>(t)])) - 1;
+        texels[static_cast<std::size_t>(t)].samples[static_cast<std::size_t>(slot)] = surface_point(triangle, barycentric);
+    });
+}
+
+// A texel standing for a whole chart of `members`: its samples at four points of each triangle (its
+// centroid and its three corner sub-triangles' centroids), spread evenly where there are more.
+void spread_samples(AtlasTexel& texel, const scene::Primitive& primitive, const std::vector<std::uint32_t>& members) {
+    static constexpr glm::vec3 kPoints[4] = {{1.0f / 3.0f, 1.0f / 3.0f, 1.0f / 3.0f},
+                                             {2.0f / 3.0f, 1.0f / 6.0f, 1.0f / 6.0f},
+                                             {1.0f / 6.0f, 2.0f / 3.0f, 1.0f / 6.0f},
+                                             {1.0f / 6.0f, 1.0f / 6.0f, 2.0f / 3.0f}};
+    const std::size_t candidates = 4 * members.size();
+    for (std::size_t slot = 0; slot < static_cast<std::size_t>(kTexelSamples); ++slot) {
+        const std::size_t c = slot * candidates / kTexelSamples;  // evenly over them, in order
+        texel.samples[slot] = surface_point(TriangleRef{&primitive, members[c / 4]}, kPoints[c % 4]);
+    }
+}
+
+// Texels with fewer than kTexelSamples sub-cells on their surface repeat the ones they have (their
+// centre where none: a chart narrower than half a texel).
+void complete_samples(std::vector<AtlasTexel>& texels, const SubCells& found) {
+    for (std::size_t t = 0; t < texels.size(); ++t) {
+        const int count = std::popcount(static_cast<unsigned>(found[t]));
+        if (count == 0) {
+            texels[t].samples.fill(texels[t].position);
+            continue;
+        }
+        for (int slot = count; slot < kTexelSamples; ++slot) texels[t].samples[static_cast<std::size_t>(slot)] = texels[t].samples[static_cast<std::size_t>(slot % count)];
+    }
 }
 
 // Every texel of a chart gets the chart's true area divided evenly (planar charts) or in
@@ -160,6 +219,17 @@ PackItem charts_from_uv1(const scene::Scene& scene, std::uint32_t object_index, 
     }
     item.charts = chart_base;
     normalize_chart_areas(item, chart_area);
+    SubCells found(item.texels.size(), 0);
+    const auto texel_at = [&](int x, int y) { return x < side && y < side ? claimed[static_cast<std::size_t>(y) * side + x] : -1; };
+    for (const scene::Primitive& primitive : mesh.primitives) {
+        for (std::uint32_t t = 0; t < primitive.triangle_count(); ++t) {
+            const TriangleRef triangle{&primitive, t};
+            glm::vec2 q[3];
+            for (int c = 0; c < 3; ++c) q[c] = primitive.uv1[triangle.vertex(c)] * static_cast<float>(side);
+            sample_sub_cells(triangle, q, item.texels, found, texel_at);
+        }
+    }
+    complete_samples(item.texels, found);
     return item;
 }
 
@@ -233,7 +303,7 @@ std::vector<PackItem> automatic_charts(const scene::Scene& scene, std::uint32_t 
                                              object.name, item.width, item.height));
             }
             item.charts = 1;
-            std::vector<std::uint8_t> claimed(static_cast<std::size_t>(item.width) * item.height, 0);
+            std::vector<std::int32_t> claimed(static_cast<std::size_t>(item.width) * item.height, -1);
             float area = 0.0f;
             for (std::uint32_t t : members) {
                 const TriangleRef triangle{&primitive, t};
@@ -242,19 +312,33 @@ std::vector<PackItem> automatic_charts(const scene::Scene& scene, std::uint32_t 
                 area += face_area[t];
                 rasterize(q, false, [&](int x, int y, const glm::vec3& barycentric) {
                     if (x < 0 || y < 0 || x >= item.width || y >= item.height) return;
-                    std::uint8_t& taken = claimed[static_cast<std::size_t>(y) * item.width + x];
-                    if (taken) return;
-                    taken = 1;
+                    std::int32_t& taken = claimed[static_cast<std::size_t>(y) * item.width + x];
+                    if (taken >= 0) return;
+                    taken = static_cast<std::int32_t>(item.texels.size());
                     AtlasTexel texel = texel_from(triangle, barycentric, object_index, 0, x, y);
                     texel.area = 1.0f;
                     item.texels.push_back(texel);
                 });
             }
+            SubCells found(item.texels.size(), 0);
+            const auto texel_at = [&](int x, int y) {
+                return x < item.width && y < item.height ? claimed[static_cast<std::size_t>(y) * item.width + x] : -1;
+            };
+            for (std::uint32_t t : members) {
+                const TriangleRef triangle{&primitive, t};
+                glm::vec2 q[3];
+                for (int c = 0; c < 3; ++c) q[c] = project(triangle.vertex(c)) - lo;
+                sample_sub_cells(triangle, q, item.texels, found, texel_at);
+            }
+            complete_samples(item.texels, found);
             if (item.texels.empty()) {
-                // A chart smaller than a texel still gets one, at its centroid, so no surface is lost.
+                // A chart smaller than a texel still gets one, at its seed's centroid, so no surface is
+                // lost; its samples spread over all its triangles (a lamp shade's narrow strip: the
+                // seed's centroid alone sat below the bulb, in the pole's shadow, all of it lit above).
                 const TriangleRef triangle{&primitive, seed};
                 AtlasTexel texel = texel_from(triangle, glm::vec3(1.0f / 3.0f), object_index, 0, 0, 0);
                 texel.area = 1.0f;  // the chart's whole area, below
+                spread_samples(texel, primitive, members);
                 item.width = item.height = 1;
                 item.texels.push_back(texel);
             }

@@ -39,12 +39,16 @@ void TexelPlacement::upload(const scene::Scene& scene, const ResidentBake& resid
                     glm::vec4(node.area, static_cast<float>(node.leaves), 0, 0),
                     glm::uvec4(node.child, node.skip, node.representative, node.texel)};
     }
+    static_assert(CSSM_TEXEL_SAMPLES == kTexelSamples);
+    std::vector<glm::vec4> samples(bake.samples.size());
+    for (std::size_t i = 0; i < samples.size(); ++i) samples[i] = glm::vec4(bake.samples[i], 1.0f);
     texels_ = gpu::storage_of(texels);
+    samples_ = gpu::storage_of(samples);
     groups_ = gpu::storage_of(groups);
     nodes_ = gpu::storage_of(nodes);
     node_radiance_ = gpu::Buffer(std::max<std::size_t>(1, nodes.size()) * sizeof(glm::vec4), nullptr, 0);
     level_nodes_ = gpu::storage_of(bake.tree.level_nodes);
-    atlas_bytes_ = texels_.bytes() + groups_.bytes();
+    atlas_bytes_ = texels_.bytes() + samples_.bytes() + groups_.bytes();
     tree_bytes_ = nodes_.bytes() + node_radiance_.bytes() + level_nodes_.bytes();
     ++version_;
     check_overlaps(scene, bake.moving);
@@ -72,6 +76,7 @@ void TexelPlacement::bind() const {
     gpu::bind_storage(CSSM_BINDING_NODE_RADIANCE, node_radiance_);
     gpu::bind_storage(CSSM_BINDING_LEVEL_NODES, level_nodes_);
     gpu::bind_storage(CSSM_BINDING_TEXELS, texels_);
+    gpu::bind_storage(CSSM_BINDING_TEXEL_SAMPLES, samples_);
     gpu::bind_storage(CSSM_BINDING_GROUPS, groups_);
 }
 
