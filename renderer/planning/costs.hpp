@@ -55,8 +55,9 @@ public:
     // Bumped whenever methods change what a preset costs: cached models of older versions are dropped.
     // 4: change costs. 5: vct scales its injected light where every light dimmed alike. 6: vct's
     // light-view maps are not drawn again for a change of power. 7: nor isr's (its VPL tree is
-    // rebuilt over them). 8: cssm scales its atlas solution where every light dimmed alike.
-    static constexpr int kVersion = 8;
+    // rebuilt over them). 8: cssm scales its atlas solution where every light dimmed alike. 9: cssm
+    // samples each texel's direct light at 16 points, and double-sided surfaces have texels on both sides.
+    static constexpr int kVersion = 9;
 
     DeviceCosts() = default;
     explicit DeviceCosts(std::string renderer) : renderer_(std::move(renderer)) {}

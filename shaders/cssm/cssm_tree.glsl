@@ -228,11 +228,11 @@ float irradiance_bound(uint node, vec3 p, vec3 n, out vec3 l, out float widen) {
 
 // Refine and gather in one stackless walk over this batch's subtrees (the paper's Fig. 10): a node
 // whose bound, times the receiver's BRDF bound towards it and tone-mapped, exceeds the threshold is
-// refined (child pointer); otherwise it is gathered and skipped (skip pointer). A node whose normals
-// span more than a hemisphere (cone cosine below 0: both sides of a sheet, a box's faces) is always
-// refined: gathered, it sends all its light along one normal, which is no side of it (in the
-// furnished room such nodes made the sun's indirect light 2.3 times the truth's at preset low, 1.02
-// refined). Leaves are always gathered. `exclude` is the receiver's own texel (for pixels, the texel under them, or
+// refined (child pointer); otherwise it is gathered and skipped (skip pointer). Leaves are always
+// gathered. A node whose normals span more than a hemisphere (both sides of a sheet, a box's faces)
+// sends all its light along its one mean normal: in the furnished room such nodes made the sun's
+// indirect light 2.3 times the truth's at preset low. Refining every such node brought it to 1.02 but
+// took 1.5 to 4 times as long at draft and low on the bench corpus (docs/benchmarks.md), so it is not done. `exclude` is the receiver's own texel (for pixels, the texel under them, or
 // CSSM_NONE). The includer defines CSSM_BRDF(l, spread) as the receiver's BRDF towards a node in
 // direction l whose disk subtends sin^2 = spread, and
 // CSSM_BRDF_BOUND(l, cone) as its bound over a cone of directions (constants for texels).
@@ -257,7 +257,7 @@ Gathered gather_cut(vec3 p, vec3 n, uint exclude) {
                 node = links.y;
                 continue;
             }
-            if (!leaf && (nodes[node].normal_cone.w < 0.0 || tone_mapped(CSSM_BRDF_BOUND(towards, cone) * bound) > u_threshold)) {
+            if (!leaf && tone_mapped(CSSM_BRDF_BOUND(towards, cone) * bound) > u_threshold) {
                 node = links.x;
                 continue;
             }
