@@ -107,6 +107,42 @@ TEST(CssmAtlas, AChartNarrowerThanATexelKeepsItsArea) {
     }
 }
 
+// The same with a mesh's own second UV set: an island no texel centre falls in (here a second unit
+// quad squeezed into 0.005 of the set) gets a texel of its own in a free cell, with its whole area,
+// its samples on its own surface.
+TEST(CssmAtlas, ASecondUvSetsIslandSmallerThanATexelKeepsItsArea) {
+    scene::Scene scene = quad_with_uv1({{0, 0}, {0.9f, 0}, {0.9f, 0.9f}, {0, 0.9f}});
+    scene::Primitive& primitive = scene.meshes[0].primitives[0];
+    const glm::vec3 offset(0.0f, 0.0f, 1.0f);  // the second quad, a metre above the first
+    for (std::uint32_t v = 0; v < 4; ++v) {
+        primitive.positions.push_back(primitive.positions[v] + offset);
+        primitive.normals.push_back(primitive.normals[v]);
+        primitive.tangents.push_back(primitive.tangents[v]);
+    }
+    primitive.uv1.insert(primitive.uv1.end(), {{0.95f, 0.95f}, {0.955f, 0.95f}, {0.955f, 0.955f}, {0.95f, 0.955f}});
+    primitive.indices.insert(primitive.indices.end(), {4, 5, 6, 4, 6, 7});
+    primitive.bounds.extend(primitive.positions.back() + offset);
+    scene.meshes[0].bounds = primitive.bounds;
+    AtlasSettings settings;
+    settings.texel_size = 0.1f;  // 16 cells a side: no cell centre within the island
+    const SurfaceAtlas atlas = build_surface_atlas(scene, {0}, settings);
+    ASSERT_EQ(atlas.uv1_objects.size(), 1u);
+    double area = 0.0, island = 0.0;
+    std::size_t island_texels = 0;
+    for (std::size_t i = 0; i < atlas.texels.size(); ++i) {
+        const AtlasTexel& t = atlas.texels[i];
+        ASSERT_EQ(atlas.at(t.x, t.y), static_cast<std::int32_t>(i));
+        area += t.area;
+        if (t.position.z < 0.5f) continue;
+        ++island_texels;
+        island += t.area;
+        for (const glm::vec3& sample : t.samples) EXPECT_NEAR(sample.z, 1.0f, 1e-6f);
+    }
+    EXPECT_EQ(island_texels, 1u);
+    EXPECT_NEAR(island, 1.0, 1e-5);
+    EXPECT_NEAR(area, 2.0, 2e-5);
+}
+
 // A texel's direct light is sampled at its 4x4 sub-cells' centres that lie on its surface: on the
 // quad's plane, within the texel's cell, all different where the cell is inside the quad; a chart
 // narrower than a texel spreads its samples over its length rather than one point of it.

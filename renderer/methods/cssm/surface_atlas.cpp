@@ -8,6 +8,7 @@
 #include <cmath>
 #include <map>
 #include <numeric>
+#include <optional>
 #include <tuple>
 
 namespace bounce::methods::cssm {
@@ -170,6 +171,7 @@ PackItem charts_from_uv1(const scene::Scene& scene, std::uint32_t object_index, 
     std::vector<std::int32_t> claimed(static_cast<std::size_t>(side) * side, -1);
     std::vector<std::uint8_t> strictly_inside(claimed.size(), 0);
     std::vector<float> chart_area;
+    std::vector<std::pair<const scene::Primitive*, std::vector<std::uint32_t>>> chart_triangles;  // per chart
     std::uint32_t chart_base = 0;
     for (const scene::Primitive& primitive : mesh.primitives) {
         // Charts: triangles connected through shared vertices (shared vertices share their UV).
@@ -189,7 +191,11 @@ PackItem charts_from_uv1(const scene::Scene& scene, std::uint32_t object_index, 
             const std::uint32_t root = find(primitive.indices[3 * t]);
             const auto [it, added] = chart_of_root.emplace(root, chart_base + static_cast<std::uint32_t>(chart_of_root.size()));
             const std::uint32_t chart = it->second;
-            if (added) chart_area.push_back(0.0f);
+            if (added) {
+                chart_area.push_back(0.0f);
+                chart_triangles.push_back({&primitive, {}});
+            }
+            chart_triangles[chart].second.push_back(t);
             const TriangleRef triangle{&primitive, t};
             const float triangle_area = scene::world_triangle_area(object.transform, primitive, t);
             chart_area[chart] += triangle_area;
@@ -218,8 +224,40 @@ PackItem charts_from_uv1(const scene::Scene& scene, std::uint32_t object_index, 
         chart_base += static_cast<std::uint32_t>(chart_of_root.size());
     }
     item.charts = chart_base;
+    // A chart that no texel centre falls in still gets one texel, in the free cell nearest its first
+    // triangle's UV centroid, carrying its whole area, its samples spread over its triangles (as the
+    // atlas's own charts do): no surface stops sending light.
+    std::vector<std::uint8_t> has_texel(chart_base, 0);
+    for (const AtlasTexel& texel : item.texels) has_texel[texel.chart] = 1;
+    std::vector<std::size_t> whole_chart_texels;
+    for (std::uint32_t chart = 0; chart < chart_base; ++chart) {
+        if (has_texel[chart]) continue;
+        const auto& [primitive, members] = chart_triangles[chart];
+        const TriangleRef first{primitive, members.front()};
+        const glm::vec2 centroid = (primitive->uv1[first.vertex(0)] + primitive->uv1[first.vertex(1)] + primitive->uv1[first.vertex(2)]) *
+                                   (static_cast<float>(side) / 3.0f);
+        const glm::ivec2 home = glm::clamp(glm::ivec2(glm::floor(centroid)), glm::ivec2(0), glm::ivec2(side - 1));
+        std::optional<glm::ivec2> cell;
+        for (int ring = 0; ring < side && !cell; ++ring) {  // the square rings around `home`, nearest first
+            for (int dy = -ring; dy <= ring && !cell; ++dy) {
+                for (int dx = -ring; dx <= ring && !cell; ++dx) {
+                    if (std::max(std::abs(dx), std::abs(dy)) != ring) continue;
+                    const glm::ivec2 at = home + glm::ivec2(dx, dy);
+                    if (at.x >= 0 && at.y >= 0 && at.x < side && at.y < side && claimed[static_cast<std::size_t>(at.y) * side + at.x] < 0) cell = at;
+                }
+            }
+        }
+        if (!cell) continue;  // every cell taken: no room for it
+        AtlasTexel texel = texel_from(first, glm::vec3(1.0f / 3.0f), object_index, chart, cell->x, cell->y);
+        texel.area = 1.0f;  // the chart's whole area, below
+        spread_samples(texel, *primitive, members);
+        claimed[static_cast<std::size_t>(cell->y) * side + cell->x] = static_cast<std::int32_t>(item.texels.size());
+        whole_chart_texels.push_back(item.texels.size());
+        item.texels.push_back(texel);
+    }
     normalize_chart_areas(item, chart_area);
     SubCells found(item.texels.size(), 0);
+    for (std::size_t t : whole_chart_texels) found[t] = 0xFFFF;  // sampled over their charts already
     const auto texel_at = [&](int x, int y) { return x < side && y < side ? claimed[static_cast<std::size_t>(y) * side + x] : -1; };
     for (const scene::Primitive& primitive : mesh.primitives) {
         for (std::uint32_t t = 0; t < primitive.triangle_count(); ++t) {
