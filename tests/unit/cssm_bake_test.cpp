@@ -141,6 +141,28 @@ TEST(CssmAtlas, ASecondUvSetsIslandSmallerThanATexelKeepsItsArea) {
     EXPECT_EQ(island_texels, 1u);
     EXPECT_NEAR(island, 1.0, 1e-5);
     EXPECT_NEAR(area, 2.0, 2e-5);
+
+    // Hostile: 3000 more islands, each a quad a metre up, all at that one UV spot. The few cells
+    // around it fill first; the rest take the grid's first free cells (265 a side here), and the
+    // area stays whole.
+    const std::uint32_t islands = 3000;
+    for (std::uint32_t i = 0; i < islands; ++i) {
+        const auto base = static_cast<std::uint32_t>(primitive.positions.size());
+        for (std::uint32_t v = 4; v < 8; ++v) {
+            primitive.positions.push_back(primitive.positions[v]);
+            primitive.normals.push_back(primitive.normals[v]);
+            primitive.tangents.push_back(primitive.tangents[v]);
+            primitive.uv1.push_back(primitive.uv1[v]);
+        }
+        primitive.indices.insert(primitive.indices.end(), {base, base + 1, base + 2, base, base + 2, base + 3});
+    }
+    settings.texel_size = 0.22f;
+    const SurfaceAtlas crowded = build_surface_atlas(scene, {0}, settings);
+    ASSERT_EQ(crowded.uv1_objects.size(), 1u);
+    double crowded_area = 0.0;
+    for (const AtlasTexel& t : crowded.texels) crowded_area += t.area;
+    EXPECT_GE(crowded.texels.size(), islands + 1);
+    EXPECT_NEAR(crowded_area, 2.0 + islands, 1e-4 * (2.0 + islands));
 }
 
 // A texel's direct light is sampled at its 4x4 sub-cells' centres that lie on its surface: on the

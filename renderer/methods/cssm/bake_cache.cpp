@@ -23,7 +23,8 @@
 namespace bounce::methods::cssm {
 namespace {
 
-// Format 04: XXH3 checksums and keys (03 had FNV-1a); files of another format are stale.
+// Format 06: each texel carries its direct light's sample points, and double-sided surfaces their
+// backs (05); 04: XXH3 checksums and keys (03 had FNV-1a). Files of another format are stale.
 constexpr char kMagic[8] = {'B', 'N', 'C', 'S', 'S', 'M', '0', '6'};
 
 class Writer {

@@ -230,6 +230,7 @@ PackItem charts_from_uv1(const scene::Scene& scene, std::uint32_t object_index, 
     std::vector<std::uint8_t> has_texel(chart_base, 0);
     for (const AtlasTexel& texel : item.texels) has_texel[texel.chart] = 1;
     std::vector<std::size_t> whole_chart_texels;
+    std::size_t next_free = 0;  // no cell before it is free
     for (std::uint32_t chart = 0; chart < chart_base; ++chart) {
         if (has_texel[chart]) continue;
         const auto& [primitive, members] = chart_triangles[chart];
@@ -238,7 +239,11 @@ PackItem charts_from_uv1(const scene::Scene& scene, std::uint32_t object_index, 
                                    (static_cast<float>(side) / 3.0f);
         const glm::ivec2 home = glm::clamp(glm::ivec2(glm::floor(centroid)), glm::ivec2(0), glm::ivec2(side - 1));
         std::optional<glm::ivec2> cell;
-        for (int ring = 0; ring < side && !cell; ++ring) {  // the square rings around `home`, nearest first
+        // The square rings around `home`, nearest first, a few of them; past those, the first free
+        // cell of the grid: many islands at one place (a hostile file's) cost a scan of the grid in
+        // all, not one per island.
+        constexpr int kNearRings = 4;
+        for (int ring = 0; ring <= kNearRings && !cell; ++ring) {
             for (int dy = -ring; dy <= ring && !cell; ++dy) {
                 for (int dx = -ring; dx <= ring && !cell; ++dx) {
                     if (std::max(std::abs(dx), std::abs(dy)) != ring) continue;
@@ -246,6 +251,10 @@ PackItem charts_from_uv1(const scene::Scene& scene, std::uint32_t object_index, 
                     if (at.x >= 0 && at.y >= 0 && at.x < side && at.y < side && claimed[static_cast<std::size_t>(at.y) * side + at.x] < 0) cell = at;
                 }
             }
+        }
+        while (!cell && next_free < claimed.size()) {
+            if (claimed[next_free] < 0) cell = glm::ivec2(static_cast<int>(next_free % side), static_cast<int>(next_free / side));
+            else ++next_free;
         }
         if (!cell) continue;  // every cell taken: no room for it
         AtlasTexel texel = texel_from(first, glm::vec3(1.0f / 3.0f), object_index, chart, cell->x, cell->y);
