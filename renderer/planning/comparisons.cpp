@@ -73,7 +73,7 @@ std::pair<double, double> expected_parts(const FrameStats& gpu_frame, const Fram
 
 std::optional<Comparison> FrameComparisons::compare(const RenderResult& gpu_frame, const RenderResult& reference,
                                                     const SceneAnalysis* analysis, SceneMeasurements& measurements,
-                                                    const RenderResult* deeper) {
+                                                    const RenderResult* deeper, std::optional<std::uint64_t> view) {
     if (gpu_frame.frame.width != reference.frame.width || gpu_frame.frame.height != reference.frame.height) return std::nullopt;
     Comparison c;
     c.method = gpu_frame.stats.method;
@@ -142,8 +142,9 @@ std::optional<Comparison> FrameComparisons::compare(const RenderResult& gpu_fram
     // missing in the same places (relMSE is a weighted squared norm: the triangle inequality). That
     // bound is recorded: in the furnished room cssm draft at 8 bounces read 0.041 against 6 bounces
     // (lacking 0.005) and measures 0.052 against the whole; the bound says 0.075.
-    if (extra_light > 0.0) c.own_error = std::pow(std::sqrt(c.own_error) + std::sqrt(extra_light), 2.0);
-    measurements.record_own_error(c.method, c.preset, c.bounces, c.own_error);
+    const bool bound = extra_light > 0.0;
+    if (bound) c.own_error = std::pow(std::sqrt(c.own_error) + std::sqrt(extra_light), 2.0);
+    measurements.record_own_error(c.method, c.preset, c.bounces, c.own_error, bound ? view : std::nullopt);
     return c;
 }
 
@@ -288,7 +289,7 @@ std::vector<Comparison> FrameComparisons::add(std::uint64_t view, std::shared_pt
     for (const auto& [fewer, more] : calibrations) calibrate_noise(*fewer, *more, analysis, measurements);
     std::vector<Comparison> made;
     for (const auto& [gpu_frame, reference, deeper] : to_compare) {
-        if (auto c = compare(*gpu_frame, *reference, analysis, measurements, deeper.get())) {
+        if (auto c = compare(*gpu_frame, *reference, analysis, measurements, deeper.get(), view)) {
             log::info("planner", "{} {} at {} bounces against this view's {}-bounce reference: relMSE {:.4f}, {}own error {:.4f}",
                       c->method, c->preset, c->bounces, modelled_bounces("reference", reference->stats.knobs), c->rel_mse,
                       deeper ? fmt::format("against the {}-bounce frame it was traced with (which adds {:.4f}) {:+.4f} "

@@ -73,10 +73,14 @@ public:
     static bool usable_reference(const FrameStats& stats);
     static bool usable_gpu_frame(const FrameStats& stats);
 
-    // One comparison, made and recorded (add() calls it; public for tests).
+    // One comparison, made and recorded (add() calls it; public for tests). `view` is the frames'
+    // view, where known: against a reference lacking light the frame has, what is recorded is a
+    // bound on that view's frame, and of several bounds of one view the least holds
+    // (SceneMeasurements::record_own_error).
     static std::optional<Comparison> compare(const RenderResult& gpu_frame, const RenderResult& reference,
                                              const SceneAnalysis* analysis, SceneMeasurements& measurements,
-                                             const RenderResult* deeper = nullptr);
+                                             const RenderResult* deeper = nullptr,
+                                             std::optional<std::uint64_t> view = std::nullopt);
 
     // Two reference frames of one view, the second with at least kCalibrationSpan times the samples:
     // relMSE between them, less the light of the bounces one has beyond the other, over what their noise

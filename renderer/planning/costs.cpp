@@ -407,26 +407,46 @@ std::optional<double> SceneMeasurements::least_noise_scale() const {
     return *std::min_element(compared_noise_scales_.begin(), compared_noise_scales_.end());
 }
 
-void SceneMeasurements::record_own_error(const std::string& method, const std::string& preset, int bounces, double rel_mse) {
+void SceneMeasurements::record_own_error(const std::string& method, const std::string& preset, int bounces, double rel_mse,
+                                         std::optional<std::uint64_t> bound_of_view) {
     if (!(rel_mse >= 0.0) || !std::isfinite(rel_mse)) return;
     const std::lock_guard lock(mutex_);
     auto& kept = own_errors_[{method, preset, bounces}];
-    kept.push_back(rel_mse);
+    if (bound_of_view) {
+        for (auto& recorded : kept) {
+            if (recorded.bound_of_view == bound_of_view) {
+                recorded.rel_mse = std::min(recorded.rel_mse, rel_mse);
+                return;
+            }
+        }
+    }
+    kept.push_back({rel_mse, bound_of_view});
     if (kept.size() > kKept) kept.pop_front();
 }
+
+namespace {
+
+template <typename Records>
+double largest_own_error(const Records& kept) {
+    double largest = 0.0;
+    for (const auto& recorded : kept) largest = std::max(largest, recorded.rel_mse);
+    return largest;
+}
+
+}  // namespace
 
 // The largest, not the median: a target error is a promise, and views differ in what a method gets wrong.
 std::optional<SceneMeasurements::OwnError> SceneMeasurements::own_error(const std::string& method, const std::string& preset,
                                                                        int bounces) const {
     const std::lock_guard lock(mutex_);
     if (const auto it = own_errors_.find({method, preset, bounces}); it != own_errors_.end() && !it->second.empty()) {
-        return OwnError{*std::max_element(it->second.begin(), it->second.end()), static_cast<int>(it->second.size()), true};
+        return OwnError{largest_own_error(it->second), static_cast<int>(it->second.size()), true};
     }
     std::optional<OwnError> found;
     for (const auto& [key, kept] : own_errors_) {
         if (std::get<0>(key) != method || std::get<1>(key) != preset || std::get<2>(key) < bounces || kept.empty()) continue;
         if (!found) found = OwnError{0.0, 0, false};
-        found->rel_mse = std::max(found->rel_mse, *std::max_element(kept.begin(), kept.end()));
+        found->rel_mse = std::max(found->rel_mse, largest_own_error(kept));
         found->frames += static_cast<int>(kept.size());
     }
     return found;
@@ -438,7 +458,7 @@ std::map<std::string, double> SceneMeasurements::own_errors(const std::string& m
     for (const auto& [key, kept] : own_errors_) {
         if (std::get<0>(key) != method || std::get<2>(key) < at_least_bounces || kept.empty()) continue;
         double& value = largest[std::get<1>(key)];
-        value = std::max(value, *std::max_element(kept.begin(), kept.end()));
+        value = std::max(value, largest_own_error(kept));
     }
     return largest;
 }
