@@ -271,7 +271,8 @@ std::vector<Comparison> FrameComparisons::add(std::uint64_t view, std::shared_pt
             }
             // Each GPU frame is compared with the reference that leaves the least of its relMSE not
             // its own: where that is now one of these.
-            for (const auto& [key, gpu_frame] : gpu_frames_) {
+            for (const auto& [key, kept] : gpu_frames_) {
+                const auto& gpu_frame = kept.frame;
                 const auto best = best_reference(gpu_frame->stats, analysis, measurements);
                 if (std::find(kept_now.begin(), kept_now.end(), best) != kept_now.end()) {
                     to_compare.push_back({gpu_frame, best, deeper_than(*best)});
@@ -279,8 +280,8 @@ std::vector<Comparison> FrameComparisons::add(std::uint64_t view, std::shared_pt
             }
         } else {
             const std::tuple key{stats.method, stats.preset, modelled_bounces(stats.method, stats.knobs)};
-            if (gpu_frames_.size() >= kMaxFrames && !gpu_frames_.count(key)) gpu_frames_.erase(gpu_frames_.begin());
-            gpu_frames_[key] = frame;
+            if (gpu_frames_.size() >= kMaxFrames && !gpu_frames_.count(key)) drop_a_gpu_frame();
+            gpu_frames_[key] = {frame, ++added_};
             if (auto reference = best_reference(stats, analysis, measurements)) {
                 to_compare.push_back({frame, reference, deeper_than(*reference)});
             }
@@ -302,6 +303,18 @@ std::vector<Comparison> FrameComparisons::add(std::uint64_t view, std::shared_pt
         }
     }
     return made;
+}
+
+void FrameComparisons::drop_a_gpu_frame() {
+    auto oldest = gpu_frames_.end(), oldest_measured = gpu_frames_.end();
+    for (auto it = gpu_frames_.begin(); it != gpu_frames_.end(); ++it) {
+        if (oldest == gpu_frames_.end() || it->second.order < oldest->second.order) oldest = it;
+        const bool measured = references_.lower_bound(std::get<2>(it->first)) != references_.end();
+        if (measured && (oldest_measured == gpu_frames_.end() || it->second.order < oldest_measured->second.order)) {
+            oldest_measured = it;
+        }
+    }
+    gpu_frames_.erase(oldest_measured != gpu_frames_.end() ? oldest_measured : oldest);
 }
 
 std::shared_ptr<const RenderResult> FrameComparisons::deeper_than(const RenderResult& reference) const {

@@ -118,7 +118,20 @@ private:
     std::mutex mutex_;
     std::optional<std::uint64_t> view_;
     std::map<int, std::shared_ptr<const RenderResult>> references_;  // by bounce count
-    std::map<std::tuple<std::string, std::string, int>, std::shared_ptr<const RenderResult>> gpu_frames_;
+    // Where the view's GPU frames are full, the one to drop for a new one: the oldest whose bounces a
+    // kept reference has (its own error is measured), else the oldest. A frame of more bounces than
+    // any reference so far has only a bound on its own error, which a deeper reference can tighten:
+    // dropped first by the order of their keys, cssm's frames went before the view's 6-bounce
+    // reference came, and the furnished room's cssm draft at 8 bounces kept a bound of 0.18 where it
+    // measures 0.046 against the truth.
+    void drop_a_gpu_frame();
+
+    struct KeptFrame {
+        std::shared_ptr<const RenderResult> frame;
+        std::uint64_t order = 0;  // when it was added
+    };
+    std::uint64_t added_ = 0;
+    std::map<std::tuple<std::string, std::string, int>, KeptFrame> gpu_frames_;
 };
 
 }  // namespace bounce::planning

@@ -232,6 +232,34 @@ TEST(FrameComparisons, OfTwoBoundsOnOneViewsFrameTheTighterIsKept) {
     EXPECT_NEAR(measured.own_error("cssm", "medium", 8)->rel_mse, against_3, 1e-6);
 }
 
+// The view keeps kMaxFrames GPU frames. A frame of more bounces than any reference has only a bound
+// on its own error, so the frames whose bounces a reference has go first, oldest first, and the
+// bounded one is still there to be measured when a deeper reference comes.
+TEST(FrameComparisons, AFrameOnlyBoundedWaitsForADeeperReference) {
+    const SceneAnalysis analysis = made_up_analysis();
+    SceneMeasurements measured;
+    FrameComparisons comparisons;
+    comparisons.add(6, frame("cssm", "medium", {{"bounces", 8}}, 1.5f), &analysis, measured);
+    ASSERT_EQ(comparisons.add(6, reference(4096, 0.0, {{"bounces", 3}}), &analysis, measured).size(), 1u);
+    std::size_t others = 0;
+    for (const char* preset : {"draft", "low", "medium", "high", "ultra"}) {
+        comparisons.add(6, frame("direct", preset, {}, 1.2f), &analysis, measured);
+        ++others;
+    }
+    for (const char* preset : {"draft", "low", "medium", "high", "ultra"}) {
+        comparisons.add(6, frame("isr", preset, {}, 1.2f), &analysis, measured);
+        ++others;
+    }
+    ASSERT_GT(others + 1, FrameComparisons::kMaxFrames);
+    const auto made = comparisons.add(6, reference(4096, 0.0, {{"bounces", 6}}), &analysis, measured);
+    const auto cssm = std::find_if(made.begin(), made.end(), [](const Comparison& c) { return c.method == "cssm"; });
+    ASSERT_NE(cssm, made.end()) << "the bounded frame was dropped before the deeper reference came";
+    const double against_6 = std::pow(std::sqrt(0.25 / 1.01) + std::sqrt(0.1 / 64.0 - 0.1 / 256.0), 2.0);
+    EXPECT_NEAR(measured.own_error("cssm", "medium", 8)->rel_mse, against_6, 1e-6);
+    // Of the measured frames, the oldest went: the first direct ones, not the last isr ones.
+    EXPECT_EQ(std::count_if(made.begin(), made.end(), [](const Comparison& c) { return c.method == "isr"; }), 5);
+}
+
 TEST(FrameComparisons, OnlyFramesOfOneViewAreCompared) {
     const SceneAnalysis analysis = made_up_analysis();
     SceneMeasurements measured;
