@@ -58,7 +58,8 @@ public:
     // light-view maps are not drawn again for a change of power. 7: nor isr's (its VPL tree is
     // rebuilt over them). 8: cssm scales its atlas solution where every light dimmed alike. 9: cssm
     // samples each texel's direct light at 16 points, and double-sided surfaces have texels on both sides.
-    static constexpr int kVersion = 9;
+    // 10: cssm's nodes send light by their lobes, so nodes that face away in the mean gather too.
+    static constexpr int kVersion = 10;
 
     DeviceCosts() = default;
     explicit DeviceCosts(std::string renderer) : renderer_(std::move(renderer)) {}

@@ -14,8 +14,8 @@ namespace {
 
 // relMSE against the reference with as many bounces (`rel_mse_same_bounces`), at 128x128 through
 // pixel centres: the largest over the five corpus scenes (bench/results/corpus/quality.csv; cssm's
-// from bench/results/corpus/cssm_atlas_quality.csv, since its texels sample their light over their
-// surface and double-sided surfaces have two sides), leaving out the cases the analysis rules out
+// from bench/results/corpus/cssm_lobe_quality.csv, since its texels sample their light over their
+// surface, double-sided surfaces have two sides and its nodes send light by their lobes), leaving out the cases the analysis rules out
 // (vct where it leaks). The largest, not a typical value: a
 // target error is a promise, and a scene's own error is not known before its reference is. Update
 // it when that table changes.
@@ -27,7 +27,7 @@ const std::map<std::pair<std::string, std::string>, double> kOwnError = {
     {{"vct", "high"}, 0.5256},      {{"vct", "ultra"}, 0.3823},
     {{"isr", "draft"}, 0.2735},     {{"isr", "low"}, 0.2986},      {{"isr", "medium"}, 0.1441},
     {{"isr", "high"}, 0.0715},      {{"isr", "ultra"}, 0.0714},
-    {{"cssm", "draft"}, 0.0629},    {{"cssm", "low"}, 0.0628},     {{"cssm", "medium"}, 0.0602},
+    {{"cssm", "draft"}, 0.0626},    {{"cssm", "low"}, 0.0628},     {{"cssm", "medium"}, 0.0602},
     {{"cssm", "high"}, 0.0579},     {{"cssm", "ultra"}, 0.0583},
 };
 // vct with its second bounce (`bounces` 2), against the two-bounce reference, the same way
@@ -45,8 +45,8 @@ const std::map<std::pair<std::string, std::string>, double> kTypicalOwnError = {
     {{"vct", "high"}, 0.1298},      {{"vct", "ultra"}, 0.1079},
     {{"isr", "draft"}, 0.0475},     {{"isr", "low"}, 0.0473},      {{"isr", "medium"}, 0.0475},
     {{"isr", "high"}, 0.0360},      {{"isr", "ultra"}, 0.0365},
-    {{"cssm", "draft"}, 0.0319},    {{"cssm", "low"}, 0.0401},     {{"cssm", "medium"}, 0.0239},
-    {{"cssm", "high"}, 0.0195},     {{"cssm", "ultra"}, 0.0189},
+    {{"cssm", "draft"}, 0.0305},    {{"cssm", "low"}, 0.0251},     {{"cssm", "medium"}, 0.0205},
+    {{"cssm", "high"}, 0.0193},     {{"cssm", "ultra"}, 0.0189},
 };
 const std::map<std::string, double> kVctSecondBounceTypicalOwnError = {
     {"draft", 0.1519}, {"low", 0.1537}, {"medium", 0.1580}, {"high", 0.1559}, {"ultra", 0.1136}};

@@ -3,7 +3,7 @@
 #define BOUNCE_CSSM_LAYOUT_H
 
 #define CSSM_BINDING_NODES 0         // CssmNode[]: the radiosity hierarchy, depth-first, child + skip pointers
-#define CSSM_BINDING_NODE_RADIANCE 1 // vec4[nodes]: area-weighted mean exitant radiance (pulled)
+#define CSSM_BINDING_NODE_LIGHT 1     // CssmNodeLight[nodes]: what each node sends, pulled from its texels
 #define CSSM_BINDING_TEXELS 2        // CssmTexel[]: atlas texels (world position, normal, map, albedo)
 #define CSSM_BINDING_PIXEL_RUNS 3    // uint[pixels + 1]: each cube pixel's first run
 #define CSSM_BINDING_RUN_START 4     // uint[runs]: first map of each run
@@ -57,6 +57,17 @@ struct CssmNode {
     uvec4 links;       // child, skip, representative texel, leaf texel (CSSM_NONE for internal nodes)
 };
 
+// What a node sends, pulled up from its texels each bounce. A node whose texels face many ways (both
+// sides of a sheet, a box's faces) sends light along each of them, not along its mean normal: its
+// lobe is the luminance-weighted mean of its texels' normals, v = sum(Y L_i A_i n_i) / sum(Y L_i A_i),
+// and towards w it sends L A (max(0, v.w) + (1 - |v|) / 4): a planar node's |v| is 1 and this is its
+// L A cos; what cancels in v is sent as from normals spread over the sphere, whose mean clamped
+// cosine is 1/4. Either way it sends pi L A in all (docs/methods.md, "Hierarchical radiosity").
+struct CssmNodeLight {
+    vec4 radiance;  // rgb: area-weighted mean exitant radiance L
+    vec4 lobe;      // xyz: v; w: its length |v|
+};
+
 struct CssmTexel {
     vec4 position_area;  // world position (where its object is now), area
     vec4 normal_map;     // world normal, w: the texel's map in its group's bake sequence
@@ -83,6 +94,8 @@ struct CssmCsm {
 static_assert(sizeof(CssmNode) == 64);
 static_assert(offsetof(CssmNode, centre_radius) == 0 && offsetof(CssmNode, normal_cone) == 16 &&
               offsetof(CssmNode, area) == 32 && offsetof(CssmNode, links) == 48);
+static_assert(sizeof(CssmNodeLight) == 32);
+static_assert(offsetof(CssmNodeLight, radiance) == 0 && offsetof(CssmNodeLight, lobe) == 16);
 static_assert(sizeof(CssmTexel) == 64);
 static_assert(offsetof(CssmTexel, position_area) == 0 && offsetof(CssmTexel, normal_map) == 16 &&
               offsetof(CssmTexel, albedo) == 32 && offsetof(CssmTexel, emission) == 48);

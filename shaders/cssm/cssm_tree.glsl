@@ -6,7 +6,7 @@
 #include "common/math.glsl"
 
 layout(std430, binding = CSSM_BINDING_NODES) readonly buffer CssmNodes { CssmNode nodes[]; };
-layout(std430, binding = CSSM_BINDING_NODE_RADIANCE) buffer CssmNodeRadiance { vec4 node_radiance[]; };
+layout(std430, binding = CSSM_BINDING_NODE_LIGHT) buffer CssmNodeLights { CssmNodeLight node_light[]; };
 layout(std430, binding = CSSM_BINDING_TEXELS) readonly buffer CssmTexels { CssmTexel texels[]; };
 layout(std430, binding = CSSM_BINDING_PIXEL_RUNS) readonly buffer CssmPixelRuns { uint pixel_runs[]; };
 layout(std430, binding = CSSM_BINDING_RUN_START) readonly buffer CssmRunStart { uint run_start[]; };
@@ -166,7 +166,7 @@ float luminance(vec3 c) { return dot(c, vec3(0.2126, 0.7152, 0.0722)); }
 // A simple gamma tone map against the atlas's mean radiance (the root's): the oracle's threshold
 // then means the same at any light intensity or scene scale.
 float tone_mapped(float radiance) {
-    float white = max(luminance(node_radiance[0].rgb), 1e-30);
+    float white = max(luminance(node_light[0].radiance.rgb), 1e-30);
     return pow(max(radiance / white, 0.0), 1.0 / 2.2);
 }
 
@@ -190,8 +190,25 @@ vec3 sender_position(uint node) {
     return centre + radius * (cos(angle) * u + sin(angle) * w);
 }
 
+// The share of its L A that a node sends towards the unit direction w: its lobe (CssmNodeLight in
+// cssm_layout.h), the cosine to its normal for a leaf or a planar node. A lobe that is not a plane's
+// is held within the node's normal cone: no texel below sends further from the mean normal than the
+// cone's edge does.
+float node_lobe(uint node, vec3 w) {
+    vec4 lobe = node_light[node].lobe;
+    float sent = max(dot(lobe.xyz, w), 0.0);
+    if (lobe.w >= 0.999) return sent;
+    sent += 0.25 * (1.0 - lobe.w);
+    float cone_cos = nodes[node].normal_cone.w;
+    float c = dot(nodes[node].normal_cone.xyz, w);
+    if (c >= cone_cos) return sent;
+    // cos(angle to the mean normal - the cone's half-angle), where that is under 90 degrees.
+    float edge = c * cone_cos + sqrt(max(1.0 - c * c, 0.0)) * sqrt(max(1.0 - cone_cos * cone_cos, 0.0));
+    return min(sent, max(edge, 0.0));
+}
+
 // Light a node sends to a receiver at p with normal n: the disk-to-point form factor times its
-// radiance, pi L A cos_s cos_r / (pi d^2 + A), weighted by the CSSM visibility.
+// radiance, pi L A lobe(-l) cos_r / (pi d^2 + A), weighted by the CSSM visibility.
 // `spread` is sin^2 of the angular radius of the node's disk as seen from p, A / (pi d^2 + A).
 vec3 node_irradiance(uint node, vec3 p, vec3 n, uint receiver_texel, out vec3 l, out float spread) {
     vec3 to_node = sender_position(node) - p;
@@ -200,10 +217,11 @@ vec3 node_irradiance(uint node, vec3 p, vec3 n, uint receiver_texel, out vec3 l,
     float area = nodes[node].area.x;
     spread = area / (PI * d2 + area);
     float cos_r = dot(n, l);
-    float cos_s = dot(nodes[node].normal_cone.xyz, -l);
-    if (cos_r <= 0.0 || cos_s <= 0.0) return vec3(0.0);
+    if (cos_r <= 0.0) return vec3(0.0);
+    float sent = node_lobe(node, -l);
+    if (sent <= 0.0) return vec3(0.0);
     float v = visibility(nodes[node].links.z, p, receiver_texel);
-    return node_radiance[node].rgb * (PI * area * cos_s * cos_r / (PI * d2 + area)) * v;
+    return node_light[node].radiance.rgb * (PI * area * sent * cos_r / (PI * d2 + area)) * v;
 }
 
 // Upper bound of the irradiance a node can give the receiver (0 when it lies wholly behind either
@@ -223,16 +241,16 @@ float irradiance_bound(uint node, vec3 p, vec3 n, out vec3 l, out float widen) {
     if (receiver_angle >= 0.5 * PI || sender_angle >= 0.5 * PI) return 0.0;
     float cos_r = cos(max(receiver_angle, 0.0)), cos_s = cos(max(sender_angle, 0.0));
     float d_min = d - r;
-    return luminance(node_radiance[node].rgb) * nodes[node].area.x * cos_r * cos_s / (d_min * d_min);
+    return luminance(node_light[node].radiance.rgb) * nodes[node].area.x * cos_r * cos_s / (d_min * d_min);
 }
 
 // Refine and gather in one stackless walk over this batch's subtrees (the paper's Fig. 10): a node
 // whose bound, times the receiver's BRDF bound towards it and tone-mapped, exceeds the threshold is
 // refined (child pointer); otherwise it is gathered and skipped (skip pointer). Leaves are always
 // gathered. A node whose normals span more than a hemisphere (both sides of a sheet, a box's faces)
-// sends all its light along its one mean normal: in the furnished room such nodes made the sun's
-// indirect light 2.3 times the truth's at preset low. Refining every such node brought it to 1.02 but
-// took 1.5 to 4 times as long at draft and low on the bench corpus (docs/benchmarks.md), so it is not done. `exclude` is the receiver's own texel (for pixels, the texel under them, or
+// sends its light by its lobe (node_lobe): along its one mean normal, such nodes made the furnished
+// room's indirect sunlight 2.3 times the truth's at preset low, and refining every such node instead
+// took 1.5 to 4 times as long at draft and low on the bench corpus (docs/methods.md). `exclude` is the receiver's own texel (for pixels, the texel under them, or
 // CSSM_NONE). The includer defines CSSM_BRDF(l, spread) as the receiver's BRDF towards a node in
 // direction l whose disk subtends sin^2 = spread, and
 // CSSM_BRDF_BOUND(l, cone) as its bound over a cone of directions (constants for texels).

@@ -46,10 +46,10 @@ void TexelPlacement::upload(const scene::Scene& scene, const ResidentBake& resid
     samples_ = gpu::storage_of(samples);
     groups_ = gpu::storage_of(groups);
     nodes_ = gpu::storage_of(nodes);
-    node_radiance_ = gpu::Buffer(std::max<std::size_t>(1, nodes.size()) * sizeof(glm::vec4), nullptr, 0);
+    node_light_ = gpu::Buffer(std::max<std::size_t>(1, nodes.size()) * sizeof(glsl::CssmNodeLight), nullptr, 0);
     level_nodes_ = gpu::storage_of(bake.tree.level_nodes);
     atlas_bytes_ = texels_.bytes() + samples_.bytes() + groups_.bytes();
-    tree_bytes_ = nodes_.bytes() + node_radiance_.bytes() + level_nodes_.bytes();
+    tree_bytes_ = nodes_.bytes() + node_light_.bytes() + level_nodes_.bytes();
     ++version_;
     check_overlaps(scene, bake.moving);
     placed_geometry_ = passes::geometry_fingerprint(scene);
@@ -73,7 +73,7 @@ void TexelPlacement::check_overlaps(const scene::Scene& scene, const std::vector
 
 void TexelPlacement::bind() const {
     gpu::bind_storage(CSSM_BINDING_NODES, nodes_);
-    gpu::bind_storage(CSSM_BINDING_NODE_RADIANCE, node_radiance_);
+    gpu::bind_storage(CSSM_BINDING_NODE_LIGHT, node_light_);
     gpu::bind_storage(CSSM_BINDING_LEVEL_NODES, level_nodes_);
     gpu::bind_storage(CSSM_BINDING_TEXELS, texels_);
     gpu::bind_storage(CSSM_BINDING_TEXEL_SAMPLES, samples_);

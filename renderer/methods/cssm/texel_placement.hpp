@@ -37,7 +37,7 @@ public:
 private:
     void check_overlaps(const scene::Scene& scene, const std::vector<std::uint32_t>& moving);
 
-    gpu::Buffer texels_, samples_, groups_, nodes_, node_radiance_, level_nodes_;
+    gpu::Buffer texels_, samples_, groups_, nodes_, node_light_, level_nodes_;
     std::vector<HullOverlap> overlaps_;
     std::uint64_t placed_geometry_ = 0, version_ = 0;
     std::size_t placements_ = 0, atlas_bytes_ = 0, tree_bytes_ = 0;
