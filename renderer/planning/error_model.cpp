@@ -45,7 +45,7 @@ const std::map<std::pair<std::string, std::string>, double> kTypicalOwnError = {
     {{"vct", "high"}, 0.1298},      {{"vct", "ultra"}, 0.1079},
     {{"isr", "draft"}, 0.0475},     {{"isr", "low"}, 0.0473},      {{"isr", "medium"}, 0.0475},
     {{"isr", "high"}, 0.0360},      {{"isr", "ultra"}, 0.0365},
-    {{"cssm", "draft"}, 0.0305},    {{"cssm", "low"}, 0.0251},     {{"cssm", "medium"}, 0.0205},
+    {{"cssm", "draft"}, 0.0307},    {{"cssm", "low"}, 0.0251},     {{"cssm", "medium"}, 0.0205},
     {{"cssm", "high"}, 0.0193},     {{"cssm", "ultra"}, 0.0189},
 };
 const std::map<std::string, double> kVctSecondBounceTypicalOwnError = {

@@ -60,9 +60,11 @@ struct CssmNode {
 // What a node sends, pulled up from its texels each bounce. A node whose texels face many ways (both
 // sides of a sheet, a box's faces) sends light along each of them, not along its mean normal: its
 // lobe is the luminance-weighted mean of its texels' normals, v = sum(Y L_i A_i n_i) / sum(Y L_i A_i),
-// and towards w it sends L A (max(0, v.w) + (1 - |v|) / 4): a planar node's |v| is 1 and this is its
-// L A cos; what cancels in v is sent as from normals spread over the sphere, whose mean clamped
-// cosine is 1/4. Either way it sends pi L A in all (docs/methods.md, "Hierarchical radiosity").
+// and where its normals span more than a hemisphere it sends L A (max(0, v.w) + (1 - |v|) / 4)
+// towards w: what cancels in v is sent as from normals spread over the sphere, whose mean clamped
+// cosine is 1/4. Within a hemisphere it sends L A max(0, v.w) / |v|, as a plane facing v would; a
+// planar node's |v| is 1 and both are its L A cos. Either way it sends pi L A in all
+// (docs/methods.md, "Hierarchical radiosity").
 struct CssmNodeLight {
     vec4 radiance;  // rgb: area-weighted mean exitant radiance L
     vec4 lobe;      // xyz: v; w: its length |v|

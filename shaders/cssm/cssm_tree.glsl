@@ -190,14 +190,18 @@ vec3 sender_position(uint node) {
     return centre + radius * (cos(angle) * u + sin(angle) * w);
 }
 
-// The share of its L A that a node sends towards the unit direction w: its lobe (CssmNodeLight in
-// cssm_layout.h), the cosine to its normal for a leaf or a planar node. A lobe that is not a plane's
-// is held within the node's normal cone: no texel below sends further from the mean normal than the
-// cone's edge does.
+// The share of its L A that a node sends towards the unit direction w, by its lobe (CssmNodeLight in
+// cssm_layout.h): the cosine to its normal for a leaf or a planar node. A node whose normals lie
+// within a hemisphere sends along the lobe's direction, as a plane would: the spread part matters
+// where normals face apart (both sides of a sheet, a box's faces); sent backwards from the other
+// nodes too, it changed no error on the bench corpus by more than 0.0002 and needed each one's visibility.
+// Elsewhere the lobe is held within the node's normal cone: no texel below sends further from the
+// mean normal than the cone's edge does.
 float node_lobe(uint node, vec3 w) {
     vec4 lobe = node_light[node].lobe;
     float sent = max(dot(lobe.xyz, w), 0.0);
     if (lobe.w >= 0.999) return sent;
+    if (nodes[node].normal_cone.w >= 0.0) return sent / max(lobe.w, 1e-6);
     sent += 0.25 * (1.0 - lobe.w);
     float cone_cos = nodes[node].normal_cone.w;
     float c = dot(nodes[node].normal_cone.xyz, w);

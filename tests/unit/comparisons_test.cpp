@@ -256,8 +256,13 @@ TEST(FrameComparisons, AFrameOnlyBoundedWaitsForADeeperReference) {
     ASSERT_NE(cssm, made.end()) << "the bounded frame was dropped before the deeper reference came";
     const double against_6 = std::pow(std::sqrt(0.25 / 1.01) + std::sqrt(0.1 / 64.0 - 0.1 / 256.0), 2.0);
     EXPECT_NEAR(measured.own_error("cssm", "medium", 8)->rel_mse, against_6, 1e-6);
-    // Of the measured frames, the oldest went: the first direct ones, not the last isr ones.
-    EXPECT_EQ(std::count_if(made.begin(), made.end(), [](const Comparison& c) { return c.method == "isr"; }), 5);
+    // Of the measured frames, the oldest went: of eleven, three, the first three direct ones. A
+    // reference of no bounces now measures the direct frames still kept: high and ultra.
+    const auto direct = comparisons.add(6, reference(4096, 0.0, {{"bounces", 0}}), &analysis, measured);
+    std::vector<std::string> kept;
+    for (const Comparison& c : direct) kept.push_back(c.method + " " + c.preset);
+    std::sort(kept.begin(), kept.end());
+    EXPECT_EQ(kept, (std::vector<std::string>{"direct high", "direct ultra"}));
 }
 
 TEST(FrameComparisons, OnlyFramesOfOneViewAreCompared) {
