@@ -54,6 +54,14 @@ std::shared_ptr<const RenderResult> reference(double spp, double noise_per_sampl
     return frame("reference", "medium", more, 1.0f, noise_per_sample);
 }
 
+// What a constant frame of 1.5 at 8 bounces records against a reference of `bounces` (value 1.0,
+// no noise) in made_up_analysis(): relMSE (1.5 - 1)^2 / (1 + 0.01), plus the light the reference
+// lacks by the triangle inequality.
+double bound_of_8_bounce_frame_against(int bounces) {
+    const double lacking = 0.1 / std::pow(2.0, bounces) - 0.1 / 256.0;
+    return std::pow(std::sqrt(0.25 / 1.01) + std::sqrt(lacking), 2.0);
+}
+
 TEST(OwnError, TheLargestOfTheLastComparisonsAtABounceCountElseAtThePresetsLargerOnes) {
     SceneMeasurements measured;
     measured.record_own_error("cssm", "low", 2, 0.03);
@@ -205,8 +213,7 @@ TEST(FrameComparisons, AReferenceWithFewerBouncesMeasuresOnlyWhereTheLightItLack
     const auto made = comparisons.add(6, frame("cssm", "medium", {{"bounces", 8}}, 1.5f), &analysis, measured);
     ASSERT_EQ(made.size(), 1u);
     EXPECT_EQ(made[0].bounce_gap, 0.0);
-    const double lacking = 0.1 / 8.0 - 0.1 / 256.0;
-    EXPECT_NEAR(made[0].own_error, std::pow(std::sqrt(0.25 / 1.01) + std::sqrt(lacking), 2.0), 1e-6);
+    EXPECT_NEAR(made[0].own_error, bound_of_8_bounce_frame_against(3), 1e-6);
 }
 
 // A frame of more bounces than any reference of its view: each reference that comes bounds its own
@@ -219,11 +226,10 @@ TEST(FrameComparisons, OfTwoBoundsOnOneViewsFrameTheTighterIsKept) {
     FrameComparisons comparisons;
     comparisons.add(6, frame("cssm", "medium", {{"bounces", 8}}, 1.5f), &analysis, measured);
     ASSERT_EQ(comparisons.add(6, reference(4096, 0.0, {{"bounces", 3}}), &analysis, measured).size(), 1u);
-    const double own = 0.25 / 1.01;
-    const double against_3 = std::pow(std::sqrt(own) + std::sqrt(0.1 / 8.0 - 0.1 / 256.0), 2.0);
+    const double against_3 = bound_of_8_bounce_frame_against(3);
     EXPECT_NEAR(measured.own_error("cssm", "medium", 8)->rel_mse, against_3, 1e-6);
     ASSERT_EQ(comparisons.add(6, reference(4096, 0.0, {{"bounces", 6}}), &analysis, measured).size(), 1u);
-    const double against_6 = std::pow(std::sqrt(own) + std::sqrt(0.1 / 64.0 - 0.1 / 256.0), 2.0);
+    const double against_6 = bound_of_8_bounce_frame_against(6);
     ASSERT_LT(against_6, against_3);
     EXPECT_NEAR(measured.own_error("cssm", "medium", 8)->rel_mse, against_6, 1e-6);
     // The same frame in another view is bounded on its own: its bound counts beside the first view's.
@@ -254,8 +260,7 @@ TEST(FrameComparisons, AFrameOnlyBoundedWaitsForADeeperReference) {
     const auto made = comparisons.add(6, reference(4096, 0.0, {{"bounces", 6}}), &analysis, measured);
     const auto cssm = std::find_if(made.begin(), made.end(), [](const Comparison& c) { return c.method == "cssm"; });
     ASSERT_NE(cssm, made.end()) << "the bounded frame was dropped before the deeper reference came";
-    const double against_6 = std::pow(std::sqrt(0.25 / 1.01) + std::sqrt(0.1 / 64.0 - 0.1 / 256.0), 2.0);
-    EXPECT_NEAR(measured.own_error("cssm", "medium", 8)->rel_mse, against_6, 1e-6);
+    EXPECT_NEAR(measured.own_error("cssm", "medium", 8)->rel_mse, bound_of_8_bounce_frame_against(6), 1e-6);
     // Of the measured frames, the oldest went: of eleven, three, the first three direct ones. A
     // reference of no bounces now measures the direct frames still kept: high and ultra.
     const auto direct = comparisons.add(6, reference(4096, 0.0, {{"bounces", 0}}), &analysis, measured);
