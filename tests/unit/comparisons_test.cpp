@@ -62,6 +62,13 @@ double bound_of_8_bounce_frame_against(int bounces) {
     return std::pow(std::sqrt(0.25 / 1.01) + std::sqrt(lacking), 2.0);
 }
 
+// Adds to `view` cssm medium's frame of 1.5 at 8 bounces, then a 3-bounce reference, which bounds it.
+void bound_an_8_bounce_frame_by_a_3_bounce_reference(FrameComparisons& comparisons, const SceneAnalysis& analysis,
+                                                     SceneMeasurements& measured, std::uint64_t view) {
+    comparisons.add(view, frame("cssm", "medium", {{"bounces", 8}}, 1.5f), &analysis, measured);
+    ASSERT_EQ(comparisons.add(view, reference(4096, 0.0, {{"bounces", 3}}), &analysis, measured).size(), 1u);
+}
+
 TEST(OwnError, TheLargestOfTheLastComparisonsAtABounceCountElseAtThePresetsLargerOnes) {
     SceneMeasurements measured;
     measured.record_own_error("cssm", "low", 2, 0.03);
@@ -224,8 +231,7 @@ TEST(FrameComparisons, OfTwoBoundsOnOneViewsFrameTheTighterIsKept) {
     const SceneAnalysis analysis = made_up_analysis();
     SceneMeasurements measured;
     FrameComparisons comparisons;
-    comparisons.add(6, frame("cssm", "medium", {{"bounces", 8}}, 1.5f), &analysis, measured);
-    ASSERT_EQ(comparisons.add(6, reference(4096, 0.0, {{"bounces", 3}}), &analysis, measured).size(), 1u);
+    bound_an_8_bounce_frame_by_a_3_bounce_reference(comparisons, analysis, measured, 6);
     const double against_3 = bound_of_8_bounce_frame_against(3);
     EXPECT_NEAR(measured.own_error("cssm", "medium", 8)->rel_mse, against_3, 1e-6);
     ASSERT_EQ(comparisons.add(6, reference(4096, 0.0, {{"bounces", 6}}), &analysis, measured).size(), 1u);
@@ -233,8 +239,7 @@ TEST(FrameComparisons, OfTwoBoundsOnOneViewsFrameTheTighterIsKept) {
     ASSERT_LT(against_6, against_3);
     EXPECT_NEAR(measured.own_error("cssm", "medium", 8)->rel_mse, against_6, 1e-6);
     // The same frame in another view is bounded on its own: its bound counts beside the first view's.
-    comparisons.add(7, frame("cssm", "medium", {{"bounces", 8}}, 1.5f), &analysis, measured);
-    ASSERT_EQ(comparisons.add(7, reference(4096, 0.0, {{"bounces", 3}}), &analysis, measured).size(), 1u);
+    bound_an_8_bounce_frame_by_a_3_bounce_reference(comparisons, analysis, measured, 7);
     EXPECT_NEAR(measured.own_error("cssm", "medium", 8)->rel_mse, against_3, 1e-6);
 }
 
@@ -245,8 +250,7 @@ TEST(FrameComparisons, AFrameOnlyBoundedWaitsForADeeperReference) {
     const SceneAnalysis analysis = made_up_analysis();
     SceneMeasurements measured;
     FrameComparisons comparisons;
-    comparisons.add(6, frame("cssm", "medium", {{"bounces", 8}}, 1.5f), &analysis, measured);
-    ASSERT_EQ(comparisons.add(6, reference(4096, 0.0, {{"bounces", 3}}), &analysis, measured).size(), 1u);
+    bound_an_8_bounce_frame_by_a_3_bounce_reference(comparisons, analysis, measured, 6);
     std::size_t others = 0;
     for (const char* preset : {"draft", "low", "medium", "high", "ultra"}) {
         comparisons.add(6, frame("direct", preset, {}, 1.2f), &analysis, measured);
