@@ -15,8 +15,8 @@ namespace {
 // relMSE against the reference with as many bounces (`rel_mse_same_bounces`), at 128x128 through
 // pixel centres: the largest over the five corpus scenes (bench/results/corpus/quality.csv; cssm's
 // from bench/results/corpus/cssm_lobe_quality.csv, since its texels sample their light over their
-// surface, double-sided surfaces have two sides and its nodes send light by their lobes), leaving out the cases the analysis rules out
-// (vct where it leaks). The largest, not a typical value: a
+// surface, double-sided surfaces have two sides and its nodes send light by their lobes), leaving
+// out the cases the analysis rules out (vct where it leaks). The largest, not a typical value: a
 // target error is a promise, and a scene's own error is not known before its reference is. Update
 // it when that table changes.
 // clang-format off

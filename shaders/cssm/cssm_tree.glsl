@@ -194,8 +194,8 @@ vec3 sender_position(uint node) {
 // cssm_layout.h): the cosine to its normal for a leaf or a planar node. A node whose normals lie
 // within a hemisphere sends along the lobe's direction, as a plane would: the spread part matters
 // where normals face apart (both sides of a sheet, a box's faces); sent backwards from the other
-// nodes too, it changed no error on the bench corpus by more than 0.0002 and needed each one's visibility.
-// Elsewhere the lobe is held within the node's normal cone: no texel below sends further from the
+// nodes too (dd90a6d), it changed no error on the bench corpus by more than 0.0002 and needed each
+// one's visibility. Elsewhere the lobe is held within the node's normal cone: no texel below sends further from the
 // mean normal than the cone's edge does.
 float node_lobe(uint node, vec3 w) {
     vec4 lobe = node_light[node].lobe;

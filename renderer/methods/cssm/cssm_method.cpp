@@ -186,7 +186,8 @@ MemoryEstimate estimate(const EstimateInput& input) {
         if (area > 0.0) both_sides += double_sided_area(input.scene, objects) / area;
     }
     const auto texels = static_cast<std::uint64_t>(input.knob("atlas_resolution") * input.knob("atlas_resolution") * both_sides);
-    constexpr std::uint64_t kGpuPerTexel = sizeof(glsl::CssmTexel) + kTexelSamples * 16 + 2 * (sizeof(glsl::CssmNode) + sizeof(glsl::CssmNodeLight)) + 5 * 16;
+    constexpr std::uint64_t kGpuPerTexel = sizeof(glsl::CssmTexel) + kTexelSamples * 16 +
+                                           2 * (sizeof(glsl::CssmNode) + sizeof(glsl::CssmNodeLight)) + 5 * 16;
     constexpr std::uint64_t kHostPerTexel =
         sizeof(AtlasTexel) + (6 + kTexelSamples) * sizeof(glm::vec3) + 3 * sizeof(std::uint32_t);
     estimate.push_back({"atlas_texels", texels * (kGpuPerTexel + kHostPerTexel), "atlas_resolution"});
