@@ -44,6 +44,10 @@ std::optional<int> bounces_knob(const methods::KnobValues& knobs) {
 bool faster(const Candidate& a, const Candidate& b) {
     return a.predicted_ms != b.predicted_ms ? a.predicted_ms < b.predicted_ms : a.predicted_error < b.predicted_error;
 }
+double expected_ms(const Candidate& c) { return c.expected_ms.value_or(c.predicted_ms); }
+bool faster_expected(const Candidate& a, const Candidate& b) {
+    return expected_ms(a) != expected_ms(b) ? expected_ms(a) < expected_ms(b) : faster(a, b);
+}
 bool more_accurate(const Candidate& a, const Candidate& b) {
     return a.predicted_error != b.predicted_error ? a.predicted_error < b.predicted_error : a.predicted_ms < b.predicted_ms;
 }
@@ -59,6 +63,16 @@ Plan choose(const std::vector<Candidate>& candidates, const Budget& budget) {
     for (const Candidate& c : candidates) {
         if (within_time(c) && within_error(c) && (!best || (budget.max_error ? faster(c, *best) : more_accurate(c, *best)))) best = &c;
     }
+    // A target error alone races at expected prices, among plans whose bounds keep kTargetTimeSlack.
+    const Candidate* fastest_bound = best;
+    if (best && budget.max_error && !budget.max_ms) {
+        for (const Candidate& c : candidates) {
+            if (within_error(c) && c.predicted_ms <= kTargetTimeSlack * fastest_bound->predicted_ms &&
+                faster_expected(c, *best)) {
+                best = &c;
+            }
+        }
+    }
     Plan plan;
     plan.considered = static_cast<int>(candidates.size());
     const std::string error_text = budget.max_error ? fmt::format("relMSE {:g}", *budget.max_error) : "";
@@ -70,6 +84,12 @@ Plan choose(const std::vector<Candidate>& candidates, const Budget& budget) {
                        ? fmt::format("the fastest of {} plans predicted within {}{}", plan.considered, error_text,
                                      budget.max_ms ? " and " + time_text : "")
                        : fmt::format("the most accurate of {} plans predicted within {}", plan.considered, time_text);
+        if (best != fastest_bound) {
+            plan.why = fmt::format("of {} plans, the fastest at its expected price ({:.1f} ms) of those predicted within {} "
+                                   "whose bound on time is at most {:g}x the least ({} at {:.1f} ms)",
+                                   plan.considered, expected_ms(*best), error_text, kTargetTimeSlack,
+                                   describe(*fastest_bound), fastest_bound->predicted_ms);
+        }
     } else if (budget.max_ms && std::any_of(candidates.begin(), candidates.end(), within_time)) {
         for (const Candidate& c : candidates) {
             if (within_time(c) && (!best || more_accurate(c, *best))) best = &c;
@@ -117,6 +137,11 @@ struct MostBounceCost {
 constexpr MostBounceCost kMostBounceCost[] = {
     {"cssm", "draft", 2.91}, {"cssm", "low", 2.91}, {"cssm", "medium", 3.12}, {"cssm", "high", 5.30}, {"cssm", "ultra", 5.37},
     {"vct", "draft", 1.23},  {"vct", "low", 1.23},  {"vct", "medium", 1.23},  {"vct", "high", 1.29},  {"vct", "ultra", 1.32}};
+// The median of the same ratios (12 per cssm preset, 6 per vct preset), never below 1: what the
+// planner races plans at for a target error (choose(), kTargetTimeSlack).
+constexpr MostBounceCost kTypicalBounceCost[] = {
+    {"cssm", "draft", 1.40}, {"cssm", "low", 1.50}, {"cssm", "medium", 1.63}, {"cssm", "high", 1.15}, {"cssm", "ultra", 1.52},
+    {"vct", "draft", 1.06},  {"vct", "low", 1.02},  {"vct", "medium", 1.0},   {"vct", "high", 1.0},   {"vct", "ultra", 1.01}};
 
 // A preset's own `bounces` knob, or -1 where the method has none.
 int preset_bounces(const std::string& method, const std::string& preset) {
@@ -125,12 +150,26 @@ int preset_bounces(const std::string& method, const std::string& preset) {
     return own != presets.end() && own->second.count("bounces") ? static_cast<int>(own->second.at("bounces")) : -1;
 }
 
+using BouncePricing = PlanningInputs::BouncePricing;
+
+// What a frame at `bounces` costs over one at the preset's own count, by `pricing`'s table.
+double bounce_cost(BouncePricing pricing, const std::string& method, const std::string& preset, int bounces) {
+    return pricing == BouncePricing::bound ? bounce_cost_bound(method, preset, bounces)
+                                           : typical_bounce_cost(method, preset, bounces);
+}
+
+// How bounces not yet measured are priced, for a plan's cost basis.
+std::string bounce_raise_text(BouncePricing pricing, double factor) {
+    return pricing == BouncePricing::bound ? fmt::format(", x {:.2g} for bounces not yet measured", factor)
+                                           : fmt::format(", x {:.2g}, what bounces not yet measured typically cost", factor);
+}
+
 // What frames of `measured_preset` at `measured` bounces are raised by to price `preset` at `bounces`:
-// the ratio of the bounds, never below 1 (fewer bounces are priced as the frames measured).
-double bounce_raise(const std::string& method, const std::string& preset, int bounces, const std::string& measured_preset,
-                    int measured) {
+// the ratio of `pricing`'s figures, never below 1 (fewer bounces are priced as the frames measured).
+double bounce_raise(BouncePricing pricing, const std::string& method, const std::string& preset, int bounces,
+                    const std::string& measured_preset, int measured) {
     if (method == "reference") return 1.0;  // its baseline prices each count (the analysis' time per sample)
-    return std::max(1.0, bounce_cost_bound(method, preset, bounces) / bounce_cost_bound(method, measured_preset, measured));
+    return std::max(1.0, bounce_cost(pricing, method, preset, bounces) / bounce_cost(pricing, method, measured_preset, measured));
 }
 
 // A GPU preset's time on this scene from the scene's own lines (SceneMeasurements::line), where it
@@ -160,12 +199,12 @@ std::optional<double> scene_line_ms(const PlanningInputs& inputs, const std::str
         if (frame.pixels > 0.0 && model(frame.pixels) > 0.0) by_size[frame.pixels].push_back(&frame);
     }
     if (by_size.empty()) {
-        const double factor = bounce_raise(method, preset, bounces, shape->preset, shape->bounces);
+        const double factor = bounce_raise(inputs.bounce_pricing, method, preset, bounces, shape->preset, shape->bounces);
         if (basis) {
             *basis = fmt::format("this scene's line for {} {} (frames at two sizes or more) x the device's ratio of the "
                                  "presets",
                                  method, shape->preset);
-            if (factor > 1.0) *basis += fmt::format(", x {:.2g} for bounces not yet measured", factor);
+            if (factor > 1.0) *basis += bounce_raise_text(inputs.bounce_pricing, factor);
         }
         return model(pixels) * factor;
     }
@@ -218,6 +257,15 @@ double bounce_cost_bound(const std::string& method, const std::string& preset, i
     return static_cast<double>(bounces) / std::max(1, own);  // not measured: as if each bounce repeated the frame
 }
 
+double typical_bounce_cost(const std::string& method, const std::string& preset, int bounces) {
+    const int own = preset_bounces(method, preset);
+    if (own < 0 || bounces <= own) return 1.0;
+    for (const MostBounceCost& typical : kTypicalBounceCost) {
+        if (method == typical.method && preset == typical.preset) return std::max(1.0, typical.ratio);
+    }
+    return bounce_cost_bound(method, preset, bounces);  // not measured: nothing typical is known
+}
+
 namespace {
 
 // A warm frame's price (predicted_ms without the work a change redoes).
@@ -249,19 +297,20 @@ double warm_ms(const PlanningInputs& inputs, const std::string& method, const st
     std::optional<double> ratio, scene_ratio;
     if (inputs.scene) {
         const SceneMeasurements::BounceRaise raise = [&](const std::string& measured_preset, int measured) {
-            return bounce_raise(method, preset, bounces, measured_preset, measured);
+            return bounce_raise(inputs.bounce_pricing, method, preset, bounces, measured_preset, measured);
         };
         ratio = inputs.scene->ratio(method, preset, bounces, nullptr, raise);
         if (!ratio && method != "reference") scene_ratio = inputs.scene->scene_ratio();
     }
     // Measured on this scene, the ratio carries its bounces' cost already; else the device's line is at the preset's own count.
-    const double bounce_factor = method != "reference" && !ratio ? bounce_cost_bound(method, preset, bounces) : 1.0;
+    const double bounce_factor =
+        method != "reference" && !ratio ? bounce_cost(inputs.bounce_pricing, method, preset, bounces) : 1.0;
     const std::string source = method == "reference" ? "the analysis' times" : "the device's calibration";
     if (basis) {
         *basis = ratio         ? fmt::format("{} x {:.2f} measured on this scene", source, *ratio)
                  : scene_ratio ? fmt::format("{} x {:.2f}, this scene's ratio over other methods", source, *scene_ratio)
                                : source;
-        if (bounce_factor > 1.0) *basis += fmt::format(", x {:.2g} for bounces not yet measured", bounce_factor);
+        if (bounce_factor > 1.0) *basis += bounce_raise_text(inputs.bounce_pricing, bounce_factor);
     }
     return *base * ratio.value_or(scene_ratio.value_or(1.0)) * bounce_factor;
 }
@@ -527,6 +576,16 @@ std::vector<Candidate> candidates(const PlanningInputs& inputs, std::vector<std:
                     fmt::format("; upsampling adds {:.3f} (this scene's {} draft frames)", resample_error, method);
             }
             candidate.predicted_ms = predicted_ms(scaled, method, preset, knobs, &candidate.cost_basis);
+            if (method != "reference" && std::isfinite(candidate.predicted_ms)) {
+                PlanningInputs typical = scaled;
+                typical.bounce_pricing = PlanningInputs::BouncePricing::typical;
+                std::string typical_basis;
+                const double expected = predicted_ms(typical, method, preset, knobs, &typical_basis);
+                if (expected < candidate.predicted_ms) {
+                    candidate.expected_ms = expected;
+                    candidate.cost_basis += fmt::format("; expected {:.1f} ms: {}", expected, typical_basis);
+                }
+            }
             if (inputs.change && method != "reference") candidate.redoes = inputs.change(method, preset, knobs);
             if (std::isfinite(candidate.predicted_ms)) all.push_back(std::move(candidate));
         }
@@ -773,6 +832,7 @@ nlohmann::json plan_json(const Plan& plan) {
             {"knobs", plan.chosen.knobs},
             {"scale", plan.chosen.scale},
             {"predicted_ms", plan.chosen.predicted_ms},
+            {"expected_ms", expected_ms(plan.chosen)},
             {"predicted_error", plan.chosen.predicted_error},
             {"redoes", to_string(plan.chosen.redoes)},
             {"meets_budget", plan.meets_budget},

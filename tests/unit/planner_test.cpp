@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <random>
 
 namespace bounce::planning {
@@ -93,6 +94,53 @@ TEST(Planner, WithBothLimitsTheTimeBudgetIsKept) {
     EXPECT_EQ(tight.chosen.method, "mid");
     EXPECT_FALSE(tight.meets_budget);
     EXPECT_EQ(choose(table, {5.0, 0.02}).chosen.method, "fast_rough");  // nothing within 5 ms: the fastest
+}
+
+TEST(Planner, ATargetErrorRacesExpectedPricesAmongBoundsWithinTheSlack) {
+    // A GPU plan priced by a bound on bounces not measured (120 ms) and expected at 60 beats the
+    // reference's 100; one expected cheaper still but bound past 1.5 x 100 does not.
+    Candidate bounded = plan_of("bounded", 120, 0.05);
+    bounded.expected_ms = 60;
+    Candidate loose = plan_of("loose", 151, 0.05);
+    loose.expected_ms = 10;
+    const std::vector<Candidate> table = {plan_of("reference", 100, 0.09), bounded, loose, plan_of("rough", 5, 0.2)};
+    const Plan plan = choose(table, {std::nullopt, 0.1});
+    EXPECT_EQ(plan.chosen.method, "bounded") << plan.why;
+    EXPECT_TRUE(plan.meets_budget);
+    EXPECT_NE(plan.why.find("expected price"), std::string::npos) << plan.why;
+    EXPECT_NE(plan.why.find("reference"), std::string::npos) << plan.why;  // the plan the bounds chose is named
+    // A time budget is a promise: the bounds decide, with a target error or without.
+    EXPECT_EQ(choose(table, {110.0, 0.1}).chosen.method, "reference");
+    EXPECT_EQ(choose(table, {1000.0, std::nullopt}).chosen.method, "bounded");  // the most accurate within it (tie: faster)
+    EXPECT_EQ(plan_json(plan)["expected_ms"].get<double>(), 60.0);
+    EXPECT_EQ(plan_json(plan)["predicted_ms"].get<double>(), 120.0);
+
+    // On random tables: the chosen plan's bound is within the slack of the least bound within E, and
+    // no plan so bounded within E is expected cheaper.
+    std::mt19937 random(13);
+    int raced = 0;
+    for (int trial = 0; trial < 2000; ++trial) {
+        std::vector<Candidate> priced = random_table(random);
+        for (Candidate& c : priced) {
+            if (random() % 2) c.expected_ms = c.predicted_ms * std::uniform_real_distribution<double>(0.3, 1.0)(random);
+        }
+        const double target = std::pow(10.0, std::uniform_real_distribution<double>(-3.0, 0.0)(random));
+        const Plan chosen = choose(priced, {std::nullopt, target});
+        if (!chosen.meets_budget) continue;
+        double least_bound = std::numeric_limits<double>::infinity();
+        for (const Candidate& c : priced) {
+            if (c.predicted_error <= target) least_bound = std::min(least_bound, c.predicted_ms);
+        }
+        EXPECT_LE(chosen.chosen.predicted_error, target);
+        EXPECT_LE(chosen.chosen.predicted_ms, kTargetTimeSlack * least_bound);
+        const double chosen_expected = chosen.chosen.expected_ms.value_or(chosen.chosen.predicted_ms);
+        for (const Candidate& c : priced) {
+            if (c.predicted_error > target || c.predicted_ms > kTargetTimeSlack * least_bound) continue;
+            EXPECT_GE(c.expected_ms.value_or(c.predicted_ms), chosen_expected) << c.method;
+        }
+        if (chosen.chosen.predicted_ms > least_bound) ++raced;
+    }
+    EXPECT_GT(raced, 50);  // the expected prices changed the choice in some trials
 }
 
 TEST(Planner, AnEmptyTableOrABudgetWithoutLimitsIsRefused) {
@@ -246,6 +294,50 @@ TEST(Costs, BouncesAreMeasuredApartAndPricedFromTheNearestCountBelow) {
     EXPECT_DOUBLE_EQ(predicted_ms(inputs, "cssm", "draft", {{"bounces", 8}}), 15.0);
     // 1 from 4: fewer bounces cost at most what the frames measured, and are not assumed cheaper.
     EXPECT_DOUBLE_EQ(predicted_ms(inputs, "cssm", "draft", {{"bounces", 1}}), 15.0);
+}
+
+TEST(Costs, BouncesNotMeasuredAreExpectedAtWhatTheyTypicallyCost) {
+    for (const char* method : {"cssm", "vct"}) {
+        for (const char* preset : {"draft", "low", "medium", "high", "ultra"}) {
+            EXPECT_DOUBLE_EQ(typical_bounce_cost(method, preset, 1), 1.0);  // the preset's own count
+            EXPECT_GE(typical_bounce_cost(method, preset, 8), 1.0) << method << " " << preset;
+            EXPECT_LE(typical_bounce_cost(method, preset, 8), bounce_cost_bound(method, preset, 8)) << method << " " << preset;
+        }
+    }
+    EXPECT_LT(typical_bounce_cost("cssm", "draft", 8), bounce_cost_bound("cssm", "draft", 8));
+    EXPECT_DOUBLE_EQ(typical_bounce_cost("isr", "medium", 8), 1.0);  // no bounces knob
+
+    const SceneAnalysis analysis = made_up_analysis();
+    DeviceCosts device("test");
+    device.set("cssm", "draft", {10.0, 0.0});
+    SceneMeasurements scene;
+    const PlanningInputs inputs{analysis, device, &scene, 64, 64, "cssm"};
+    const auto at = [](const std::vector<Candidate>& all, int bounces) {
+        const auto it = std::find_if(all.begin(), all.end(), [&](const Candidate& c) {
+            return c.preset == "draft" && c.knobs.at("bounces") == bounces && c.scale == 1.0;
+        });
+        EXPECT_NE(it, all.end()) << bounces;
+        return *it;
+    };
+    // Nothing measured: the bound prices it, and the typical cost is its expected price.
+    std::vector<Candidate> all = candidates(inputs);
+    EXPECT_DOUBLE_EQ(at(all, 8).predicted_ms, 10.0 * bounce_cost_bound("cssm", "draft", 8));
+    ASSERT_TRUE(at(all, 8).expected_ms.has_value());
+    EXPECT_DOUBLE_EQ(*at(all, 8).expected_ms, 10.0 * typical_bounce_cost("cssm", "draft", 8));
+    EXPECT_NE(at(all, 8).cost_basis.find("typically"), std::string::npos) << at(all, 8).cost_basis;
+    EXPECT_FALSE(at(all, 1).expected_ms.has_value());  // priced as measured: nothing to expect apart
+    // Measured at its count, a plan has one price.
+    scene.record("cssm", "draft", 8, 18.0, 10.0);
+    all = candidates(inputs);
+    EXPECT_DOUBLE_EQ(at(all, 8).predicted_ms, 18.0);
+    EXPECT_FALSE(at(all, 8).expected_ms.has_value());
+    // From 1 bounce measured, 4 is raised by the typical cost where expected, by the bound where priced.
+    SceneMeasurements one;
+    one.record("cssm", "draft", 1, 12.0, 10.0);
+    const PlanningInputs from_one{analysis, device, &one, 64, 64, "cssm"};
+    all = candidates(from_one);
+    EXPECT_DOUBLE_EQ(at(all, 4).predicted_ms, 12.0 * bounce_cost_bound("cssm", "draft", 4));
+    EXPECT_DOUBLE_EQ(*at(all, 4).expected_ms, 12.0 * typical_bounce_cost("cssm", "draft", 4));
 }
 
 TEST(Costs, TheCacheFileRoundTripsAndAnotherDevicesOrAGarbledOneIsIgnored) {
