@@ -2,7 +2,7 @@
 """What further bounces cost a warm frame: bench/quality at each bounce count of cssm (1, 2, 8) and
 vct (1, 2), on every corpus scene and the Cornell box, each preset's time against its time at one
 bounce. The planner prices bounce counts a scene has not measured by the largest ratio here
-(renderer/planning/planner.hpp, kMostBounceCost).
+(renderer/planning/planner.cpp, kMostBounceCost), and expects them at the median (kTypicalBounceCost).
 
 usage: bench/bounce_cost.py [--runs DIR] [--out FILE]
   --runs DIR  where each run's output goes, DIR/<scene>-<method>-<bounces>/ (default /tmp/bounce_cost);
@@ -11,6 +11,7 @@ usage: bench/bounce_cost.py [--runs DIR] [--out FILE]
 Takes about half an hour on two cores."""
 import csv
 import os
+import statistics
 import subprocess
 import sys
 from collections import defaultdict
@@ -42,7 +43,7 @@ def main(runs: str, out: str) -> None:
                 for row in csv.DictReader(open(run(runs, scene, method, bounces))):
                     if row["method"] == method:
                         warm[(row["scene"], method, row["preset"])][int(row["bounces"])] = float(row["wall_ms"])
-    largest = defaultdict(float)
+    ratios = defaultdict(list)
     with open(out, "w", newline="") as file:
         table = csv.writer(file)
         table.writerow(["scene", "method", "preset", "bounces", "warm_ms", "one_bounce_ms", "ratio"])
@@ -51,11 +52,11 @@ def main(runs: str, out: str) -> None:
                 if bounces == 1 or 1 not in by_count:
                     continue
                 ratio = ms / by_count[1]
-                largest[(method, preset)] = max(largest[(method, preset)], ratio)
+                ratios[(method, preset)].append(ratio)
                 table.writerow([scene, method, preset, bounces, f"{ms:.1f}", f"{by_count[1]:.1f}", f"{ratio:.2f}"])
-    print(f"wrote {out}; the largest ratio per preset:")
-    for (method, preset), ratio in sorted(largest.items()):
-        print(f"  {method} {preset}: {ratio:.2f}")
+    print(f"wrote {out}; per preset, the largest ratio and the median:")
+    for (method, preset), values in sorted(ratios.items()):
+        print(f"  {method} {preset}: {max(values):.2f}, {statistics.median(values):.2f}")
 
 
 if __name__ == "__main__":

@@ -86,13 +86,13 @@ std::vector<Candidate> probes(const std::vector<Candidate>& all, const Candidate
                               const SceneAnalysis* analysis = nullptr, int prefix_bounces = 0);
 
 // A target error is judged against the cheapest plan that meets it: at most this many times its
-// time (issue 17's "done when"). For max_error alone, choose() takes the plan of least expected
-// price (Candidate::expected_ms) among those predicted within E whose predicted_ms, a bound, is at
-// most this many times the least predicted_ms within E: a plan priced by a bound on the bounces the
-// scene has not measured then wins where it typically costs less (the furnished room's cssm draft
-// at 8 bounces, bound at 2.9 times its 1-bounce frames, took 1.5 times them, and lost its race to a
-// reference frame twice as slow), and were it to cost its bound, it costs at most this many times
-// the plan the bounds chose. A time budget is a promise, and is kept by the bounds.
+// time (bench/planner). For max_error alone, choose() takes the plan of least expected price
+// (Candidate::expected_ms) among those predicted within E whose predicted_ms, a bound, is at most
+// this many times the least predicted_ms within E. A plan priced by a bound on bounces the scene
+// has not measured then wins where it typically costs less (the furnished room's cssm draft at 8
+// bounces, bound at 2.9 times its 1-bounce frames, took 1.25 to 1.9 times them, and lost its race to
+// a reference frame twice as slow); were it to cost its bound, it costs at most this many times the
+// plan the bounds chose. A time budget is a promise, and is kept by the bounds.
 inline constexpr double kTargetTimeSlack = 1.5;
 
 // Chooses among predicted plans (a pure function: the planner's unit tests call it on tables).
