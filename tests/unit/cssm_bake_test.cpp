@@ -3,6 +3,7 @@
 #include "renderer/base/error.hpp"
 #include "renderer/methods/cssm/atlas_traversal.hpp"
 #include "renderer/methods/cssm/bake_cache.hpp"
+#include "renderer/methods/cssm/buried_texels.hpp"
 #include "renderer/methods/cssm/hull_overlap.hpp"
 #include "renderer/methods/cssm/surface_shadow_maps.hpp"
 #include "renderer/raytrace/ray_scene.hpp"
@@ -251,6 +252,75 @@ TEST(CssmAtlas, ADoubleSidedSurfaceHasTexelsOnBothSides) {
     const SurfaceAtlas one_sided = build_surface_atlas(quad_with_uv1({}), {0}, settings);
     EXPECT_TRUE(std::all_of(one_sided.texels.begin(), one_sided.texels.end(),
                             [](const AtlasTexel& t) { return t.normal.z > 0.999f; }));
+}
+
+// A floor with a block standing on it whose foot covers part of the floor's texels: their sample
+// points under the block give way to their others, their area shrinks by the share of points
+// buried, and their point moves to the one left nearest the others' centroid, outside the block. Under a
+// double-sided block (sheets, whose backs are surfaces too) nothing is buried.
+TEST(CssmAtlas, TexelsPartlyInsideASolidStandOnTheRestOfTheirPatch) {
+    for (const bool double_sided : {false, true}) {
+        scene::Scene scene;
+        scene.materials.push_back(scene::Material{});
+        scene::Material block = scene::Material{};
+        block.double_sided = double_sided;
+        scene.materials.push_back(block);
+        scene::add_box(scene, "floor", {0.0f, -0.1f, 0.0f}, {1.0f, 0.0f, 1.0f}, 0);
+        // The block's foot: x and z in [0.1, 0.43] (world), whatever texels it straddles.
+        const float lo = 0.1f, hi = 0.43f;
+        scene::add_box(scene, "block", {lo, 0.0f, lo}, {hi, 1.0f, hi}, 1);
+        AtlasSettings settings;
+        settings.texel_size = 0.25f;
+        SurfaceAtlas atlas = build_surface_atlas(scene, {0}, settings);  // the floor's texels
+        const SurfaceAtlas before = atlas;
+        const raytrace::RayScene rays(scene);
+        // Texels are in object space; the floor's object stands where add_box placed it.
+        const glm::mat4& floor_to_world = scene.objects[0].transform;
+        const auto under_block = [&](const glm::vec3& object_point) {
+            const glm::vec3 p(floor_to_world * glm::vec4(object_point, 1.0f));
+            return p.x > lo && p.x < hi && p.z > lo && p.z < hi;
+        };
+        EXPECT_EQ(buried_point(scene, rays, {0.25f, 0.0f, 0.25f}, {0.0f, 1.0f, 0.0f}, settings.texel_size), !double_sided);
+        EXPECT_FALSE(buried_point(scene, rays, {0.6f, 0.0f, 0.6f}, {0.0f, 1.0f, 0.0f}, settings.texel_size));
+
+        const BuriedTexels buried = unbury_texels(scene, rays, atlas, settings.texel_size);
+        std::size_t partly = 0, wholly = 0;
+        for (std::size_t t = 0; t < atlas.texels.size(); ++t) {
+            const AtlasTexel& was = before.texels[t];
+            const AtlasTexel& now = atlas.texels[t];
+            const bool top = was.normal.y > 0.999f;
+            std::set<std::tuple<float, float, float>> distinct, kept;
+            for (const glm::vec3& p : was.samples) {
+                distinct.emplace(p.x, p.y, p.z);
+                if (!top || !under_block(p)) kept.emplace(p.x, p.y, p.z);
+            }
+            if (double_sided || kept.size() == distinct.size()) {
+                EXPECT_EQ(now.position, was.position);
+                EXPECT_EQ(now.area, was.area);
+                continue;
+            }
+            if (kept.empty()) {
+                ++wholly;
+                EXPECT_EQ(now.area, 0.0f);
+                continue;
+            }
+            ++partly;
+            EXPECT_NEAR(now.area, was.area * static_cast<float>(kept.size()) / static_cast<float>(distinct.size()), 1e-6f);
+            glm::vec3 centroid(0.0f);
+            for (const auto& [x, y, z] : kept) centroid += glm::vec3(x, y, z);
+            centroid /= static_cast<float>(kept.size());
+            EXPECT_TRUE(kept.count({now.position.x, now.position.y, now.position.z})) << "its point is one of those left";
+            for (const auto& [x, y, z] : kept) {
+                EXPECT_LE(glm::distance(now.position, centroid), glm::distance(glm::vec3(x, y, z), centroid) + 1e-6f);
+            }
+            EXPECT_FALSE(under_block(now.position));
+            for (const glm::vec3& p : now.samples) EXPECT_TRUE(kept.count({p.x, p.y, p.z})) << "a buried point is left";
+        }
+        EXPECT_EQ(buried.partly, partly);
+        EXPECT_EQ(buried.wholly, wholly);
+        if (!double_sided) EXPECT_GE(partly, 2u);  // the foot, a third of a metre across, straddles texels
+        if (!double_sided) EXPECT_GE(partly + wholly, 4u);
+    }
 }
 
 TEST(CssmAtlas, UsesAValidSecondUvSetAndRejectsAnOverlappingOne) {

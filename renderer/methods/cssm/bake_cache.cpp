@@ -23,9 +23,10 @@
 namespace bounce::methods::cssm {
 namespace {
 
-// Format 06: each texel carries its direct light's sample points, and double-sided surfaces their
-// backs (05); 04: XXH3 checksums and keys (03 had FNV-1a). Files of another format are stale.
-constexpr char kMagic[8] = {'B', 'N', 'C', 'S', 'S', 'M', '0', '6'};
+// Format 07: texels partly inside a solid stand on the rest of their patch (buried_texels.hpp); 06:
+// each texel carries its direct light's sample points, and double-sided surfaces their backs (05);
+// 04: XXH3 checksums and keys (03 had FNV-1a). Files of another format are stale.
+constexpr char kMagic[8] = {'B', 'N', 'C', 'S', 'S', 'M', '0', '7'};
 
 class Writer {
 public:

@@ -3,6 +3,7 @@
 #include "renderer/base/error.hpp"
 #include "renderer/base/log.hpp"
 #include "renderer/methods/cssm/bake_cache.hpp"
+#include "renderer/methods/cssm/buried_texels.hpp"
 #include "renderer/raytrace/ray_scene.hpp"
 #include "renderer/scene/shading.hpp"
 
@@ -78,6 +79,12 @@ void bake_group(const scene::Scene& scene, BakeGroup& group, const BakeParameter
     const raytrace::RayScene rays(scene, [&](std::size_t o) {
         return std::binary_search(members.begin(), members.end(), static_cast<std::uint32_t>(o));
     });
+    const BuriedTexels buried = unbury_texels(scene, rays, group.atlas, texel_size);
+    if (buried.partly + buried.wholly > 0) {
+        log::info("cssm", "{} of {} texels partly inside a solid, moved to the rest of their patch; {} wholly",
+                  buried.partly, group.atlas.texels.size(), buried.wholly);
+    }
+    progress.checkpoint("texels inside solids");
     auto order = traverse_atlas(scene, group.atlas, parameters.traversal);
     progress.checkpoint("traversal");
     group.maps = bake_surface_shadow_maps(scene, group.atlas, std::move(order), cube, rays, progress.for_stage("depth cube maps"));

@@ -1,0 +1,94 @@
+#include "renderer/methods/cssm/buried_texels.hpp"
+
+#include "renderer/raytrace/ray_scene.hpp"
+
+#include <glm/glm.hpp>
+
+#include <array>
+#include <cmath>
+
+namespace bounce::methods::cssm {
+namespace {
+
+// The hemisphere's rays: the normal, and four at 60 degrees from it.
+constexpr int kRays = 5;
+
+glm::vec3 world_face_normal(const scene::Scene& scene, const raytrace::RayHit& hit) {
+    const scene::Object& object = scene.objects[hit.object];
+    const scene::Primitive& primitive = scene.meshes[static_cast<std::size_t>(object.mesh)].primitives[hit.primitive];
+    const std::uint32_t* corner = &primitive.indices[3 * static_cast<std::size_t>(hit.triangle)];
+    const auto at = [&](int i) { return glm::vec3(object.transform * glm::vec4(primitive.positions[corner[i]], 1.0f)); };
+    return glm::cross(at(1) - at(0), at(2) - at(0));
+}
+
+bool double_sided(const scene::Scene& scene, const raytrace::RayHit& hit) {
+    const scene::Object& object = scene.objects[hit.object];
+    const int material = scene.meshes[static_cast<std::size_t>(object.mesh)].primitives[hit.primitive].material;
+    return material >= 0 && static_cast<std::size_t>(material) < scene.materials.size() &&
+           scene.materials[static_cast<std::size_t>(material)].double_sided;
+}
+
+}  // namespace
+
+bool buried_point(const scene::Scene& scene, const raytrace::RayScene& rays, const glm::vec3& point,
+                  const glm::vec3& normal, float reach) {
+    const glm::vec3 n = glm::normalize(normal);
+    const glm::vec3 helper = std::abs(n.x) < 0.9f ? glm::vec3(1.0f, 0.0f, 0.0f) : glm::vec3(0.0f, 1.0f, 0.0f);
+    const glm::vec3 u = glm::normalize(glm::cross(n, helper)), v = glm::cross(n, u);
+    const float c = 0.5f, s = 0.8660254f;  // 60 degrees
+    const std::array<glm::vec3, kRays> directions = {n, c * n + s * u, c * n - s * u, c * n + s * v, c * n - s * v};
+    // Off the surface by a little of the reach, so that the point's own face is not met.
+    const glm::vec3 origin = point + 1e-4f * reach * n;
+    // Inside a column taller than the reach, the ray along the normal meets nothing: misses say nothing.
+    int backs = 0, fronts = 0;
+    for (const glm::vec3& direction : directions) {
+        const auto hit = rays.intersect(origin, direction, 0.0f, reach);
+        if (!hit) continue;
+        const bool back = !double_sided(scene, *hit) && glm::dot(world_face_normal(scene, *hit), direction) > 0.0f;
+        ++(back ? backs : fronts);
+    }
+    return backs > fronts;
+}
+
+BuriedTexels unbury_texels(const scene::Scene& scene, const raytrace::RayScene& rays, SurfaceAtlas& atlas, float reach) {
+    BuriedTexels counts;
+    for (AtlasTexel& texel : atlas.texels) {
+        const glm::mat4& transform = scene.objects[texel.object].transform;
+        const glm::vec3 normal = glm::normalize(glm::transpose(glm::inverse(glm::mat3(transform))) * texel.normal);
+        // The texel's distinct points (repeats stand for cells off its chart).
+        std::array<glm::vec3, kTexelSamples> kept{};
+        int distinct = 0, left = 0;
+        for (int i = 0; i < kTexelSamples; ++i) {
+            const glm::vec3& sample = texel.samples[static_cast<std::size_t>(i)];
+            bool repeat = false;
+            for (int j = 0; j < i && !repeat; ++j) repeat = texel.samples[static_cast<std::size_t>(j)] == sample;
+            if (repeat) continue;
+            ++distinct;
+            if (!buried_point(scene, rays, glm::vec3(transform * glm::vec4(sample, 1.0f)), normal, reach)) {
+                kept[static_cast<std::size_t>(left++)] = sample;
+            }
+        }
+        if (left == distinct) continue;
+        if (left == 0) {
+            texel.area = 0.0f;
+            ++counts.wholly;
+            continue;
+        }
+        texel.area *= static_cast<float>(left) / static_cast<float>(distinct);
+        // The kept point nearest their centroid: the centroid itself may be buried where a solid's
+        // corner leaves an L of the patch.
+        glm::vec3 centroid(0.0f);
+        for (int i = 0; i < left; ++i) centroid += kept[static_cast<std::size_t>(i)];
+        centroid /= static_cast<float>(left);
+        texel.position = kept[0];
+        for (int i = 1; i < left; ++i) {
+            const glm::vec3& point = kept[static_cast<std::size_t>(i)];
+            if (glm::distance(point, centroid) < glm::distance(texel.position, centroid)) texel.position = point;
+        }
+        for (int i = 0; i < kTexelSamples; ++i) texel.samples[static_cast<std::size_t>(i)] = kept[static_cast<std::size_t>(i % left)];
+        ++counts.partly;
+    }
+    return counts;
+}
+
+}  // namespace bounce::methods::cssm
