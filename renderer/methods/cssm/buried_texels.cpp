@@ -1,9 +1,11 @@
 #include "renderer/methods/cssm/buried_texels.hpp"
 
+#include "renderer/base/error.hpp"
 #include "renderer/raytrace/ray_scene.hpp"
 
 #include <glm/glm.hpp>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 
@@ -40,19 +42,29 @@ bool buried_point(const scene::Scene& scene, const raytrace::RayScene& rays, con
     // Off the surface by a little of the reach, so that the point's own face is not met.
     const glm::vec3 origin = point + 1e-4f * reach * n;
     // Inside a column taller than the reach, the ray along the normal meets nothing: misses say nothing.
+    // Faces through the point itself (a solid's side standing on a sample point) and faces met
+    // edge-on say nothing either: whether a ray meets them turns on rounding, which a scene's scale
+    // changes.
     int backs = 0, fronts = 0;
     for (const glm::vec3& direction : directions) {
-        const auto hit = rays.intersect(origin, direction, 0.0f, reach);
+        const auto hit = rays.intersect(origin, direction, 1e-3f * reach, reach);
         if (!hit) continue;
-        const bool back = !double_sided(scene, *hit) && glm::dot(world_face_normal(scene, *hit), direction) > 0.0f;
-        ++(back ? backs : fronts);
+        const float facing = glm::dot(glm::normalize(world_face_normal(scene, *hit)), direction);
+        if (std::abs(facing) < 1e-3f) continue;
+        ++(!double_sided(scene, *hit) && facing > 0.0f ? backs : fronts);
     }
     return backs > fronts;
 }
 
-BuriedTexels unbury_texels(const scene::Scene& scene, const raytrace::RayScene& rays, SurfaceAtlas& atlas, float reach) {
+BuriedTexels unbury_texels(const scene::Scene& scene, const raytrace::RayScene& rays, SurfaceAtlas& atlas, float reach,
+                           const BakeProgress& progress) {
     BuriedTexels counts;
-    for (AtlasTexel& texel : atlas.texels) {
+    const auto total = static_cast<std::uint32_t>(atlas.texels.size());
+    for (std::uint32_t t = 0; t < total; ++t) {
+        if (progress && t % kProgressTexels == 0 && !progress(t, total)) {
+            throw Cancelled(fmt::format("bake cancelled after {} of {} texels looked at for solids", t, total));
+        }
+        AtlasTexel& texel = atlas.texels[t];
         const glm::mat4& transform = scene.objects[texel.object].transform;
         const glm::vec3 normal = glm::normalize(glm::transpose(glm::inverse(glm::mat3(transform))) * texel.normal);
         // The texel's distinct points (repeats stand for cells off its chart).
@@ -80,10 +92,18 @@ BuriedTexels unbury_texels(const scene::Scene& scene, const raytrace::RayScene& 
         glm::vec3 centroid(0.0f);
         for (int i = 0; i < left; ++i) centroid += kept[static_cast<std::size_t>(i)];
         centroid /= static_cast<float>(left);
+        // Points about as near (symmetric patches: ties within a thousandth of the patch's spread) go to
+        // the first, whatever the scene's scale and its rounding.
+        float spread = 0.0f;
+        for (int i = 0; i < left; ++i) spread = std::max(spread, glm::distance(kept[static_cast<std::size_t>(i)], centroid));
         texel.position = kept[0];
+        float nearest = glm::distance(kept[0], centroid);
         for (int i = 1; i < left; ++i) {
-            const glm::vec3& point = kept[static_cast<std::size_t>(i)];
-            if (glm::distance(point, centroid) < glm::distance(texel.position, centroid)) texel.position = point;
+            const float distance = glm::distance(kept[static_cast<std::size_t>(i)], centroid);
+            if (distance < nearest - 1e-3f * spread) {
+                texel.position = kept[static_cast<std::size_t>(i)];
+                nearest = distance;
+            }
         }
         for (int i = 0; i < kTexelSamples; ++i) texel.samples[static_cast<std::size_t>(i)] = kept[static_cast<std::size_t>(i % left)];
         ++counts.partly;

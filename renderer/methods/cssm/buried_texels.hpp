@@ -6,8 +6,10 @@
 #pragma once
 
 #include "renderer/methods/cssm/surface_atlas.hpp"
+#include "renderer/methods/cssm/surface_shadow_maps.hpp"
 
 #include <cstddef>
+#include <cstdint>
 
 namespace bounce::raytrace {
 class RayScene;
@@ -30,6 +32,9 @@ bool buried_point(const scene::Scene& scene, const raytrace::RayScene& rays, con
 // as for a texel partly off its chart), its area shrinks by their share, and its point (where it
 // sends, receives and bakes its map) moves to the point left nearest their centroid. A texel buried whole
 // keeps its point and has no area. `reach`: how far a face may be to bury a point (a texel's edge).
-BuriedTexels unbury_texels(const scene::Scene& scene, const raytrace::RayScene& rays, SurfaceAtlas& atlas, float reach);
+// `progress` hears of every kProgressTexels texels (80 rays each); false cancels (bounce::Cancelled).
+inline constexpr std::uint32_t kProgressTexels = 4096;
+BuriedTexels unbury_texels(const scene::Scene& scene, const raytrace::RayScene& rays, SurfaceAtlas& atlas, float reach,
+                           const BakeProgress& progress = {});
 
 }  // namespace bounce::methods::cssm

@@ -79,7 +79,12 @@ void bake_group(const scene::Scene& scene, BakeGroup& group, const BakeParameter
     const raytrace::RayScene rays(scene, [&](std::size_t o) {
         return std::binary_search(members.begin(), members.end(), static_cast<std::uint32_t>(o));
     });
-    const BuriedTexels buried = unbury_texels(scene, rays, group.atlas, texel_size);
+    // Reported at the stage's start: the work estimate counts cube maps, and this stage is not one.
+    const BakeProgress still_wanted = [&](std::uint32_t, std::uint32_t) {
+        progress.checkpoint("texels inside solids");
+        return true;
+    };
+    const BuriedTexels buried = unbury_texels(scene, rays, group.atlas, texel_size, still_wanted);
     if (buried.partly + buried.wholly > 0) {
         log::info("cssm", "{} of {} texels partly inside a solid, moved to the rest of their patch; {} wholly",
                   buried.partly, group.atlas.texels.size(), buried.wholly);
