@@ -2,7 +2,7 @@
 """What further bounces cost a warm frame: bench/quality at each bounce count of cssm (1, 2, 8) and
 vct (1, 2), on every corpus scene and the Cornell box, each preset's time against its time at one
 bounce. The planner prices bounce counts a scene has not measured by the largest ratio here
-(renderer/planning/planner.cpp, kMostBounceCost), and expects them at the median (kTypicalBounceCost).
+(renderer/planning/bench_bounds.cpp, kMostBounceCost), and expects them at the median (kTypicalBounceCost).
 
 usage: bench/bounce_cost.py [--runs DIR] [--out FILE]
   --runs DIR  where each run's output goes, DIR/<scene>-<method>-<bounces>/ (default /tmp/bounce_cost);

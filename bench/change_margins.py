@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """How far the device's calibration of what changes redo (ChangeCost, measured on the Cornell box)
 fell short of what the bench corpus's frames redid, per method and change: the margin the planner
-adds, in warm frames at 128x128 of the scene (planner.cpp, kChangeMargin).
+adds, in warm frames at 128x128 of the scene (renderer/planning/bench_bounds.cpp, kChangeMargin).
 
     bench/change_margins.py FRAME_CHANGES_CSV COST_MODEL_JSON
 

@@ -3,7 +3,7 @@
 cold_ms and their shadow_maps pass, and dimmed_ms): per scene, method and preset, as multiples of the
 warm frame (wall_ms), in all and less the shadow maps, and for a change of the lights' power alone;
 then, per method and preset, the largest over the scenes, which the planner takes as its bound
-before a scene measured its own (planner.cpp, kMostChangeCost).
+before a scene measured its own (renderer/planning/bench_bounds.cpp, kMostChangeCost).
 
     bench/frame_changes.py OUT_CSV QUALITY_CSV...
 

@@ -120,7 +120,7 @@ public:
     };
     std::vector<ChangedFrame> changed_frames_of(const std::string& method) const;
     // What frames measured at `measured_bounces` of a preset are raised by to price another count
-    // (planner.cpp: a bound on what more bounces cost; 1 where the count asked is not more).
+    // (bench_bounds.hpp: a bound on what more bounces cost; 1 where the count asked is not more).
     using BounceRaise = std::function<double(const std::string& preset, int measured_bounces)>;
     // The median of the last frames at this preset and bounce count; else, raised by `raise`, of this
     // preset's frames at the nearest count measured below it (the fewest above it where none is

@@ -74,10 +74,14 @@ std::vector<glm::vec4> uv_tangents(const Primitive& primitive, std::span<const g
     return tangents;
 }
 
-float world_triangle_area(const glm::mat4& transform, const Primitive& primitive, std::size_t triangle) {
+glm::vec3 world_triangle_cross(const glm::mat4& transform, const Primitive& primitive, std::size_t triangle) {
     glm::vec3 p[3];
     for (int c = 0; c < 3; ++c) p[c] = glm::vec3(transform * glm::vec4(primitive.positions[primitive.indices[3 * triangle + c]], 1.0f));
-    return 0.5f * glm::length(glm::cross(p[1] - p[0], p[2] - p[0]));
+    return glm::cross(p[1] - p[0], p[2] - p[0]);
+}
+
+float world_triangle_area(const glm::mat4& transform, const Primitive& primitive, std::size_t triangle) {
+    return 0.5f * glm::length(world_triangle_cross(transform, primitive, triangle));
 }
 
 double surface_area(const Scene& scene) {

@@ -28,6 +28,9 @@ glm::vec4 fallback_tangent(const glm::vec3& normal);
 // normals must be set), orthogonal to the normal, with the handedness in w.
 std::vector<glm::vec4> uv_tangents(const Primitive& primitive, std::span<const glm::vec2> uvs);
 
+// The cross product of `primitive`'s triangle `triangle`'s edges once `transform` places it in the
+// world: its geometric normal (by its winding) times twice its area.
+glm::vec3 world_triangle_cross(const glm::mat4& transform, const Primitive& primitive, std::size_t triangle);
 // The area of `primitive`'s triangle `triangle` once `transform` places it in the world.
 float world_triangle_area(const glm::mat4& transform, const Primitive& primitive, std::size_t triangle);
 

@@ -61,6 +61,9 @@ TEST(Budget, AnAutoRenderCarriesItsPlanAndKeepsThePredictedTime) {
     ASSERT_TRUE(plan.is_object()) << reply.body.dump();
     EXPECT_TRUE(plan["meets_budget"].get<bool>()) << plan.dump();
     EXPECT_LE(plan["predicted_ms"].get<double>(), 60.0) << plan.dump();
+    // The expected price is never above the bound a time budget keeps.
+    EXPECT_GT(plan["expected_ms"].get<double>(), 0.0) << plan.dump();
+    EXPECT_LE(plan["expected_ms"].get<double>(), plan["predicted_ms"].get<double>()) << plan.dump();
     EXPECT_GT(plan["considered"].get<int>(), 20);
     EXPECT_FALSE(plan["why"].get<std::string>().empty());
     // The frame is the plan's.

@@ -2,6 +2,7 @@
 
 #include "renderer/base/error.hpp"
 #include "renderer/raytrace/ray_scene.hpp"
+#include "renderer/scene/mesh_utils.hpp"
 
 #include <glm/glm.hpp>
 
@@ -15,17 +16,13 @@ namespace {
 // The hemisphere's rays: the normal, and four at 60 degrees from it.
 constexpr int kRays = 5;
 
-glm::vec3 world_face_normal(const scene::Scene& scene, const raytrace::RayHit& hit) {
+const scene::Primitive& hit_primitive(const scene::Scene& scene, const raytrace::RayHit& hit) {
     const scene::Object& object = scene.objects[hit.object];
-    const scene::Primitive& primitive = scene.meshes[static_cast<std::size_t>(object.mesh)].primitives[hit.primitive];
-    const std::uint32_t* corner = &primitive.indices[3 * static_cast<std::size_t>(hit.triangle)];
-    const auto at = [&](int i) { return glm::vec3(object.transform * glm::vec4(primitive.positions[corner[i]], 1.0f)); };
-    return glm::cross(at(1) - at(0), at(2) - at(0));
+    return scene.meshes[static_cast<std::size_t>(object.mesh)].primitives[hit.primitive];
 }
 
 bool double_sided(const scene::Scene& scene, const raytrace::RayHit& hit) {
-    const scene::Object& object = scene.objects[hit.object];
-    const int material = scene.meshes[static_cast<std::size_t>(object.mesh)].primitives[hit.primitive].material;
+    const int material = hit_primitive(scene, hit).material;
     return material >= 0 && static_cast<std::size_t>(material) < scene.materials.size() &&
            scene.materials[static_cast<std::size_t>(material)].double_sided;
 }
@@ -35,8 +32,7 @@ bool double_sided(const scene::Scene& scene, const raytrace::RayHit& hit) {
 bool buried_point(const scene::Scene& scene, const raytrace::RayScene& rays, const glm::vec3& point,
                   const glm::vec3& normal, float reach) {
     const glm::vec3 n = glm::normalize(normal);
-    const glm::vec3 helper = std::abs(n.x) < 0.9f ? glm::vec3(1.0f, 0.0f, 0.0f) : glm::vec3(0.0f, 1.0f, 0.0f);
-    const glm::vec3 u = glm::normalize(glm::cross(n, helper)), v = glm::cross(n, u);
+    const glm::vec3 u(scene::fallback_tangent(n)), v = glm::cross(n, u);
     const float c = 0.5f, s = 0.8660254f;  // 60 degrees
     const std::array<glm::vec3, kRays> directions = {n, c * n + s * u, c * n - s * u, c * n + s * v, c * n - s * v};
     // Off the surface by a little of the reach, so that the point's own face is not met.
@@ -49,7 +45,9 @@ bool buried_point(const scene::Scene& scene, const raytrace::RayScene& rays, con
     for (const glm::vec3& direction : directions) {
         const auto hit = rays.intersect(origin, direction, 1e-3f * reach, reach);
         if (!hit) continue;
-        const float facing = glm::dot(glm::normalize(world_face_normal(scene, *hit)), direction);
+        const glm::vec3 face = scene::world_triangle_cross(scene.objects[hit->object].transform, hit_primitive(scene, *hit),
+                                                            hit->triangle);
+        const float facing = glm::dot(glm::normalize(face), direction);
         if (std::abs(facing) < 1e-3f) continue;
         ++(!double_sided(scene, *hit) && facing > 0.0f ? backs : fronts);
     }
