@@ -108,6 +108,44 @@ TEST(CssmAtlas, AChartNarrowerThanATexelKeepsItsArea) {
     }
 }
 
+// A texel whose cell the surface covers in part carries that part's share of the area, counted in
+// its 4 x 4 sub-cells, and stands on that part. A unit square at texels of 0.38: its third column
+// and row cover 0.24 / 0.38 = 0.63 of a cell. A sub-cell counts where its centre lies on the surface,
+// so each side's share is counted to within half a sub-cell, an eighth. A texel with a whole cell's
+// share there put light beyond the surface's edge and dimmed the rest: the floor beside a wall read
+// 0.89 of its light (Cssm.AFloorReceivesTheLightOfTheWallBesideItUpToTheWall).
+TEST(CssmAtlas, ATexelItsChartCoversInPartCarriesThatPartsArea) {
+    constexpr float kTexel = 0.38f;
+    scene::Scene scene = quad_with_uv1({});
+    scene.materials.push_back(scene::Material{});
+    AtlasSettings settings;
+    settings.texel_size = kTexel;
+    const SurfaceAtlas atlas = build_surface_atlas(scene, {0}, settings);
+    ASSERT_EQ(atlas.texels.size(), 9u);
+    double area = 0.0, full = 0.0;
+    for (const AtlasTexel& t : atlas.texels) {
+        area += t.area;
+        if (t.position.x < 2.0f * kTexel && t.position.y < 2.0f * kTexel) full = t.area;
+    }
+    EXPECT_NEAR(area, 1.0, 1e-5);
+    ASSERT_GT(full, 0.0);
+    for (const AtlasTexel& t : atlas.texels) {
+        // The part of its cell on the surface: its share along each side, and its middle.
+        const glm::vec2 lo = glm::floor(glm::vec2(t.position) / kTexel) * kTexel;
+        const glm::vec2 hi = glm::min(lo + kTexel, glm::vec2(1.0f));
+        const glm::vec2 share = (hi - lo) / kTexel;
+        const glm::vec2 error(share.x < 0.999f ? 0.125f : 0.0f, share.y < 0.999f ? 0.125f : 0.0f);
+        const double bound = (share.x + error.x) * (share.y + error.y) - share.x * share.y;
+        EXPECT_NEAR(t.area / full, share.x * share.y, bound + 1e-5) << "texel at " << t.position.x << ", " << t.position.y;
+        // On the surface, within a sub-cell of its part's middle on each axis.
+        const glm::vec2 middle = 0.5f * (lo + hi);
+        EXPECT_LE(t.position.x, 1.0f);
+        EXPECT_LE(t.position.y, 1.0f);
+        EXPECT_NEAR(t.position.x, middle.x, kTexel / 4.0f);
+        EXPECT_NEAR(t.position.y, middle.y, kTexel / 4.0f);
+    }
+}
+
 // The same with a mesh's own second UV set: an island no texel centre falls in (here a second unit
 // quad squeezed into 0.005 of the set) gets a texel of its own in a free cell, with its whole area,
 // its samples on its own surface.

@@ -87,22 +87,7 @@ BuriedTexels unbury_texels(const scene::Scene& scene, const raytrace::RayScene& 
         texel.area *= static_cast<float>(left) / static_cast<float>(distinct);
         // The kept point nearest their centroid: the centroid itself may be buried where a solid's
         // corner leaves an L of the patch.
-        glm::vec3 centroid(0.0f);
-        for (int i = 0; i < left; ++i) centroid += kept[static_cast<std::size_t>(i)];
-        centroid /= static_cast<float>(left);
-        // Points about as near (symmetric patches: ties within a thousandth of the patch's spread) go to
-        // the first, whatever the scene's scale and its rounding.
-        float spread = 0.0f;
-        for (int i = 0; i < left; ++i) spread = std::max(spread, glm::distance(kept[static_cast<std::size_t>(i)], centroid));
-        texel.position = kept[0];
-        float nearest = glm::distance(kept[0], centroid);
-        for (int i = 1; i < left; ++i) {
-            const float distance = glm::distance(kept[static_cast<std::size_t>(i)], centroid);
-            if (distance < nearest - 1e-3f * spread) {
-                texel.position = kept[static_cast<std::size_t>(i)];
-                nearest = distance;
-            }
-        }
+        texel.position = point_nearest_centroid(std::span<const glm::vec3>(kept.data(), static_cast<std::size_t>(left)));
         for (int i = 0; i < kTexelSamples; ++i) texel.samples[static_cast<std::size_t>(i)] = kept[static_cast<std::size_t>(i % left)];
         ++counts.partly;
     }

@@ -135,8 +135,24 @@ void complete_samples(std::vector<AtlasTexel>& texels, const SubCells& found) {
     }
 }
 
-// Every texel of a chart gets the chart's true area divided evenly (planar charts) or in
-// proportion to the texel's own share (UV charts), so the atlas's area equals the surface's.
+// A texel that its chart covers in part carries that part's share of the area, and stands at its
+// sample nearest the part's centroid (a sample lies on the surface; the centroid of a curved chart's
+// part may not). Beside a junction, a texel centred on its grid cell with a whole cell's share put
+// its light where the surface is not, and dimmed the rest: a floor by a wall read 0.89 of its light.
+void weigh_by_coverage(std::vector<AtlasTexel>& texels, const SubCells& found) {
+    for (std::size_t t = 0; t < texels.size(); ++t) {
+        const int count = std::popcount(static_cast<unsigned>(found[t]));
+        if (count >= kTexelSamples) continue;
+        AtlasTexel& texel = texels[t];
+        texel.area *= static_cast<float>(std::max(count, 1)) / static_cast<float>(kTexelSamples);
+        if (count == 0) continue;
+        texel.position = point_nearest_centroid(std::span<const glm::vec3>(texel.samples.data(), static_cast<std::size_t>(count)));
+    }
+}
+
+// Every texel of a chart keeps its share of the chart's true area (its cell's part of the surface:
+// weigh_by_coverage; in UV charts, times its triangle's world area per texel), scaled so that the
+// atlas's area equals the surface's.
 void normalize_chart_areas(PackItem& item, const std::vector<float>& chart_area) {
     std::vector<float> sum(item.charts, 0.0f);
     for (const AtlasTexel& t : item.texels) sum[t.chart] += t.area;
@@ -264,7 +280,6 @@ PackItem charts_from_uv1(const scene::Scene& scene, std::uint32_t object_index, 
         whole_chart_texels.push_back(item.texels.size());
         item.texels.push_back(texel);
     }
-    normalize_chart_areas(item, chart_area);
     SubCells found(item.texels.size(), 0);
     for (std::size_t t : whole_chart_texels) found[t] = 0xFFFF;  // sampled over their charts already
     const auto texel_at = [&](int x, int y) { return x < side && y < side ? claimed[static_cast<std::size_t>(y) * side + x] : -1; };
@@ -277,6 +292,8 @@ PackItem charts_from_uv1(const scene::Scene& scene, std::uint32_t object_index, 
         }
     }
     complete_samples(item.texels, found);
+    weigh_by_coverage(item.texels, found);
+    normalize_chart_areas(item, chart_area);
     return item;
 }
 
@@ -378,6 +395,7 @@ std::vector<PackItem> automatic_charts(const scene::Scene& scene, std::uint32_t 
                 sample_sub_cells(triangle, q, item.texels, found, texel_at);
             }
             complete_samples(item.texels, found);
+            weigh_by_coverage(item.texels, found);
             if (item.texels.empty()) {
                 // A chart smaller than a texel still gets one, at its seed's centroid, so no surface is
                 // lost; its samples spread over all its triangles (a lamp shade's narrow strip: the
@@ -529,6 +547,25 @@ SurfaceAtlas build_surface_atlas(const scene::Scene& scene, const std::vector<st
         chart_base += item.charts;
     }
     return atlas;
+}
+
+glm::vec3 point_nearest_centroid(std::span<const glm::vec3> points) {
+    if (points.empty()) return glm::vec3(0.0f);
+    glm::vec3 centroid(0.0f);
+    for (const glm::vec3& point : points) centroid += point;
+    centroid /= static_cast<float>(points.size());
+    float spread = 0.0f;
+    for (const glm::vec3& point : points) spread = std::max(spread, glm::distance(point, centroid));
+    std::size_t nearest = 0;
+    float nearest_distance = glm::distance(points[0], centroid);
+    for (std::size_t i = 1; i < points.size(); ++i) {
+        const float distance = glm::distance(points[i], centroid);
+        if (distance < nearest_distance - 1e-3f * spread) {
+            nearest = i;
+            nearest_distance = distance;
+        }
+    }
+    return points[nearest];
 }
 
 }  // namespace bounce::methods::cssm

@@ -18,6 +18,7 @@
 
 #include <array>
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -82,5 +83,10 @@ float texel_size_for(float area, float texels_per_side);
 float surface_area(const scene::Scene& scene, const std::vector<std::uint32_t>& objects);
 // The part of it whose material is double-sided: the atlas covers it twice, once per side.
 float double_sided_area(const scene::Scene& scene, const std::vector<std::uint32_t>& objects);
+
+// Of a texel's points on its surface, the one nearest their centroid (which itself may lie off the
+// surface, or outside an L-shaped part of it). Points about as near (symmetric parts: ties within a
+// thousandth of the points' spread) go to the first, whatever the scene's scale and its rounding.
+glm::vec3 point_nearest_centroid(std::span<const glm::vec3> points);
 
 }  // namespace bounce::methods::cssm
