@@ -57,12 +57,15 @@ double cornell_error(const std::string& preset, int bounces) {
 }
 
 TEST(Cssm, OneBounceMatchesTheReferenceAndImprovesAsTheAtlasGetsFiner) {
-    // Measured (48^2, 512 spp reference): draft 0.020, low 0.0074, medium 0.0076, high 0.0043, ultra 0.0038.
+    // Measured (48^2, 512 spp reference): draft 0.0067, low 0.0048, high 0.0031, ultra 0.0028 (draft
+    // 0.020, low 0.0074, high 0.0043, ultra 0.0038 while cube maps stored depths up to second hits,
+    // where runs of maps lit receivers on the surface behind the first). Each finer preset gains
+    // more than the reference's noise (a tenth, below).
     const double draft = cornell_error("draft", 1), low = cornell_error("low", 1), high = cornell_error("high", 1),
                  ultra = cornell_error("ultra", 1);
     EXPECT_LT(draft, 0.03);
-    EXPECT_LT(low, 0.6 * draft);
-    EXPECT_LT(high, 0.7 * low);
+    EXPECT_LT(low, 0.9 * draft);
+    EXPECT_LT(high, 0.9 * low);
     EXPECT_LT(ultra, 0.006);
     EXPECT_LE(ultra, 1.1 * high);  // within the reference's noise
 }

@@ -451,6 +451,51 @@ TEST(CssmCompression, EveryDecompressedDepthLiesInItsMapsIntervalWithTheFewestRu
     EXPECT_EQ(admissible_interval(1.0f, 1.0f).lo, kDepthMax);
 }
 
+// A plate between a floor and a ceiling: from every floor texel under the plate's middle, the
+// ceiling above the plate is behind it. Along a cube-map pixel the plate (0.5 above the floor) is
+// the first hit and the ceiling (0.6) the second; the stored value may lie anywhere that keeps
+// receivers on the first lit and on the second hidden. The lookup lights a receiver within its bias
+// of the stored value (here about 0.06 at the ceiling), so the value must stay that bias short of
+// the second hit. Allowed up to the second hit itself, runs of maps sharing a value lit some of
+// these pairs, and in the furnished room the inside of one lampshade lit the outside of the other
+// (2.6 times the reference's light there at high, now 1.45).
+TEST(CssmVisibility, ASurfaceBehindAnotherStaysHiddenWhateverValueItsPixelsShare) {
+    scene::Scene scene;
+    scene.materials.push_back(scene::Material{});
+    scene::add_box(scene, "floor", {-1.0f, -0.05f, -1.0f}, {1.0f, 0.0f, 1.0f}, 0);
+    scene::add_box(scene, "ceiling", {-1.0f, 0.6f, -1.0f}, {1.0f, 0.65f, 1.0f}, 0);
+    scene::Primitive plate;
+    plate.material = 0;
+    plate.positions = {{-0.6f, 0.5f, -0.6f}, {0.6f, 0.5f, -0.6f}, {0.6f, 0.5f, 0.6f}, {-0.6f, 0.5f, 0.6f}};
+    plate.normals.assign(4, {0.0f, -1.0f, 0.0f});
+    plate.indices = {0, 2, 1, 0, 3, 2};
+    for (const glm::vec3& corner : plate.positions) plate.bounds.extend(corner);
+    scene::add_primitive_object(scene, "plate", std::move(plate));
+    const auto objects = all_objects(scene);
+    AtlasSettings atlas_settings;
+    atlas_settings.texel_size = 0.1f;
+    const SurfaceAtlas atlas = build_surface_atlas(scene, objects, atlas_settings);
+    const raytrace::RayScene rays(scene);
+    const CubeMapSettings settings{32, 0.025f, glm::length(scene.world_bounds().extent())};
+    const SurfaceShadowMaps maps = bake_surface_shadow_maps(scene, atlas, traverse_atlas(scene, atlas, Traversal::spiral),
+                                                            settings, rays, {});
+    int senders = 0, pairs = 0, lit = 0;
+    for (std::uint32_t s = 0; s < atlas.texels.size(); ++s) {
+        const glm::vec3 from = maps.origins[s];
+        if (atlas.texels[s].normal.y < 0.9f || std::abs(from.y) > 1e-3f || std::max(std::abs(from.x), std::abs(from.z)) > 0.3f) continue;
+        ++senders;
+        for (std::uint32_t r = 0; r < atlas.texels.size(); ++r) {
+            const glm::vec3 to = maps.origins[r];
+            if (atlas.texels[r].normal.y > -0.9f || std::abs(to.y - 0.6f) > 1e-3f || std::max(std::abs(to.x), std::abs(to.z)) > 0.3f) continue;
+            ++pairs;
+            lit += cssm_visibility(maps, s, to, 1) > 0.0f ? 1 : 0;
+        }
+    }
+    ASSERT_GT(senders, 10);
+    ASSERT_GT(pairs, 500);
+    EXPECT_EQ(lit, 0) << "of " << pairs << " floor-to-ceiling pairs through the plate";
+}
+
 TEST(CssmVisibility, CubeMapsAgreeWithRayQueriesOnRandomCornellPairs) {
     const scene::Scene scene = scene::make_cornell_box();
     const SurfaceAtlas atlas = cornell_atlas(scene, 24.0f);
@@ -486,6 +531,7 @@ TEST(CssmVisibility, CubeMapsAgreeWithRayQueriesOnRandomCornellPairs) {
         disagree += blocked != cube_blocked ? 1 : 0;
     }
     EXPECT_GT(occluded, 200);  // the blocks do hide part of the room
+    // Measured: 70 of 4000 (111 before the cube maps kept the bias short of second hits).
     EXPECT_LT(static_cast<double>(disagree) / pairs, 0.03) << disagree << " of " << pairs;
 
     int calls = 0;

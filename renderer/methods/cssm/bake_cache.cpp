@@ -23,11 +23,12 @@
 namespace bounce::methods::cssm {
 namespace {
 
-// Format 08: texels a chart covers in part carry that part's area, at its middle (surface_atlas.cpp);
+// Format 09: cube-map depths stay their bias short of second hits (biased_interval); 08: texels a
+// chart covers in part carry that part's area, at its middle (surface_atlas.cpp);
 // 07: texels partly inside a solid stand on the rest of their patch (buried_texels.hpp); 06:
 // each texel carries its direct light's sample points, and double-sided surfaces their backs (05);
 // 04: XXH3 checksums and keys (03 had FNV-1a). Files of another format are stale.
-constexpr char kMagic[8] = {'B', 'N', 'C', 'S', 'S', 'M', '0', '8'};
+constexpr char kMagic[8] = {'B', 'N', 'C', 'S', 'S', 'M', '0', '9'};
 
 class Writer {
 public:

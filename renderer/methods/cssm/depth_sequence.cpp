@@ -25,6 +25,11 @@ DepthInterval admissible_interval(float first, float second) {
     return {static_cast<std::uint16_t>(std::min(lo, kDepthMax)), static_cast<std::uint16_t>(std::min(hi, kDepthMax))};
 }
 
+DepthInterval biased_interval(float first, float second, float second_bias) {
+    if (!(first < 1.0f)) return {kDepthMax, kDepthMax};  // nothing within the far plane
+    return admissible_interval(first, second < 1.0f ? second - second_bias : second);
+}
+
 std::uint16_t CompressedDepthMaps::depth(std::uint32_t map, std::uint32_t pixel) const {
     BOUNCE_CHECK(pixel < pixels && map < maps, "depth lookup out of range: map {} of {}, pixel {} of {}", map, maps, pixel,
                  pixels);

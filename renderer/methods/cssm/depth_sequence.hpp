@@ -25,6 +25,10 @@ struct DepthInterval {
 // plane; 1 or more for no hit). The stored value must not reach `second`: a receiver there is
 // behind the first surface.
 DepthInterval admissible_interval(float first, float second);
+// The same for a lookup that lights a receiver at depth d where the stored value is at least
+// d - bias(d) (a surface's cube map: cssm_visibility): the value stays below the second hit less
+// its bias there, so that a receiver on the second surface stays behind the first.
+DepthInterval biased_interval(float first, float second, float second_bias);
 constexpr DepthInterval kDontCare{0, kDepthMax};
 
 struct CompressedDepthMaps {

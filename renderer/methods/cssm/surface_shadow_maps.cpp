@@ -103,7 +103,9 @@ SurfaceShadowMaps bake_surface_shadow_maps(const scene::Scene& scene, const Surf
                     const float first_depth = hit->distance * to_z / settings.far_plane;
                     const auto second = rays.intersect(origin, directions[p], hit->distance * (1.0f + 1e-5f) + 1e-7f * tfar, tfar);
                     const float second_depth = second ? second->distance * to_z / settings.far_plane : 1.0f;
-                    out = admissible_interval(first_depth, second_depth);
+                    // A receiver on the second surface (another lampshade seen through this one's
+                    // far side) must stay behind the first.
+                    out = biased_interval(first_depth, second_depth, depth_bias(settings, second_depth));
                 }
             }
         });
