@@ -58,7 +58,7 @@ double cornell_error(const std::string& preset, int bounces) {
 
 TEST(Cssm, OneBounceMatchesTheReferenceAndImprovesAsTheAtlasGetsFiner) {
     // Measured (48^2, 512 spp reference): draft 0.0067, low 0.0048, high 0.0031, ultra 0.0028 (draft
-    // 0.020, low 0.0074, high 0.0043, ultra 0.0038 while cube maps stored depths up to second hits,
+    // 0.0147, low 0.0061, high 0.0039, ultra 0.0035 while cube maps stored depths up to second hits,
     // where runs of maps lit receivers on the surface behind the first). Each finer preset gains
     // more than the reference's noise (a tenth, below).
     const double draft = cornell_error("draft", 1), low = cornell_error("low", 1), high = cornell_error("high", 1),
@@ -463,7 +463,7 @@ TEST(Cssm, AtlasTexelsTakeTheirMaterialsTextures) {
 // floor point sees the wall at grazing angles, where one disk at a texel's centre, at its centre's
 // cosines, stands for it worst. At 8 texels along the square root of the area (texels of 0.35 m,
 // the grid not aligned with the wall's edges), the floor's bands of 5 cm from the wall read 0.03,
-// 0.43 and 0.70 of the reference's indirect light by the disk; by each near texel's square (and
+// 0.46 and 0.74 of the reference's indirect light by the disk; by each near texel's square (and
 // texels their chart covers in part carrying that part's area), 1.00, 0.98 and 0.96 (and at 16,
 // 1.02, 1.04 and 1.02). The bound is the 10% the box's means are held to; the reference's noise over
 // a band's 26 pixels at 512 samples is under 1%.
