@@ -41,6 +41,18 @@ int Arguments::number() {
     }
 }
 
+void Arguments::knob(methods::KnobValues& knobs) {
+    const std::string assignment = value();
+    const auto equals = assignment.find('=');
+    char* end = nullptr;
+    const double number = equals == std::string::npos ? 0.0 : std::strtod(assignment.c_str() + equals + 1, &end);
+    if (equals == std::string::npos || equals == 0 || end == assignment.c_str() + equals + 1 || *end != '\0') {
+        std::fprintf(stderr, "%s: %s takes NAME=VALUE, not '%s'\n", program_.c_str(), flag_.c_str(), assignment.c_str());
+        std::exit(2);
+    }
+    knobs[assignment.substr(0, equals)] = number;
+}
+
 double ms_since(Clock::time_point start) { return std::chrono::duration<double, std::milli>(Clock::now() - start).count(); }
 
 RenderRequest linear_request(const std::string& method, const std::string& preset, methods::KnobValues knobs, int size) {

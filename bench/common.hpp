@@ -23,6 +23,8 @@ public:
     const std::string& flag() const { return flag_; }
     std::string value();
     int number();
+    // A NAME=VALUE value (--knob), added to `knobs`.
+    void knob(methods::KnobValues& knobs);
     const std::string& command() const { return command_; }
 
 private:

@@ -7,7 +7,7 @@
 // - with --region, the same over a rectangle of pixels that `direct` leaves dark;
 // - the whole frame's relMSE against the 1-bounce reference, and the share of it its worst pixels
 //   carry, with what those pixels read.
-// --lights sun|lamps keeps the directional lights or the others; --matte sets every specular and
+// --knob NAME=VALUE sets a cssm knob over each preset's. --lights sun|lamps keeps the directional lights or the others; --matte sets every specular and
 // metallic factor to 0.
 #include "bench/common.hpp"
 #include "bench/corpus.hpp"
@@ -30,7 +30,8 @@ using namespace bounce;
 
 constexpr const char* kUsage =
     "usage: bounce_bench_cssm_indirect --scene NAME [--preset P ...] [--size N] [--spp N] [--lights all|sun|lamps]\n"
-    "                                  [--matte] [--region X0,Y0,X1,Y1] [--worst N]";
+    "                                  [--matte] [--region X0,Y0,X1,Y1] [--worst N]\n"
+    "                                  [--knob NAME=VALUE ...]";
 
 struct Options {
     std::string scene;
@@ -41,6 +42,7 @@ struct Options {
     bool matte = false;
     std::vector<double> region;  // x0, y0, x1, y1 (exclusive), rows top to bottom
     int worst = 10;
+    methods::KnobValues knobs;  // over each preset's
 };
 
 double luminance(const image::Frame& frame, std::size_t pixel) {
@@ -118,6 +120,7 @@ int main(int argc, char** argv) {
         else if (flag == "--matte") options.matte = true;
         else if (flag == "--region") options.region = bench::numbers(arguments.value());
         else if (flag == "--worst") options.worst = arguments.number();
+        else if (flag == "--knob") arguments.knob(options.knobs);
         else {
             std::fprintf(stderr, "%s\n", kUsage);
             return 2;
@@ -156,7 +159,7 @@ int main(int argc, char** argv) {
         auto resources = renderer.upload(scene);
         const image::Frame direct = renderer.render(*resources, bench::linear_request("direct", "high", {}, options.size)).frame;
         for (const std::string& preset : options.presets) {
-            const image::Frame cssm = renderer.render(*resources, bench::linear_request("cssm", preset, {}, options.size)).frame;
+            const image::Frame cssm = renderer.render(*resources, bench::linear_request("cssm", preset, options.knobs, options.size)).frame;
             report(preset, options, truth, truth_direct, direct, cssm);
         }
         return 0;

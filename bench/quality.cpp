@@ -232,17 +232,8 @@ int main(int argc, char** argv) {
         else if (flag == "--previews") options.previews = arguments.value();
         else if (flag == "--detail") options.detail = std::max(1, arguments.number());
         else if (flag == "--method") options.methods.push_back(arguments.value());
-        else if (flag == "--knob") {
-            const std::string assignment = arguments.value();
-            const auto equals = assignment.find('=');
-            char* end = nullptr;
-            const double value = equals == std::string::npos ? 0.0 : std::strtod(assignment.c_str() + equals + 1, &end);
-            if (equals == std::string::npos || equals == 0 || end == assignment.c_str() + equals + 1 || *end != '\0') {
-                std::fprintf(stderr, "quality: --knob takes NAME=VALUE, not '%s'\n", assignment.c_str());
-                return 2;
-            }
-            options.knobs[assignment.substr(0, equals)] = value;
-        } else {
+        else if (flag == "--knob") arguments.knob(options.knobs);
+        else {
             std::fprintf(stderr,
                          "usage: quality [--size N] [--reference-spp N] [--reference-bounces N] [--repeats N]\n"
                          "               [--scene NAME ...] [--method NAME ...] [--knob NAME=VALUE ...]\n"
