@@ -14,8 +14,9 @@ namespace {
 
 // relMSE against the reference with as many bounces (`rel_mse_same_bounces`), at 128x128 through
 // pixel centres: the largest over the five corpus scenes (bench/results/corpus/quality.csv; cssm's
-// from bench/results/corpus/cssm_lobe_quality.csv, since its texels sample their light over their
-// surface, double-sided surfaces have two sides and its nodes send light by their lobes), leaving
+// from bench/results/corpus/cssm_spots_quality.csv, the method as it is now: the near texels' squares
+// and the cube maps' second hits, d9829fd and 3942dd8, took the outdoor scene's at low from 0.0628 to
+// 0.0738, past what this table said until it was measured again), leaving
 // out the cases the analysis rules out (vct where it leaks). The largest, not a typical value: a
 // target error is a promise, and a scene's own error is not known before its reference is. Update
 // it when that table changes.
@@ -27,8 +28,8 @@ const std::map<std::pair<std::string, std::string>, double> kOwnError = {
     {{"vct", "high"}, 0.5256},      {{"vct", "ultra"}, 0.3823},
     {{"isr", "draft"}, 0.2735},     {{"isr", "low"}, 0.2986},      {{"isr", "medium"}, 0.1441},
     {{"isr", "high"}, 0.0715},      {{"isr", "ultra"}, 0.0714},
-    {{"cssm", "draft"}, 0.0626},    {{"cssm", "low"}, 0.0628},     {{"cssm", "medium"}, 0.0602},
-    {{"cssm", "high"}, 0.0579},     {{"cssm", "ultra"}, 0.0583},
+    {{"cssm", "draft"}, 0.0643},    {{"cssm", "low"}, 0.0738},     {{"cssm", "medium"}, 0.0587},
+    {{"cssm", "high"}, 0.0578},     {{"cssm", "ultra"}, 0.0579},
 };
 // vct with its second bounce (`bounces` 2), against the two-bounce reference, the same way
 // (bench/quality --corpus --method vct --knob bounces=2; bench/results/corpus/vct_second_bounce.csv,
@@ -45,8 +46,8 @@ const std::map<std::pair<std::string, std::string>, double> kTypicalOwnError = {
     {{"vct", "high"}, 0.1298},      {{"vct", "ultra"}, 0.1079},
     {{"isr", "draft"}, 0.0475},     {{"isr", "low"}, 0.0473},      {{"isr", "medium"}, 0.0475},
     {{"isr", "high"}, 0.0360},      {{"isr", "ultra"}, 0.0365},
-    {{"cssm", "draft"}, 0.0307},    {{"cssm", "low"}, 0.0251},     {{"cssm", "medium"}, 0.0205},
-    {{"cssm", "high"}, 0.0193},     {{"cssm", "ultra"}, 0.0189},
+    {{"cssm", "draft"}, 0.0277},    {{"cssm", "low"}, 0.0253},     {{"cssm", "medium"}, 0.0177},
+    {{"cssm", "high"}, 0.0173},     {{"cssm", "ultra"}, 0.0171},
 };
 const std::map<std::string, double> kVctSecondBounceTypicalOwnError = {
     {"draft", 0.1519}, {"low", 0.1537}, {"medium", 0.1580}, {"high", 0.1559}, {"ultra", 0.1136}};

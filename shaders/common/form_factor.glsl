@@ -35,12 +35,13 @@ void clip_and_sum(vec3 a, vec3 b, vec3 n, inout vec3 first, inout vec3 last, ino
 }
 
 // Irradiance per unit radiance (pi times the point-to-area form factor) at the origin, normal n,
-// from the square of centre c (relative to the receiver), unit axes e1, e2 and half-edge h; its
-// emitting side is e1 x e2's. 0 where the receiver is behind it or in its plane (within a thousandth
-// of its edge: the other side of a double-sided sheet, at the same place, must receive nothing).
-float square_irradiance_factor(vec3 c, vec3 e1, vec3 e2, float h, vec3 n) {
-    if (dot(c, cross(e1, e2)) > -2e-3 * h) return 0.0;
-    vec3 u = h * e1, w = h * e2;
+// from the rectangle of centre c (relative to the receiver), unit axes e1, e2 and half-edges h.x, h.y
+// along them; its emitting side is e1 x e2's. 0 where the receiver is behind it or in its plane
+// (within a thousandth of its longer edge: the other side of a double-sided sheet, at the same
+// place, must receive nothing).
+float rectangle_irradiance_factor(vec3 c, vec3 e1, vec3 e2, vec2 h, vec3 n) {
+    if (dot(c, cross(e1, e2)) > -2e-3 * max(h.x, h.y)) return 0.0;
+    vec3 u = h.x * e1, w = h.y * e2;
     vec3 c0 = c - u - w, c1 = c + u - w, c2 = c + u + w, c3 = c - u + w;
     vec3 first = vec3(0.0), last = vec3(0.0);
     int emitted = 0;

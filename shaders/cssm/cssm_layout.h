@@ -21,6 +21,12 @@
 #define CSSM_BINDING_TEXEL_INDIRECT 15  // vec4[texels]: irradiance of every bounce, summed (per-texel display)
 #define CSSM_BINDING_TEXEL_SAMPLES 16   // vec4[texels * CSSM_TEXEL_SAMPLES]: world points of each texel's surface
 #define CSSM_TEXEL_SAMPLES 16           // where its direct light is sampled (AtlasTexel::samples)
+// vec4[2 * texels]: where on each texel the lights' light falls, summed over its samples and the
+// lights (atlas_direct.comp): [sum e d, sum e] and [sum e d.x^2, sum e d.y^2, mean d.x^2, mean d.y^2],
+// with d a sample's place p - m from the samples' mean m (in the normal's tangent_frame for x and y)
+// and e its part of the texel's exitance luminance from the lights. pull.comp makes each leaf's spot
+// of them (CssmNodeLight::spot).
+#define CSSM_BINDING_TEXEL_SPOTS 17
 
 #define CSSM_TABLE_FACE 16
 
@@ -65,9 +71,19 @@ struct CssmNode {
 // cosine is 1/4. Within a hemisphere it sends L A max(0, v.w) / |v|, as a plane facing v would; a
 // planar node's |v| is 1 and both are its L A cos. Either way it sends pi L A in all
 // (docs/methods.md, "Hierarchical radiosity").
+//
+// A leaf sends from its spot (cssm's `texel_spots`): the part of its texel's cell that the lights'
+// light falls on, a rectangle along the cell's axes (the normal's tangent_frame) as wide along each
+// as the light's spread over its samples is to theirs, about the light's centre; moved from the cell
+// as far as what it sends is the lights' light (not a bounce's, nor its emission). Light that falls
+// on part of a texel (a strip of sun at a wall's foot, a lamp's pool of light under its shade) is
+// otherwise sent from all of it. Near leaves send through the rectangle, the others through the disk
+// of the texel's area about the spot's centre. Internal nodes send from their centres
+// (docs/methods.md, "Texel spots").
 struct CssmNodeLight {
     vec4 radiance;  // rgb: area-weighted mean exitant radiance L
     vec4 lobe;      // xyz: v; w: its length |v|
+    vec4 spot;      // xyz: where it sends from; w: packHalf2x16 of its half-widths over the cell's (leaves)
 };
 
 struct CssmTexel {
@@ -96,8 +112,9 @@ struct CssmCsm {
 static_assert(sizeof(CssmNode) == 64);
 static_assert(offsetof(CssmNode, centre_radius) == 0 && offsetof(CssmNode, normal_cone) == 16 &&
               offsetof(CssmNode, area) == 32 && offsetof(CssmNode, links) == 48);
-static_assert(sizeof(CssmNodeLight) == 32);
-static_assert(offsetof(CssmNodeLight, radiance) == 0 && offsetof(CssmNodeLight, lobe) == 16);
+static_assert(sizeof(CssmNodeLight) == 48);
+static_assert(offsetof(CssmNodeLight, radiance) == 0 && offsetof(CssmNodeLight, lobe) == 16 &&
+              offsetof(CssmNodeLight, spot) == 32);
 static_assert(sizeof(CssmTexel) == 64);
 static_assert(offsetof(CssmTexel, position_area) == 0 && offsetof(CssmTexel, normal_map) == 16 &&
               offsetof(CssmTexel, albedo) == 32 && offsetof(CssmTexel, emission) == 48);

@@ -25,6 +25,7 @@ uniform float u_texel_size;   // atlas texel edge, world units
 uniform int u_pcf;            // filter width in pixels (odd)
 uniform float u_threshold;    // refine while the tone-mapped bound on received radiance exceeds it
 uniform uint u_jitter_seed;   // 0: senders at their centres; else a frame's seed for jittered positions (§4.5)
+uniform bool u_spots;         // leaves send from their spots (CssmNodeLight::spot): `texel_spots`
 uniform uint u_first_root;    // this batch's subtrees: roots[u_first_root .. + u_root_count)
 uniform uint u_root_count;
 
@@ -177,10 +178,13 @@ struct Gathered {
     uint visited;
 };
 
-// Where a sender node emits from: its centre, or, jittered, a point of the disk of its area (at
-// most its bounding sphere) on its tangent plane, a different one each frame.
+// Where a sender node emits from: its spot (CssmNodeLight in cssm_layout.h; an internal node's
+// centre), or, jittered, a point of the disk of its area (at most its bounding sphere) about it on
+// its tangent plane, a different one each frame.
 vec3 sender_position(uint node) {
-    vec3 centre = nodes[node].centre_radius.xyz;
+    vec3 centre;
+    if (u_spots) centre = node_light[node].spot.xyz;  // a uniform branch: without spots, no load
+    else centre = nodes[node].centre_radius.xyz;
     if (u_jitter_seed == 0u) return centre;
     uint h1 = pcg_hash(node ^ pcg_hash(u_jitter_seed)), h2 = pcg_hash(h1);
     float radius = min(sqrt(nodes[node].area.x * INV_PI), nodes[node].centre_radius.w) * sqrt(float(h1) / 4294967296.0);
@@ -255,16 +259,19 @@ vec3 near_leaf_irradiance(uint node, vec3 p, vec3 n, uint receiver_texel, out ve
     vec3 to_node = sender_position(node) - p;
     mat3 frame = tangent_frame(texels[texel].normal_map.xyz);
     float h = 0.5 * sqrt(side2);
-    vec3 local = -to_node * frame;
+    vec3 local = -(nodes[node].centre_radius.xyz - p) * frame;
     if (max(abs(local.x), abs(local.y)) < 0.75 * h && local.z < 0.5 * h) return node_irradiance(node, p, n, receiver_texel, l, spread);
+    // The part of the cell its light falls on (its spot).
+    vec2 half_widths = vec2(h);
+    if (u_spots) half_widths *= unpackHalf2x16(floatBitsToUint(node_light[node].spot.w));
     float d2 = max(dot(to_node, to_node), 1e-30);
     l = to_node * inversesqrt(d2);
     float area = nodes[node].area.x;
     spread = area / (PI * d2 + area);
-    float factor = square_irradiance_factor(to_node, frame[0], frame[1], h, n);
+    float factor = rectangle_irradiance_factor(to_node, frame[0], frame[1], half_widths, n);
     if (factor <= 0.0) return vec3(0.0);
     float v = visibility(nodes[node].links.z, p, receiver_texel);
-    return node_light[node].radiance.rgb * (factor * area / side2) * v;
+    return node_light[node].radiance.rgb * (factor * area / (4.0 * half_widths.x * half_widths.y)) * v;
 }
 
 // Upper bound of the irradiance a node can give the receiver (0 when it lies wholly behind either

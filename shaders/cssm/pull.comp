@@ -1,7 +1,8 @@
 #version 450 core
-// Pull (§4.1.1): leaves take their texel's radiance and normal; each internal node, a level at a
-// time from the deepest, the area-weighted mean of its two children's radiance and the
-// luminance-weighted mean of their lobes (CssmNodeLight in cssm/cssm_layout.h).
+// Pull (§4.1.1): leaves take their texel's radiance, normal and spot; each internal node, a level at
+// a time from the deepest, the area-weighted mean of its two children's radiance and the
+// luminance-weighted mean of their lobes, and sends from its centre (CssmNodeLight in
+// cssm/cssm_layout.h).
 layout(local_size_x = 64) in;
 #include "common/compute.glsl"
 #define CSSM_BRDF(l, spread) 1.0
@@ -10,10 +11,33 @@ layout(local_size_x = 64) in;
 
 layout(std430, binding = CSSM_BINDING_TEXEL_IN) readonly buffer CssmTexelIn { vec4 texel_in[]; };
 layout(std430, binding = CSSM_BINDING_LEVEL_NODES) readonly buffer CssmLevelNodes { uint level_nodes[]; };
+layout(std430, binding = CSSM_BINDING_TEXEL_SPOTS) readonly buffer CssmTexelSpots { vec4 texel_spots[]; };
 
 uniform bool u_leaves;
+uniform bool u_holds_direct;  // the source holds the lights' light on the texels
 uniform uint u_first;
 uniform uint u_count;
+
+// A leaf's spot (CssmNodeLight in cssm/cssm_layout.h), `radiance` being all it sends.
+vec4 leaf_spot(uint texel, vec3 radiance) {
+    vec3 position = texels[texel].position_area.xyz;
+    vec4 light_sum = texel_spots[2u * texel];
+    if (!u_spots || !u_holds_direct || !(light_sum.w > 0.0)) return vec4(position, uintBitsToFloat(packHalf2x16(vec2(1.0))));
+    float share = clamp(light_sum.w / max(luminance(radiance), 1e-30), 0.0, 1.0);
+    vec3 offset = light_sum.xyz / light_sum.w;
+    mat3 frame = tangent_frame(texels[texel].normal_map.xyz);
+    vec2 along = vec2(dot(offset, frame[0]), dot(offset, frame[1]));
+    vec4 spreads = texel_spots[2u * texel + 1u];
+    vec2 lit = max(spreads.xy / light_sum.w - along * along, vec2(0.0));
+    // The spreads are of the samples, at the middles of k = 4 sub-cells a side: k lit in a row spread
+    // s^2 (k^2 - 1) / 12 for sub-cells of width s, where the sub-cells they stand for spread s^2 k^2 /
+    // 12. So the lit part's width over the cell's is sqrt((15 lit + all) / (16 all)): a quarter for one
+    // row, a half for two, all of it for four.
+    const float k2 = float(CSSM_TEXEL_SAMPLES);
+    vec2 widths = vec2(spreads.z > 0.0 ? clamp(sqrt(((k2 - 1.0) * lit.x + spreads.z) / (k2 * spreads.z)), 0.25, 1.0) : 1.0,
+                       spreads.w > 0.0 ? clamp(sqrt(((k2 - 1.0) * lit.y + spreads.w) / (k2 * spreads.w)), 0.25, 1.0) : 1.0);
+    return vec4(position + share * offset, uintBitsToFloat(packHalf2x16(mix(vec2(1.0), widths, share))));
+}
 
 void main() {
     uint i = thread_index();
@@ -24,6 +48,7 @@ void main() {
         if (texel != CSSM_NONE) {
             node_light[node].radiance = vec4(texel_in[texel].rgb, 0.0);
             node_light[node].lobe = vec4(texels[texel].normal_map.xyz, 1.0);
+            node_light[node].spot = leaf_spot(texel, texel_in[texel].rgb);
         }
         return;
     }
@@ -41,4 +66,5 @@ void main() {
     }
     vec3 v = (node_light[left].lobe.xyz * w_left + node_light[right].lobe.xyz * w_right) / max(w_left + w_right, 1e-30);
     node_light[node].lobe = vec4(v, min(length(v), 1.0));
+    node_light[node].spot = vec4(nodes[node].centre_radius.xyz, uintBitsToFloat(packHalf2x16(vec2(1.0))));
 }

@@ -22,6 +22,7 @@ GatherSettings GatherSettings::of(const FrameContext& frame) {
     settings.pcf = frame.knob_int("pcf");
     settings.jitter_frames = frame.knob_int("jitter_frames");
     settings.per_texel = frame.knob_int("per_texel") != 0;
+    settings.spots = frame.knob_int("texel_spots") != 0;
     return settings;
 }
 
@@ -70,6 +71,7 @@ void GatherTree::bind(const gpu::ShaderProgram& program, int pcf, float threshol
     program.set("u_pcf", pcf);
     program.set("u_threshold", threshold);
     program.set("u_jitter_seed", 0u);
+    program.set("u_spots", spots ? 1 : 0);
 }
 
 }  // namespace bounce::methods::cssm

@@ -19,6 +19,7 @@ struct GatherSettings {
     int pcf = 1;
     int jitter_frames = 0;
     bool per_texel = false;
+    bool spots = false;  // leaves send the lights' light from their spots (CssmNodeLight)
 
     static GatherSettings of(const FrameContext& frame);
 };
@@ -61,8 +62,9 @@ struct GatherTree {
     const TexelPlacement& placement;
     const GatherBatches& batches;
     const gpu::CounterBuffer& counters;
+    bool spots = false;  // leaves send from their spots (GatherSettings::spots)
 
-    // Binds every buffer cssm_tree.glsl declares and sets its uniforms, senders at their centres.
+    // Binds every buffer cssm_tree.glsl declares and sets its uniforms, senders unjittered.
     void bind(const gpu::ShaderProgram& program, int pcf, float threshold) const;
 };
 

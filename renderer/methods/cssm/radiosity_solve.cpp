@@ -23,6 +23,7 @@ const gpu::ShaderProgram& compute(const FrameContext& frame, const char* path, c
 void RadiositySolve::allocate(std::size_t texels) {
     for (gpu::Buffer* buffer : {&direct_, &bounce_, &total_, &irradiance_, &indirect_})
         *buffer = gpu::Buffer(std::max<std::size_t>(1, texels) * sizeof(glm::vec4), nullptr, 0);
+    spots_ = gpu::Buffer(std::max<std::size_t>(1, texels) * 2 * sizeof(glm::vec4), nullptr, 0);
 }
 
 void RadiositySolve::solve(const FrameContext& frame, const GatherTree& tree, const passes::ShadowMaps& shadows,
@@ -32,8 +33,8 @@ void RadiositySolve::solve(const FrameContext& frame, const GatherTree& tree, co
     glCopyNamedBufferSubData(direct_.id(), bounce_.id(), 0, 0, static_cast<GLsizeiptr>(direct_.bytes()));
     glClearNamedBufferData(indirect_.id(), GL_RGBA32F, GL_RGBA, GL_FLOAT, nullptr);
     const int atlas_bounces = settings.per_texel ? settings.bounces : settings.bounces - 1;
-    for (int b = 1; b <= atlas_bounces; ++b) bounce(frame, tree, settings);
-    pull(frame, tree, total_);
+    for (int b = 1; b <= atlas_bounces; ++b) bounce(frame, tree, settings, /*from_direct=*/b == 1);
+    pull(frame, tree, total_, /*holds_direct=*/true, settings.spots);
 }
 
 void RadiositySolve::direct_light(const FrameContext& frame, const GatherTree& tree, const passes::ShadowMaps& shadows,
@@ -42,6 +43,7 @@ void RadiositySolve::direct_light(const FrameContext& frame, const GatherTree& t
     const gpu::ShaderProgram& program = compute(frame, "cssm/atlas_direct.comp", tree, settings);
     const std::size_t texel_count = tree.bake.bake().texel_count();
     gpu::bind_storage(CSSM_BINDING_TEXEL_OUT, direct_);
+    gpu::bind_storage(CSSM_BINDING_TEXEL_SPOTS, spots_);
     program.set("u_emission_only", 1);
     program.dispatch_threads(texel_count);
     program.set("u_emission_only", 0);
@@ -55,8 +57,9 @@ void RadiositySolve::direct_light(const FrameContext& frame, const GatherTree& t
     gpu::storage_barrier();
 }
 
-void RadiositySolve::bounce(const FrameContext& frame, const GatherTree& tree, const GatherSettings& settings) {
-    pull(frame, tree, bounce_);
+void RadiositySolve::bounce(const FrameContext& frame, const GatherTree& tree, const GatherSettings& settings,
+                            bool from_direct) {
+    pull(frame, tree, bounce_, from_direct, settings.spots);
     gpu::GpuTimers::Scope timing(frame.timers, "cssm_atlas_gather");
     const std::size_t texel_count = tree.bake.bake().texel_count();
     const gpu::ShaderProgram& gather = compute(frame, "cssm/gather.comp", tree, settings);
@@ -79,12 +82,16 @@ void RadiositySolve::bounce(const FrameContext& frame, const GatherTree& tree, c
     std::swap(bounce_, irradiance_);  // this bounce's exitance is the next one's source
 }
 
-void RadiositySolve::pull(const FrameContext& frame, const GatherTree& tree, const gpu::Buffer& source) const {
+void RadiositySolve::pull(const FrameContext& frame, const GatherTree& tree, const gpu::Buffer& source,
+                          bool holds_direct, bool spots) const {
     gpu::GpuTimers::Scope timing(frame.timers, "cssm_pull");
     const gpu::ShaderProgram& program = frame.shaders.get(gpu::ProgramSource::compute_shader("cssm/pull.comp"));
     program.use();
     tree.placement.bind();
     gpu::bind_storage(CSSM_BINDING_TEXEL_IN, source);
+    gpu::bind_storage(CSSM_BINDING_TEXEL_SPOTS, spots_);
+    program.set("u_spots", spots ? 1 : 0);
+    program.set("u_holds_direct", holds_direct ? 1 : 0);
     const RadiosityTree& hierarchy = tree.bake.bake().tree;
     const auto node_count = static_cast<unsigned>(hierarchy.nodes.size());
     program.set("u_leaves", 1);

@@ -23,19 +23,22 @@ public:
     // Each texel's irradiance of every bounce, summed (the per-texel display's).
     const gpu::Buffer& indirect() const { return indirect_; }
     std::size_t bytes() const {
-        return direct_.bytes() + bounce_.bytes() + total_.bytes() + irradiance_.bytes() + indirect_.bytes();
+        return direct_.bytes() + bounce_.bytes() + total_.bytes() + irradiance_.bytes() + indirect_.bytes() + spots_.bytes();
     }
 
 private:
     void direct_light(const FrameContext& frame, const GatherTree& tree, const passes::ShadowMaps& shadows,
                       const GatherSettings& settings) const;
     // One bounce: every texel gathers from bounce_ into irradiance_; its exitance becomes the next
-    // bounce's source and is added to total_.
-    void bounce(const FrameContext& frame, const GatherTree& tree, const GatherSettings& settings);
-    // The nodes' area-weighted mean of `source`, leaves first, then a level at a time upwards.
-    void pull(const FrameContext& frame, const GatherTree& tree, const gpu::Buffer& source) const;
+    // bounce's source and is added to total_. The first gathers the direct light (`from_direct`).
+    void bounce(const FrameContext& frame, const GatherTree& tree, const GatherSettings& settings, bool from_direct);
+    // The nodes' area-weighted mean of `source`, leaves first, then a level at a time upwards; with
+    // `spots`, where it holds the lights' light (`holds_direct`), leaves send it from their spots.
+    void pull(const FrameContext& frame, const GatherTree& tree, const gpu::Buffer& source, bool holds_direct,
+              bool spots) const;
 
     gpu::Buffer direct_, bounce_, total_, irradiance_, indirect_;
+    gpu::Buffer spots_;  // where the lights' light falls on each texel (CSSM_BINDING_TEXEL_SPOTS)
 };
 
 }  // namespace bounce::methods::cssm
