@@ -1,6 +1,6 @@
-// Exact irradiance from a uniformly bright square, for senders too near a receiver for a point or a
-// disk at their centre to stand in (a floor beside the wall that lights it). Lambert's contour
-// integral over the square's edges, the square first clipped to the receiver's hemisphere:
+// Exact irradiance from a uniformly bright rectangle, for senders too near a receiver for a point or
+// a disk at their centre to stand in (a floor beside the wall that lights it). Lambert's contour
+// integral over the rectangle's edges, the rectangle first clipped to the receiver's hemisphere:
 // E / L = 1/2 sum_i theta_i (n . unit(v_i x v_(i+1))), v_i its corners as seen from the receiver.
 #include "common/math.glsl"
 
@@ -13,10 +13,6 @@ float contour_edge(vec3 a, vec3 b, vec3 n) {
     return (s > 1e-7 ? angle / s : 1.0) * dot(n, c);
 }
 
-// Irradiance per unit radiance (pi times the point-to-area form factor) at the origin, normal n,
-// from the square of centre c (relative to the receiver), unit axes e1, e2 and half-edge h; its
-// emitting side is e1 x e2's. 0 where the receiver is behind it or in its plane (within a thousandth
-// of its edge: the other side of a double-sided sheet, at the same place, must receive nothing).
 // One edge a -> b of a polygon being clipped to n . v > 0 (Sutherland-Hodgman): emits a where it is
 // above, and the crossing where the edge crosses, adding each emitted vertex's edge to `sum`.
 void clip_and_sum(vec3 a, vec3 b, vec3 n, inout vec3 first, inout vec3 last, inout int emitted, inout float sum) {

@@ -244,7 +244,7 @@ float leaf_square2(uint node) { return max(nodes[node].area.x, u_texel_size * u_
 // Leaves within two edges of their square are gathered after the walk (gather_cut): a batch of
 // receivers runs a branch's code when any of them takes it, and in the walk the contour integral
 // doubled the final gather's time on llvmpipe, near leaves or none. Seen from beside its square, a
-// leaf sends by the square, exactly: by
+// leaf sends by the square (with spots, by the rectangle of it that its light covers), exactly: by
 // the disk at its centre's cosines, a floor a tenth of a texel from the wall that lit it had 0.03 of
 // its light. Over the square's middle and within a quarter of its edge of its plane (its other
 // side, a curved surface's next texel, what its cube map cannot see), the disk's estimate stands.
@@ -259,7 +259,7 @@ vec3 near_leaf_irradiance(uint node, vec3 p, vec3 n, uint receiver_texel, out ve
     vec3 to_node = sender_position(node) - p;
     mat3 frame = tangent_frame(texels[texel].normal_map.xyz);
     float h = 0.5 * sqrt(side2);
-    vec3 local = -(nodes[node].centre_radius.xyz - p) * frame;
+    vec3 local = -(nodes[node].centre_radius.xyz - p) * frame;  // from the cell's own, unjittered centre
     if (max(abs(local.x), abs(local.y)) < 0.75 * h && local.z < 0.5 * h) return node_irradiance(node, p, n, receiver_texel, l, spread);
     // The part of the cell its light falls on (its spot).
     vec2 half_widths = vec2(h);
@@ -267,6 +267,8 @@ vec3 near_leaf_irradiance(uint node, vec3 p, vec3 n, uint receiver_texel, out ve
     float d2 = max(dot(to_node, to_node), 1e-30);
     l = to_node * inversesqrt(d2);
     float area = nodes[node].area.x;
+    // Of the whole texel, not its spot: a glossy receiver's lobe is widened more than the spot's
+    // size asks (the safe side, a blur rather than a sharp highlight).
     spread = area / (PI * d2 + area);
     float factor = rectangle_irradiance_factor(to_node, frame[0], frame[1], half_widths, n);
     if (factor <= 0.0) return vec3(0.0);

@@ -18,7 +18,11 @@ uniform bool u_holds_direct;  // the source holds the lights' light on the texel
 uniform uint u_first;
 uniform uint u_count;
 
-// A leaf's spot (CssmNodeLight in cssm/cssm_layout.h), `radiance` being all it sends.
+// A leaf's spot (CssmNodeLight in cssm/cssm_layout.h), `radiance` being all it sends. The light's
+// offset is from the samples' mean; a texel its chart covers in part stands at its sample nearest
+// their centroid and repeats samples, so there the spot is off by as much as that point is from the
+// mean, and the widths, which take a full 4x4 grid, shrink less than the light's part: both err
+// towards sending from the whole texel.
 vec4 leaf_spot(uint texel, vec3 radiance) {
     vec3 position = texels[texel].position_area.xyz;
     vec4 light_sum = texel_spots[2u * texel];

@@ -171,7 +171,8 @@ private:
 // The atlas holds about atlas_resolution^2 texels (texel edge = sqrt(area) / atlas_resolution; chart
 // padding adds some), more by the share of the area that is double-sided (both sides have texels).
 // Each texel costs on the GPU its CssmTexel and its direct light's sample points, about two
-// radiosity-tree nodes with their radiance and five vec4 solve buffers; on the host its atlas entry
+// radiosity-tree nodes with their radiance, five vec4 solve buffers and two vec4 of its spot sums; on
+// the host its atlas entry
 // and the bake's arrays. The compressed depth runs depend on the scene: at least one run per cube-map
 // pixel per group (the static objects, and each moving one), and the bake's chunk of 32 uncompressed
 // maps on the host.
@@ -187,7 +188,7 @@ MemoryEstimate estimate(const EstimateInput& input) {
     }
     const auto texels = static_cast<std::uint64_t>(input.knob("atlas_resolution") * input.knob("atlas_resolution") * both_sides);
     constexpr std::uint64_t kGpuPerTexel = sizeof(glsl::CssmTexel) + kTexelSamples * 16 +
-                                           2 * (sizeof(glsl::CssmNode) + sizeof(glsl::CssmNodeLight)) + 5 * 16;
+                                           2 * (sizeof(glsl::CssmNode) + sizeof(glsl::CssmNodeLight)) + (5 + 2) * 16;
     constexpr std::uint64_t kHostPerTexel =
         sizeof(AtlasTexel) + (6 + kTexelSamples) * sizeof(glm::vec3) + 3 * sizeof(std::uint32_t);
     estimate.push_back({"atlas_texels", texels * (kGpuPerTexel + kHostPerTexel), "atlas_resolution"});
