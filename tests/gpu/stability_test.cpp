@@ -249,11 +249,16 @@ TEST(StabilityDimLights, EveryPhotonAndVplOfADimLightIsKept) {
 // cssm with its refinement oracle on, as its presets run it: the oracle compares tone-mapped bounds
 // with a threshold, the same at any scale, so the cut is the same but for rounding right at the
 // threshold; the frame's mean at scale 1e-3 and 1e4 agrees with scale 1's to 1e-3 (each flipped
-// decision swaps a node's gather for its children's, a difference far below it).
-TEST(StabilityCssm, UniformScaleInvarianceWithTheOracleOn) {
+// decision swaps a node's gather for its children's, a difference far below it). With texel spots
+// too (on from medium up): their offsets are world lengths taken from the samples', their widths
+// ratios of the samples' spreads.
+class StabilityCssm : public ::testing::TestWithParam<bool> {};
+
+TEST_P(StabilityCssm, UniformScaleInvarianceWithTheOracleOn) {
     RenderRequest request;
     request.method = "cssm";
     request.preset = "draft";
+    request.knobs = {{"texel_spots", GetParam() ? 1.0 : 0.0}};
     request.width = request.height = 48;
     const auto mean_of = [](const image::Frame& frame) {
         double sum = 0.0;
@@ -273,6 +278,8 @@ TEST(StabilityCssm, UniformScaleInvarianceWithTheOracleOn) {
 
 INSTANTIATE_TEST_SUITE_P(Methods, Stability, ::testing::Values("direct", "vct", "isr", "cssm"),
                          [](const ::testing::TestParamInfo<std::string>& info) { return info.param; });
+INSTANTIATE_TEST_SUITE_P(Spots, StabilityCssm, ::testing::Bool(),
+                         [](const ::testing::TestParamInfo<bool>& info) { return info.param ? "spots" : "whole_texels"; });
 
 }  // namespace
 }  // namespace bounce::test
