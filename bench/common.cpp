@@ -47,7 +47,8 @@ void Arguments::knob(methods::KnobValues& knobs) {
     char* end = nullptr;
     const double number = equals == std::string::npos ? 0.0 : std::strtod(assignment.c_str() + equals + 1, &end);
     if (equals == std::string::npos || equals == 0 || end == assignment.c_str() + equals + 1 || *end != '\0') {
-        std::fprintf(stderr, "%s: %s takes NAME=VALUE, not '%s'\n", program_.c_str(), flag_.c_str(), assignment.c_str());
+        std::fprintf(stderr, "%s: %s takes NAME=VALUE, not '%s'\n", program_.c_str(), flag_.c_str(),
+                     assignment.c_str());
         std::exit(2);
     }
     knobs[assignment.substr(0, equals)] = number;

@@ -7,8 +7,8 @@
 // - with --region, the same over a rectangle of pixels that `direct` leaves dark;
 // - the whole frame's relMSE against the 1-bounce reference, and the share of it its worst pixels
 //   carry, with what those pixels read.
-// --knob NAME=VALUE sets a cssm knob over each preset's. --lights sun|lamps keeps the directional lights or the others; --matte sets every specular and
-// metallic factor to 0.
+// --knob NAME=VALUE sets a cssm knob over each preset's; --lights sun|lamps keeps the directional
+// lights or the others; --matte sets every specular and metallic factor to 0.
 #include "bench/common.hpp"
 #include "bench/corpus.hpp"
 #include "renderer/base/log.hpp"
@@ -159,7 +159,8 @@ int main(int argc, char** argv) {
         auto resources = renderer.upload(scene);
         const image::Frame direct = renderer.render(*resources, bench::linear_request("direct", "high", {}, options.size)).frame;
         for (const std::string& preset : options.presets) {
-            const image::Frame cssm = renderer.render(*resources, bench::linear_request("cssm", preset, options.knobs, options.size)).frame;
+            const RenderRequest request = bench::linear_request("cssm", preset, options.knobs, options.size);
+            const image::Frame cssm = renderer.render(*resources, request).frame;
             report(preset, options, truth, truth_direct, direct, cssm);
         }
         return 0;

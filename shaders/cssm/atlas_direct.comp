@@ -56,7 +56,8 @@ void main() {
         LightIncidence incidence = light_incidence(light, p);
         float cos_theta = dot(n, incidence.l);
         if (cos_theta <= 0.0) continue;
-        vec3 e = incidence.irradiance * cos_theta * shadow_visibility(u_light_type, p, n, u_light_position, incidence.distance);
+        vec3 e = incidence.irradiance * cos_theta *
+                 shadow_visibility(u_light_type, p, n, u_light_position, incidence.distance);
         irradiance += e;
         // This sample's part of the texel's exitance luminance.
         float w = luminance(finite_or_zero(albedo * INV_PI * e / float(CSSM_TEXEL_SAMPLES)));

@@ -18,6 +18,16 @@ uniform bool u_holds_direct;  // the source holds the lights' light on the texel
 uniform uint u_first;
 uniform uint u_count;
 
+// The width of a texel's lit part over its cell's along one axis, from the light's spread there
+// (`lit`) and the samples' own (`all`). The samples stand at the middles of k = 4 sub-cells a side:
+// j lit in a row spread s^2 (j^2 - 1) / 12 for sub-cells of width s, where the j sub-cells they
+// stand for spread s^2 j^2 / 12, and all k samples s^2 (k^2 - 1) / 12. So the width is
+// sqrt(((k^2 - 1) lit + all) / (k^2 all)): a quarter for one row, a half for two, all of it for four.
+float lit_width(float lit, float all) {
+    const float k2 = float(CSSM_TEXEL_SAMPLES);
+    return all > 0.0 ? clamp(sqrt(((k2 - 1.0) * lit + all) / (k2 * all)), inversesqrt(k2), 1.0) : 1.0;
+}
+
 // A leaf's spot (CssmNodeLight in cssm/cssm_layout.h), `radiance` being all it sends. The light's
 // offset is from the samples' mean; a texel its chart covers in part stands at its sample nearest
 // their centroid and repeats samples, so there the spot is off by as much as that point is from the
@@ -26,20 +36,15 @@ uniform uint u_count;
 vec4 leaf_spot(uint texel, vec3 radiance) {
     vec3 position = texels[texel].position_area.xyz;
     vec4 light_sum = texel_spots[2u * texel];
-    if (!u_spots || !u_holds_direct || !(light_sum.w > 0.0)) return vec4(position, uintBitsToFloat(packHalf2x16(vec2(1.0))));
+    float whole = uintBitsToFloat(packHalf2x16(vec2(1.0)));
+    if (!u_spots || !u_holds_direct || !(light_sum.w > 0.0)) return vec4(position, whole);
     float share = clamp(light_sum.w / max(luminance(radiance), 1e-30), 0.0, 1.0);
     vec3 offset = light_sum.xyz / light_sum.w;
     mat3 frame = tangent_frame(texels[texel].normal_map.xyz);
     vec2 along = vec2(dot(offset, frame[0]), dot(offset, frame[1]));
     vec4 spreads = texel_spots[2u * texel + 1u];
     vec2 lit = max(spreads.xy / light_sum.w - along * along, vec2(0.0));
-    // The spreads are of the samples, at the middles of k = 4 sub-cells a side: k lit in a row spread
-    // s^2 (k^2 - 1) / 12 for sub-cells of width s, where the sub-cells they stand for spread s^2 k^2 /
-    // 12. So the lit part's width over the cell's is sqrt((15 lit + all) / (16 all)): a quarter for one
-    // row, a half for two, all of it for four.
-    const float k2 = float(CSSM_TEXEL_SAMPLES);
-    vec2 widths = vec2(spreads.z > 0.0 ? clamp(sqrt(((k2 - 1.0) * lit.x + spreads.z) / (k2 * spreads.z)), 0.25, 1.0) : 1.0,
-                       spreads.w > 0.0 ? clamp(sqrt(((k2 - 1.0) * lit.y + spreads.w) / (k2 * spreads.w)), 0.25, 1.0) : 1.0);
+    vec2 widths = vec2(lit_width(lit.x, spreads.z), lit_width(lit.y, spreads.w));
     return vec4(position + share * offset, uintBitsToFloat(packHalf2x16(mix(vec2(1.0), widths, share))));
 }
 

@@ -277,9 +277,9 @@ TEST_P(StabilityCssm, UniformScaleInvarianceWithTheOracleOn) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Methods, Stability, ::testing::Values("direct", "vct", "isr", "cssm"),
-                         [](const ::testing::TestParamInfo<std::string>& info) { return info.param; });
+                         [](const ::testing::TestParamInfo<std::string>& method) { return method.param; });
 INSTANTIATE_TEST_SUITE_P(Spots, StabilityCssm, ::testing::Bool(),
-                         [](const ::testing::TestParamInfo<bool>& info) { return info.param ? "spots" : "whole_texels"; });
+                         [](const ::testing::TestParamInfo<bool>& spots) { return spots.param ? "spots" : "whole_texels"; });
 
 }  // namespace
 }  // namespace bounce::test

@@ -43,7 +43,8 @@ public:
         // What the atlas solution depends on, but the lights' power: a change of any of it solves again.
         Hasher hash;
         hash.add(passes::light_view_fingerprint(frame.scene, frame.knob_int("shadow_map_size"), /*with_power=*/false));
-        hash.add(settings_.bounces).add(settings_.per_texel).add(settings_.pcf).add(settings_.threshold).add(settings_.spots);
+        hash.add(settings_.bounces).add(settings_.per_texel).add(settings_.pcf).add(settings_.threshold);
+        hash.add(settings_.spots);
         hash.add(bake_.generation());
         const std::uint64_t lighting = hash.value();
         batches_.update(settings_.pcf, bake_, placement_);

@@ -23,7 +23,8 @@ public:
     // Each texel's irradiance of every bounce, summed (the per-texel display's).
     const gpu::Buffer& indirect() const { return indirect_; }
     std::size_t bytes() const {
-        return direct_.bytes() + bounce_.bytes() + total_.bytes() + irradiance_.bytes() + indirect_.bytes() + spots_.bytes();
+        return direct_.bytes() + bounce_.bytes() + total_.bytes() + irradiance_.bytes() + indirect_.bytes() +
+               spots_.bytes();
     }
 
 private:
