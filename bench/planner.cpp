@@ -352,8 +352,9 @@ int main(int argc, char** argv) {
                 for (const auto& [preset, walls] : a.thin_walls.presets) {
                     if (a.thin_walls.leaks(preset)) leaks += " " + preset;
                 }
-                fmt::print("{}: {:.0f} ms, stopped error {}, noise {}, sample ns {}, occluded {:.3f} ({} pairs), leaks:{}\n",
-                           bench_scene.name, a.analysis_ms, fmt::join(a.bounces.stopped_error, " "),
+                fmt::print("{}: {:.0f} ms, tracer built in {:.2f} ms, stopped error {}, noise {}, sample ns {}, occluded {:.3f} "
+                           "({} pairs), leaks:{}\n",
+                           bench_scene.name, a.analysis_ms, a.bounces.tracer_build_ms, fmt::join(a.bounces.stopped_error, " "),
                            fmt::join(a.bounces.noise_per_sample, " "), fmt::join(a.bounces.sample_ns, " "),
                            a.visibility.occluded_fraction, a.visibility.pairs, leaks);
             }

@@ -27,7 +27,9 @@ double EstimateInput::knob(std::string_view name) const { return resolved_knob(k
 
 MemoryEstimate direct_light_estimate(const EstimateInput& input) {
     return {{"gbuffer", passes::GBufferPass::bytes_for(input.width, input.height), "frame size"},
-            {"shadow_maps", passes::ShadowMaps::bytes_for(input.scene, input.knob_int("shadow_map_size")), "shadow_map_size"}};
+            {"shadow_maps", passes::ShadowMaps::bytes_for(input.scene, input.knob_int("shadow_map_size"),
+                                                                        input.knob_int("shadow_cascades")),
+             "shadow_map_size"}};
 }
 
 }  // namespace bounce::methods

@@ -19,6 +19,12 @@ std::string join(const std::vector<std::string>& items) {
 }
 }  // namespace
 
+KnobSpec shadow_cascades_knob() {
+    return {"shadow_cascades", 0, 4, true,
+            "per directional light, shadow maps of shadow_map_size fitted to what the camera sees, nested to depths "
+            "far / 3^k: finer shadows near the camera, redrawn when it moves (0: the map over the whole scene alone)"};
+}
+
 const std::vector<std::string>& preset_names() {
     static const std::vector<std::string> names = {"draft", "low", "medium", "high", "ultra"};
     return names;

@@ -21,6 +21,11 @@ struct KnobSpec {
     std::string description;
 };
 
+// The knob of every GPU method's direct light that sets each directional light's view cascades
+// (passes::ShadowMaps), and what every preset sets it to.
+KnobSpec shadow_cascades_knob();
+inline constexpr double kPresetShadowCascades = 3;
+
 // Presets every method defines, from fastest to most accurate.
 const std::vector<std::string>& preset_names();
 

@@ -26,7 +26,7 @@ void DirectLightPass::render(const PassContext& context, const GBufferPass& gbuf
         if (!shadows.has_map(i)) continue;  // no power: contributes nothing
         const scene::Light& light = context.scene.lights[i];
         set_light_uniforms(program, light);
-        shadows.bind(program, i);
+        shadows.bind(program, i, ShadowMaps::Coverage::view);
         triangle_.draw();
     }
 }

@@ -2,25 +2,151 @@
 
 #include "common/shared_layout.h"
 #include "renderer/base/error.hpp"
+#include "renderer/base/hash.hpp"
 #include "renderer/passes/light_geometry.hpp"
+
+#include <fmt/format.h>
 
 #include <glm/gtc/matrix_transform.hpp>
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <optional>
 
 namespace bounce::passes {
+
+static_assert(ShadowMaps::kMaxViewCascades == BOUNCE_SHADOW_VIEW_CASCADES, "shaders/common/shadows.glsl's arrays");
+
 namespace {
 
-gpu::Texture make_depth_map(GLenum target, int size) {
-    gpu::Texture texture({target, GL_DEPTH_COMPONENT32F, size, size});
+gpu::Texture make_depth_map(GLenum target, int size, int layers = 1) {
+    gpu::Texture texture({target, GL_DEPTH_COMPONENT32F, size, size, layers});
     glTextureParameteri(texture.id(), GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
     glTextureParameteri(texture.id(), GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
     texture.set_filter(GL_LINEAR, GL_LINEAR);  // bilinear percentage-closer filtering
     return texture;
 }
 
+// A directional light's map looks along the light from twice the scene's bounding radius behind its
+// centre, over depths 0.5 r to 3 r: all of the scene, whatever the window across the light.
+struct DirectionalFrame {
+    glm::mat4 view;
+    float radius = 0.0f;
+};
+
+DirectionalFrame directional_frame(const scene::Aabb& bounds, const glm::vec3& direction) {
+    const float radius = std::max(0.5f * glm::length(bounds.extent()), 1e-6f);
+    return {directional_view(bounds.center(), glm::normalize(direction), 2.0f * radius), radius};
+}
+
+glm::mat4 directional_projection(const glm::vec2& centre, float half, float radius) {
+    return glm::ortho(centre.x - half, centre.x + half, centre.y - half, centre.y + half, 0.5f * radius, 3.0f * radius);
+}
+
+std::uint64_t view_cascades_fingerprint(std::uint64_t map, const PassContext& context, int cascades) {
+    const scene::Camera& camera = context.camera;
+    Hasher hash;
+    hash.add(map).add(cascades).add(camera.position).add(camera.orientation).add(camera.vertical_fov);
+    hash.add(camera.z_near).add(camera.z_far).add(context.width).add(context.height);
+    return hash.value() | 1u;  // 0 stands for no cascades
+}
+
+// A cascade's window across the light: a square about `centre`, `half` wide each way.
+struct CascadeWindow {
+    glm::vec2 centre{0.0f};
+    float half = 0.0f;
+};
+
+// The window that holds what the camera sees up to `depth` (the pyramid from its eye to the four
+// corners of the view at that depth), cut to the scene, in the light view's x and y; nullopt where
+// the view holds none of the scene. Its size is a power of 2^(1/4) of the scene's map's and its
+// centre a whole number of texels, so that as the camera moves the texels stay where they were and
+// shadow edges do not crawl; two texels of margin keep the filter's footprint of a point at the
+// view's edge inside.
+std::optional<CascadeWindow> cascade_window(const scene::Camera& camera, float aspect, const DirectionalFrame& frame,
+                                            const scene::Aabb& bounds, int size, float depth) {
+    const float tan_vertical = std::tan(0.5f * camera.vertical_fov), tan_horizontal = tan_vertical * aspect;
+    const glm::vec3 forward = camera.forward(), up = camera.up(), right = glm::normalize(glm::cross(forward, up));
+    const auto across = [&](const glm::vec3& p) { return glm::vec2(frame.view * glm::vec4(p, 1.0f)); };
+    glm::vec2 lo = across(camera.position), hi = lo;
+    for (const float x : {-1.0f, 1.0f}) {
+        for (const float y : {-1.0f, 1.0f}) {
+            const glm::vec2 corner =
+                across(camera.position + depth * (forward + x * tan_horizontal * right + y * tan_vertical * up));
+            lo = glm::min(lo, corner), hi = glm::max(hi, corner);
+        }
+    }
+    glm::vec2 scene_lo(std::numeric_limits<float>::max()), scene_hi(-std::numeric_limits<float>::max());
+    for (int i = 0; i < 8; ++i) {
+        const glm::vec2 corner = across(bounds.corner(i));
+        scene_lo = glm::min(scene_lo, corner), scene_hi = glm::max(scene_hi, corner);
+    }
+    lo = glm::max(lo, scene_lo), hi = glm::min(hi, scene_hi);
+    if (!(hi.x > lo.x && hi.y > lo.y)) return std::nullopt;
+    const float wanted = 0.5f * std::max(hi.x - lo.x, hi.y - lo.y) * (1.0f + 4.0f / static_cast<float>(size));
+    // r 2^(-k/4): the smallest that holds the wanted half-width.
+    const float steps = std::floor(-4.0f * std::log2(std::max(wanted, 1e-30f) / frame.radius));
+    CascadeWindow window;
+    window.half = frame.radius * std::exp2(-std::max(steps, 0.0f) / 4.0f);
+    if (window.half < wanted) window.half *= std::exp2(0.25f);  // rounding at the step's edge
+    const float texel = 2.0f * window.half / static_cast<float>(size);
+    window.centre = glm::floor(0.5f * (lo + hi) / texel + 0.5f) * texel;
+    return window;
+}
+
 }  // namespace
+
+std::vector<ShadowMaps::ViewCascade> ShadowMaps::fit_view_cascades(const scene::Aabb& bounds, const glm::vec3& light_direction,
+                                                                   const scene::Camera& camera, int width, int height,
+                                                                   int size, int cascades) {
+    std::vector<ViewCascade> fitted;
+    if (bounds.empty() || size <= 0) return fitted;
+    const DirectionalFrame frame = directional_frame(bounds, light_direction);
+    const float far = camera.z_far > 0.0f ? camera.z_far : camera.far_plane_for(bounds);
+    const float aspect = height > 0 ? static_cast<float>(width) / static_cast<float>(height) : 1.0f;
+    const float scene_texel = 2.0f * frame.radius / static_cast<float>(size);
+    // Nested depths far / 3^k, finest first: a pixel's footprint grows with its depth, and so may
+    // the texels that shadow it.
+    for (int k = cascades - 1; k >= 0; --k) {
+        const float depth = far / std::pow(3.0f, static_cast<float>(k));
+        const auto window = cascade_window(camera, aspect, frame, bounds, size, depth);
+        if (!window) continue;
+        const float texel = 2.0f * window->half / static_cast<float>(size);
+        // One no finer than the scene's map adds nothing; one as fine as the cascade before holds
+        // what that one held (it sees farther), and takes its place.
+        if (!(texel < scene_texel)) continue;
+        if (!fitted.empty() && !(fitted.back().texel < texel)) fitted.pop_back();
+        fitted.push_back({directional_projection(window->centre, window->half, frame.radius) * frame.view, texel, depth});
+    }
+    return fitted;
+}
+
+void ShadowMaps::render_view_cascades(const PassContext& context, const gpu::ShaderProgram& program,
+                                      const scene::Light& light, LightMap& map, int size, int cascades) {
+    map.view_projections.clear();
+    map.view_texels.clear();
+    for (const ViewCascade& cascade : fit_view_cascades(context.scene.world_bounds(), light.direction, context.camera,
+                                                        context.width, context.height, size, cascades)) {
+        map.view_projections.push_back(cascade.view_projection);
+        map.view_texels.push_back(cascade.texel);
+    }
+    if (map.view_projections.empty()) {
+        map.view_depth = gpu::Texture();
+        return;
+    }
+    if (!map.view_depth || map.view_depth.width() != size || map.view_depth.desc().depth != cascades) {
+        map.view_depth = make_depth_map(GL_TEXTURE_2D_ARRAY, size, cascades);
+    }
+    program.set("u_store_distance", 0);
+    const float far_depth = 1.0f;
+    for (std::size_t layer = 0; layer < map.view_projections.size(); ++layer) {
+        framebuffer_.attach_depth_layer(map.view_depth, static_cast<int>(layer));
+        framebuffer_.check_complete("a directional light's view cascade");
+        glClearNamedFramebufferfv(framebuffer_.id(), GL_DEPTH, 0, &far_depth);
+        render_view(context, program, map.view_projections[layer]);
+    }
+}
 
 void ShadowMaps::render_view(const PassContext& context, const gpu::ShaderProgram& program,
                              const glm::mat4& view_projection) {
@@ -37,14 +163,18 @@ void ShadowMaps::render_view(const PassContext& context, const gpu::ShaderProgra
     });
 }
 
-void ShadowMaps::render(const PassContext& context, int size) {
+void ShadowMaps::render(const PassContext& context, int size, int view_cascades) {
+    BOUNCE_CHECK(view_cascades >= 0 && view_cascades <= kMaxViewCascades, "{} view cascades", view_cascades);
     const auto& lights = context.scene.lights;
     const std::uint64_t geometry = geometry_fingerprint(context.scene);
-    std::vector<std::uint64_t> fingerprints(lights.size());
+    std::vector<std::uint64_t> fingerprints(lights.size()), view_fingerprints(lights.size(), 0);
     bool stale = maps_.size() != lights.size();
     for (std::size_t i = 0; i < lights.size(); ++i) {
         fingerprints[i] = shadow_map_fingerprint(lights[i], geometry, size);
-        stale = stale || maps_[i].fingerprint != fingerprints[i];
+        if (view_cascades > 0 && lights[i].type == scene::LightType::directional && has_power(lights[i])) {
+            view_fingerprints[i] = view_cascades_fingerprint(fingerprints[i], context, view_cascades);
+        }
+        stale = stale || maps_[i].fingerprint != fingerprints[i] || maps_[i].view_fingerprint != view_fingerprints[i];
     }
     last_reused_ = !stale;
     if (last_reused_) {
@@ -61,6 +191,7 @@ void ShadowMaps::render(const PassContext& context, int size) {
         for (std::size_t i = 0; i < maps_.size(); ++i) {
             maps_[i] = LightMap{};
             maps_[i].fingerprint = fingerprints[i];
+            maps_[i].view_fingerprint = view_fingerprints[i];
         }
         return;
     }
@@ -73,6 +204,18 @@ void ShadowMaps::render(const PassContext& context, int size) {
     // Both faces cast shadows: closed meshes and open single-sided walls alike.
     context.state.apply({.depth_test = true, .depth_write = true, .depth_func = GL_LESS, .cull = gpu::Cull::none});
 
+    for (std::size_t i = 0; i < lights.size(); ++i) {
+        LightMap& map = maps_[i];
+        if (map.view_fingerprint == view_fingerprints[i]) continue;
+        map.view_fingerprint = view_fingerprints[i];
+        if (view_fingerprints[i] == 0) {
+            map.view_depth = gpu::Texture();
+            map.view_projections.clear();
+            map.view_texels.clear();
+            continue;
+        }
+        render_view_cascades(context, program, lights[i], map, size, view_cascades);
+    }
     for (std::size_t i = 0; i < lights.size(); ++i) {
         const scene::Light& light = lights[i];
         LightMap& map = maps_[i];
@@ -122,12 +265,10 @@ void ShadowMaps::render(const PassContext& context, int size) {
             program.set("u_light_position", light.position);
             program.set("u_far", map.far);
         } else {
-            const glm::vec3 center = bounds.center();
-            const float radius = std::max(0.5f * glm::length(bounds.extent()), 1e-6f);
-            map.far = 3.0f * radius;
-            map.texel_world = 2.0f * radius / static_cast<float>(size);
-            map.view_projection = glm::ortho(-radius, radius, -radius, radius, radius * 0.5f, map.far) *
-                                  directional_view(center, direction, 2.0f * radius);
+            const DirectionalFrame frame = directional_frame(bounds, direction);
+            map.far = 3.0f * frame.radius;
+            map.texel_world = 2.0f * frame.radius / static_cast<float>(size);
+            map.view_projection = directional_projection(glm::vec2(0.0f), frame.radius, frame.radius) * frame.view;
             program.set("u_store_distance", 0);
         }
         render_view(context, program, map.view_projection);
@@ -138,9 +279,19 @@ bool ShadowMaps::has_map(std::size_t light_index) const {
     return light_index < maps_.size() && maps_[light_index].valid;
 }
 
-void ShadowMaps::bind(const gpu::ShaderProgram& program, std::size_t light_index) const {
+void ShadowMaps::bind(const gpu::ShaderProgram& program, std::size_t light_index, Coverage coverage) const {
     BOUNCE_CHECK(has_map(light_index), "light {} has no shadow map", light_index);
     const LightMap& map = maps_[light_index];
+    const bool view = coverage == Coverage::view && map.view_depth;
+    program.set("u_shadow_view_cascades", view ? static_cast<int>(map.view_projections.size()) : 0);
+    if (view) {
+        for (std::size_t k = 0; k < map.view_projections.size(); ++k) {
+            program.set(fmt::format("u_shadow_view_proj[{}]", k), map.view_projections[k]);
+            program.set(fmt::format("u_shadow_view_texel[{}]", k), map.view_texels[k]);
+        }
+        glBindTextureUnit(BOUNCE_UNIT_SHADOW_VIEW, map.view_depth.id());
+        glBindSampler(BOUNCE_UNIT_SHADOW_VIEW, 0);
+    }
     program.set("u_shadows_enabled", 1);
     program.set("u_light_view_proj", map.view_projection);
     program.set("u_shadow_far", map.far);
@@ -151,14 +302,23 @@ void ShadowMaps::bind(const gpu::ShaderProgram& program, std::size_t light_index
     glBindSampler(unit, 0);
 }
 
-std::uint64_t ShadowMaps::bytes_for(const scene::Scene& scene, int size) {
-    return light_views_with_power(scene) * static_cast<std::uint64_t>(size) * static_cast<std::uint64_t>(size) * 4;
+std::uint64_t ShadowMaps::bytes_for(const scene::Scene& scene, int size, int view_cascades) {
+    std::uint64_t views = light_views_with_power(scene);
+    for (const scene::Light& light : scene.lights) {
+        if (light.type == scene::LightType::directional && has_power(light)) views += static_cast<std::uint64_t>(view_cascades);
+    }
+    return views * static_cast<std::uint64_t>(size) * static_cast<std::uint64_t>(size) * 4;
 }
 
 std::size_t ShadowMaps::bytes() const {
     std::size_t total = 0;
-    for (const auto& map : maps_) total += map.depth.bytes();
+    for (const auto& map : maps_) total += map.depth.bytes() + map.view_depth.bytes();
     return total;
+}
+
+float ShadowMaps::finest_view_texel(std::size_t light_index) const {
+    if (light_index >= maps_.size() || maps_[light_index].view_texels.empty()) return 0.0f;
+    return maps_[light_index].view_texels.front();
 }
 
 std::size_t ShadowMaps::map_count() const {

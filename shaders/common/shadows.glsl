@@ -5,17 +5,34 @@
 
 layout(binding = BOUNCE_UNIT_SHADOW_2D) uniform sampler2DShadow u_shadow_map;
 layout(binding = BOUNCE_UNIT_SHADOW_CUBE) uniform samplerCubeShadow u_shadow_cube;
+layout(binding = BOUNCE_UNIT_SHADOW_VIEW) uniform sampler2DArrayShadow u_shadow_view;
 
 uniform bool u_shadows_enabled;
 uniform mat4 u_light_view_proj;   // spot and directional
 uniform float u_shadow_far;       // point and spot: distance stored as distance / far
 uniform float u_shadow_texel_angle;  // world size of one texel at unit distance (perspective maps)
 uniform float u_shadow_texel_world;  // world size of one texel (orthographic maps)
+// A directional light's view cascades (passes/shadow_maps.hpp), finest first; 0 where the pass reads
+// the scene's map alone.
+uniform int u_shadow_view_cascades;
+uniform mat4 u_shadow_view_proj[BOUNCE_SHADOW_VIEW_CASCADES];
+uniform float u_shadow_view_texel[BOUNCE_SHADOW_VIEW_CASCADES];
 
 // Surfaces are pushed towards their normal by about one texel before the lookup: a slope-free
 // bias that removes acne without detaching contact shadows.
 float shadow_visibility(int type, vec3 p, vec3 n, vec3 light_position, float distance) {
     if (!u_shadows_enabled) return 1.0;
+    if (type == BOUNCE_LIGHT_DIRECTIONAL && u_shadow_view_cascades > 0) {
+        // The finest cascade whose filter footprint holds the point: each spans the scene along the
+        // light, so inside its window it answers as the scene's map would, with smaller texels.
+        float margin = 1.0 / float(textureSize(u_shadow_view, 0).x);
+        for (int k = 0; k < u_shadow_view_cascades; ++k) {
+            vec3 uvz = (u_shadow_view_proj[k] * vec4(p + n * (1.5 * u_shadow_view_texel[k]), 1.0)).xyz * 0.5 + 0.5;
+            if (all(greaterThanEqual(uvz.xy, vec2(margin))) && all(lessThanEqual(uvz.xy, vec2(1.0 - margin)))) {
+                return texture(u_shadow_view, vec4(uvz.xy, float(k), min(uvz.z, 1.0)));
+            }
+        }
+    }
     float texel = type == BOUNCE_LIGHT_DIRECTIONAL ? u_shadow_texel_world : u_shadow_texel_angle * distance;
     vec3 offset_p = p + n * (1.5 * texel);
     if (type == BOUNCE_LIGHT_POINT) {

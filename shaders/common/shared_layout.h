@@ -27,6 +27,8 @@
 // Texture units: light-view maps and frame inputs.
 #define BOUNCE_UNIT_SHADOW_2D 8
 #define BOUNCE_UNIT_SHADOW_CUBE 9
+#define BOUNCE_UNIT_SHADOW_VIEW 16  // a directional light's view cascades, layers of a 2D array
+#define BOUNCE_SHADOW_VIEW_CASCADES 4  // at most
 #define BOUNCE_UNIT_HDR_INPUT 10
 // Texture units: the BRDF's energy-compensation tables (gpu::BrdfTables binds them for every frame;
 // methods leave these units alone).

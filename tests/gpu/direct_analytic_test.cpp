@@ -2,6 +2,7 @@
 // blocker's shadow where geometry puts it, and emission. Tolerance: 1% relative at pixel centres
 // (the G-buffer stores positions in float and normals/material in half precision).
 #include "gpu_fixture.hpp"
+#include "renderer/passes/shadow_maps.hpp"
 #include "renderer/scene/gltf_import.hpp"
 #include "renderer/scene/shading.hpp"
 
@@ -184,6 +185,68 @@ TEST(DirectAnalytic, BlockerCastsTheShadowGeometryPredicts) {
     }
     EXPECT_GT(umbra, 20);
     EXPECT_GT(lit, 200);
+}
+
+// A sun over a ground 400 m wide: its map over the whole scene has texels of 0.28 m at 2048, and a
+// blocker 1 m wide 1 m above the ground casts a shadow whose edges that map misplaces by more than
+// the view cascades allow. In the finest cascade that holds the view (texel t) an edge lies within
+// 3 t of where the geometry puts it: the normal offset of 1.5 t lifts the looked-up point, which
+// moves its shadow along the ground by 1.5 t tan(theta) < 1.5 t (the sun is 20 degrees off the
+// vertical), the bilinear filter crosses half its value within half a texel of the stored edge, and
+// the stored edge lies within a texel of the true one. One pixel's footprint is added for where the
+// pixel centre falls.
+TEST(DirectAnalytic, ASunsShadowEdgeInAWideSceneLiesWithinTheViewCascadesTexels) {
+    constexpr int kMapSize = 2048;
+    scene::Light sun = directional_light(glm::normalize(glm::vec3(0.3f, -1.0f, 0.2f)), 3.0f);
+    const scene::Material material = matte({0.6f, 0.6f, 0.6f});
+    auto setup = plane_under(material, sun);
+    setup.scene.objects.clear();
+    setup.scene.meshes.clear();
+    add_square(setup.scene, "ground", glm::vec3(0.0f), 200.0f, {0, 1, 0}, 0);
+    add_square(setup.scene, "blocker", {0.0f, 1.0f, 0.0f}, 0.5f, {0, -1, 0}, 0);  // culled from above, casts
+    setup.request.camera = top_down_camera(3.0f, 1.0f);
+    const scene::Camera& camera = *setup.request.camera;
+    // The shadow: the blocker moved along the light onto the ground.
+    const glm::vec2 shadow_centre = glm::vec2(sun.direction.x, sun.direction.z) / -sun.direction.y;
+    constexpr float kShadowHalf = 0.5f;
+
+    const auto cascades = passes::ShadowMaps::fit_view_cascades(setup.scene.world_bounds(), sun.direction, camera, kSize,
+                                                                kSize, kMapSize, 3);
+    ASSERT_FALSE(cascades.empty());
+    const float texel = cascades.front().texel;
+    const float footprint = glm::distance(pixel_on_ground(camera, kSize, kSize, 0, 0), pixel_on_ground(camera, kSize, kSize, 1, 1));
+    const float tolerance = 3.0f * texel + footprint;
+    const float scene_texel = glm::length(setup.scene.world_bounds().extent()) / kMapSize;
+    RecordProperty("finest_cascade_texel_mm", static_cast<int>(std::lround(1000.0f * texel)));
+    RecordProperty("scene_map_texel_mm", static_cast<int>(std::lround(1000.0f * scene_texel)));
+    ASSERT_LT(tolerance, 0.5f * kShadowHalf) << "the test's shadow must be resolved by the cascade";
+
+    // Pixels whose side of the edge differs from the geometry's, farther from it than `tolerance`.
+    const auto misplaced = [&](int view_cascades) {
+        RenderRequest request = setup.request;
+        request.knobs = {{"shadow_map_size", kMapSize}, {"shadow_cascades", view_cascades}};
+        const auto result = render_scene(setup.scene, request);
+        int far_from_edge = 0, shadowed = 0;
+        for (int y = 0; y < kSize; ++y) {
+            for (int x = 0; x < kSize; ++x) {
+                const glm::vec3 p = pixel_on_ground(camera, kSize, kSize, x, y);
+                const glm::vec2 offset = glm::abs(glm::vec2(p.x, p.z) - shadow_centre);
+                const float chebyshev = std::max(offset.x, offset.y);
+                const bool in_shadow = chebyshev < kShadowHalf;
+                const float lit = expected_radiance(material, sun, camera, p).r;
+                const bool dark = result.frame.at(x, y).r < 0.5f * lit;
+                shadowed += in_shadow;
+                if (dark != in_shadow && std::abs(chebyshev - kShadowHalf) > tolerance) ++far_from_edge;
+            }
+        }
+        EXPECT_GT(shadowed, 200);
+        return far_from_edge;
+    };
+    EXPECT_EQ(misplaced(3), 0) << "cascade texel " << texel << " m, tolerance " << tolerance << " m";
+    // The scene's map alone, whose texels are larger, fails the same bound: the test tells them apart.
+    const int by_the_scene_map = misplaced(0);
+    RecordProperty("pixels_misplaced_by_the_scene_map", by_the_scene_map);
+    EXPECT_GT(by_the_scene_map, 0) << "scene map texel " << scene_texel << " m";
 }
 
 TEST(DirectAnalytic, EmissionIsSeenAsItsRadiance) {

@@ -11,6 +11,10 @@ namespace {
 // What a pass needs to draw `scene`'s shadow maps outside a frame; the scene may change between draws.
 struct MapsOfAScene {
     explicit MapsOfAScene(scene::Scene drawn) : scene(std::move(drawn)) { timers.begin_frame(); }
+    // The same pass seen from another camera.
+    passes::PassContext seen_from(const scene::Camera& camera) {
+        return {scene, gpu_scene, shaders, state, timers, output, 16, 16, camera};
+    }
     ~MapsOfAScene() { timers.resolve(); }
     Renderer& renderer = shared_renderer();  // first: it makes the GL context current on this thread
     scene::Scene scene;
@@ -88,6 +92,44 @@ TEST(ShadowMaps, EachMapIsRedrawnOnlyWhenItsOwnLightMovesOrReshapes) {
     scene.objects[1].transform[3].x += 0.01f;  // a block moved: every map
     maps.render(context, 64);
     EXPECT_EQ(maps.maps_drawn(), 7u);
+}
+
+// A directional light's view cascades follow the camera: a camera that moves redraws them and not
+// the light's map over the scene; one that stays reuses both, and cascades no longer asked for are
+// let go.
+TEST(ShadowMaps, ACameraThatMovesRedrawsTheViewCascadesAlone) {
+    scene::Scene wide;
+    wide.materials.push_back(matte({0.5f, 0.5f, 0.5f}));
+    add_square(wide, "ground", glm::vec3(0.0f), 200.0f, {0, 1, 0}, 0);
+    wide.lights.push_back(directional_light(glm::normalize(glm::vec3(0.3f, -1.0f, 0.2f)), 3.0f));
+    wide.cameras.push_back(top_down_camera(3.0f, 1.0f));
+    MapsOfAScene drawn(std::move(wide));
+    passes::ShadowMaps& maps = drawn.maps;
+
+    maps.render(drawn.context, 256, 2);
+    EXPECT_EQ(maps.maps_drawn(), 1u);
+    const float scene_texel = glm::length(drawn.scene.world_bounds().extent()) / 256.0f;
+    EXPECT_GT(maps.finest_view_texel(0), 0.0f);
+    EXPECT_LT(maps.finest_view_texel(0), scene_texel);
+    const std::size_t with_cascades = maps.bytes();
+    EXPECT_EQ(with_cascades, passes::ShadowMaps::bytes_for(drawn.scene, 256, 2));
+    maps.render(drawn.context, 256, 2);
+    EXPECT_TRUE(maps.last_render_reused());
+
+    scene::Camera moved = drawn.scene.cameras[0];
+    moved.position.x += 5.0f;
+    maps.render(drawn.seen_from(moved), 256, 2);
+    EXPECT_FALSE(maps.last_render_reused());
+    EXPECT_EQ(maps.maps_drawn(), 1u);  // the map over the scene kept
+    EXPECT_EQ(maps.frames_drawn(), 2u);
+    maps.render(drawn.seen_from(moved), 256, 2);
+    EXPECT_TRUE(maps.last_render_reused());
+
+    maps.render(drawn.seen_from(moved), 256, 0);
+    EXPECT_EQ(maps.finest_view_texel(0), 0.0f);
+    EXPECT_EQ(maps.bytes(), passes::ShadowMaps::bytes_for(drawn.scene, 256, 0));
+    EXPECT_LT(maps.bytes(), with_cascades);
+    EXPECT_EQ(maps.maps_drawn(), 1u);
 }
 
 // A reused map gives the same frame as a freshly drawn one, and a moved light changes it; a dimmed

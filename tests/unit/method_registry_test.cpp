@@ -29,7 +29,7 @@ TEST(MethodRegistry, FailsLoudlyNamingTheFault) {
     EXPECT_NE(message_of([&] { registry.resolve("direct", "insane", {}); }).find("unknown preset 'insane'"),
               std::string::npos);
     EXPECT_NE(message_of([&] { registry.resolve("direct", "low", {{"bounces", 2}}); })
-                  .find("unknown knob 'bounces' for method 'direct' (knobs: shadow_map_size)"),
+                  .find("unknown knob 'bounces' for method 'direct' (knobs: shadow_map_size, shadow_cascades)"),
               std::string::npos);
     EXPECT_NE(message_of([&] { registry.resolve("direct", "low", {{"shadow_map_size", 1e9}}); }).find("outside"),
               std::string::npos);

@@ -33,7 +33,7 @@ public:
 
     void render(const FrameContext& frame) override {
         gbuffer_.render(frame);
-        shadows_.render(frame, frame.knob_int("shadow_map_size"));
+        shadows_.render(frame, frame.knob_int("shadow_map_size"), frame.knob_int("shadow_cascades"));
         direct_light_.render(frame, gbuffer_, shadows_);
         if (frame.scene.world_bounds().empty()) return;
 
@@ -236,6 +236,7 @@ MethodInfo method_info() {
          "0: the last bounce gathered per pixel (final gathering); 1: all n bounces on the atlas, pixels read the "
          "texels around them (view-dependent lightmap)"},
         {"shadow_map_size", 16, 8192, true, "texels per side of each shadow map (direct light)"},
+        shadow_cascades_knob(),
         {"texel_spots", 0, 1, true,
          "1: a texel sends the lights' light from the part of it the light falls on (its spot); 0: from all of it. "
          "Off at draft and low: with texels that coarse, what a texel's cube map sees from its point does not hold "
@@ -244,7 +245,7 @@ MethodInfo method_info() {
     auto preset = [](double atlas, double face, double threshold, double pcf, double spots) {
         return KnobValues{{"atlas_resolution", atlas}, {"face_size", face},      {"traversal", 2}, {"csm_directions", 256}, {"per_texel", 0}, {"jitter_frames", 0},
                           {"bounces", 1},              {"threshold", threshold}, {"final_threshold", threshold},
-                          {"pcf", pcf},                {"shadow_map_size", 2048}, {"bounce_tolerance", 0},
+                          {"pcf", pcf},                {"shadow_map_size", 2048}, {"shadow_cascades", kPresetShadowCascades}, {"bounce_tolerance", 0},
                           {"texel_spots", spots}};
     };
     info.presets = {{"draft", preset(12, 16, 0.3, 1, 0)},

@@ -13,7 +13,7 @@ public:
 
     void render(const FrameContext& frame) override {
         gbuffer_.render(frame);
-        shadows_.render(frame, frame.knob_int("shadow_map_size"));
+        shadows_.render(frame, frame.knob_int("shadow_map_size"), frame.knob_int("shadow_cascades"));
         direct_light_.render(frame, gbuffer_, shadows_);
     }
 
@@ -37,12 +37,13 @@ MethodInfo method_info() {
     MethodInfo info;
     info.name = "direct";
     info.description = "emission and direct light with shadow maps; no indirect light";
-    info.knobs = {{"shadow_map_size", 16, 8192, true, "texels per side of each shadow map (cube face)"}};
-    info.presets = {{"draft", {{"shadow_map_size", 256}}},
-                    {"low", {{"shadow_map_size", 512}}},
-                    {"medium", {{"shadow_map_size", 1024}}},
-                    {"high", {{"shadow_map_size", 2048}}},
-                    {"ultra", {{"shadow_map_size", 4096}}}};
+    info.knobs = {{"shadow_map_size", 16, 8192, true, "texels per side of each shadow map (cube face)"},
+                  shadow_cascades_knob()};
+    const auto preset = [](double size) {
+        return KnobValues{{"shadow_map_size", size}, {"shadow_cascades", kPresetShadowCascades}};
+    };
+    info.presets = {{"draft", preset(256)}, {"low", preset(512)}, {"medium", preset(1024)}, {"high", preset(2048)},
+                    {"ultra", preset(4096)}};
     info.create = [] { return std::make_unique<DirectMethod>(); };
     info.estimate = direct_light_estimate;
     return info;

@@ -40,7 +40,7 @@ public:
 
     void render(const FrameContext& frame) override {
         gbuffer_.render(frame);
-        shadows_.render(frame, frame.knob_int("shadow_map_size"));
+        shadows_.render(frame, frame.knob_int("shadow_map_size"), frame.knob_int("shadow_cascades"));
         direct_light_.render(frame, gbuffer_, shadows_);
         if (frame.scene.world_bounds().empty()) return;
 
@@ -229,6 +229,7 @@ MethodInfo method_info() {
          "light-patch levels below the 16^2 top patches that traversal (or basic clustering, or naive sampling) may "
          "reach"},
         {"shadow_map_size", 16, 8192, true, "texels per side of each shadow map (direct light)"},
+        shadow_cascades_knob(),
         {"ism_size", 0, 64, true,
          "indirect visibility (hierarchical mode): texels per side of each VPL patch's imperfect shadow map; 0: none, "
          "as in the paper"},
@@ -239,7 +240,7 @@ MethodInfo method_info() {
     auto preset = [](double rsm, double levels, double depth, double normal, double tau, double max_depth) {
         return KnobValues{{"rsm_size", rsm},     {"levels", levels}, {"depth_threshold", depth},
                           {"normal_threshold", normal}, {"mode", ISR_MODE_HIERARCHICAL}, {"tau", tau},
-                          {"max_depth", max_depth}, {"shadow_map_size", 2048},
+                          {"max_depth", max_depth}, {"shadow_map_size", 2048}, {"shadow_cascades", kPresetShadowCascades},
                           {"ism_size", 0}, {"ism_points", 1024}, {"ism_levels_below_top", 1}};
     };
     info.presets = {{"draft", preset(64, 5, 0.1, 0.5, 0.05, 2)},

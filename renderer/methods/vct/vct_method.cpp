@@ -70,7 +70,7 @@ public:
         const bool ambient_occlusion = frame.knob_int("ao") != 0;
         gbuffer_.render(frame);
         if (!ambient_occlusion) {
-            shadows_.render(frame, frame.knob_int("shadow_map_size"));
+            shadows_.render(frame, frame.knob_int("shadow_map_size"), frame.knob_int("shadow_cascades"));
             direct_light_.render(frame, gbuffer_, shadows_);
         }
         const bool has_geometry = !frame.scene.world_bounds().empty();
@@ -278,11 +278,12 @@ MethodInfo method_info() {
         {"anisotropic", 0, 1, true, "1: six directional voxels per inner voxel (paper §9); 0: one isotropic"},
         {"light_view_size", 16, 4096, true, "texels per side of each light-view map (photons per light view)"},
         {"shadow_map_size", 16, 8192, true, "texels per side of each shadow map (direct light)"},
+        shadow_cascades_knob(),
         {"ao", 0, 1, true, "1: ambient occlusion (paper §6) instead of radiance"},
         {"ao_lambda", 0, 1e6, false, "ambient occlusion falloff 1 / (1 + lambda r), per metre"}};
     auto preset = [](double resolution, double cones, double step, double light_view, double shadow) {
         return KnobValues{{"resolution", resolution}, {"diffuse_cones", cones}, {"aperture", 0},
-                          {"step", step}, {"specular", 1}, {"bounces", 1}, {"dense", 0}, {"anisotropic", 1}, {"light_view_size", light_view}, {"shadow_map_size", shadow},
+                          {"step", step}, {"specular", 1}, {"bounces", 1}, {"dense", 0}, {"anisotropic", 1}, {"light_view_size", light_view}, {"shadow_map_size", shadow}, {"shadow_cascades", kPresetShadowCascades},
                           {"ao", 0}, {"ao_lambda", 1}};
     };
     info.presets = {{"draft", preset(24, 6, 1.0, 128, 512)},
