@@ -44,11 +44,10 @@ glm::mat4 directional_projection(const glm::vec2& centre, float half, float radi
     return glm::ortho(centre.x - half, centre.x + half, centre.y - half, centre.y + half, 0.5f * radius, 3.0f * radius);
 }
 
-std::uint64_t view_cascades_fingerprint(std::uint64_t map, const PassContext& context, int cascades) {
-    const scene::Camera& camera = context.camera;
+std::uint64_t view_cascades_fingerprint(std::uint64_t map, const std::vector<ShadowMaps::ViewCascade>& cascades) {
     Hasher hash;
-    hash.add(map).add(cascades).add(camera.position).add(camera.orientation).add(camera.vertical_fov);
-    hash.add(camera.z_near).add(camera.z_far).add(context.width).add(context.height);
+    hash.add(map);
+    for (const ShadowMaps::ViewCascade& cascade : cascades) hash.add(cascade.view_projection).add(cascade.texel);
     return hash.value() | 1u;  // 0 stands for no cascades
 }
 
@@ -62,8 +61,9 @@ struct CascadeWindow {
 // corners of the view at that depth), cut to the scene, in the light view's x and y; nullopt where
 // the view holds none of the scene. Its size is a power of 2^(1/4) of the scene's map's and its
 // centre a whole number of texels, so that as the camera moves the texels stay where they were and
-// shadow edges do not crawl; two texels of margin keep the filter's footprint of a point at the
-// view's edge inside.
+// shadow edges do not crawl. A margin of 3.5 texels a side keeps what the lookup reads of a point
+// at the view's edge inside: its normal offset (1.5 texels), the filter's texel, and the half texel
+// the snapped centre may move, with half a texel to spare.
 std::optional<CascadeWindow> cascade_window(const scene::Camera& camera, float aspect, const DirectionalFrame& frame,
                                             const scene::Aabb& bounds, int size, float depth) {
     const float tan_vertical = std::tan(0.5f * camera.vertical_fov), tan_horizontal = tan_vertical * aspect;
@@ -83,12 +83,17 @@ std::optional<CascadeWindow> cascade_window(const scene::Camera& camera, float a
         scene_lo = glm::min(scene_lo, corner), scene_hi = glm::max(scene_hi, corner);
     }
     lo = glm::max(lo, scene_lo), hi = glm::min(hi, scene_hi);
-    if (!(hi.x > lo.x && hi.y > lo.y)) return std::nullopt;
-    const float wanted = 0.5f * std::max(hi.x - lo.x, hi.y - lo.y) * (1.0f + 4.0f / static_cast<float>(size));
-    // r 2^(-k/4): the smallest that holds the wanted half-width.
+    const bool finite = std::isfinite(lo.x) && std::isfinite(lo.y) && std::isfinite(hi.x) && std::isfinite(hi.y);
+    if (!finite || !(hi.x > lo.x && hi.y > lo.y)) return std::nullopt;
+    const float side = std::max(hi.x - lo.x, hi.y - lo.y);
+    const float wanted = 0.5f * side * (1.0f + 7.0f / static_cast<float>(size));
+    // r 2^(-k/4): the smallest that holds the wanted half-width, and no smaller than r / 1024, where a
+    // texel's normal offset still spans a few steps of float depth over the map's 2.5 r at 8192
+    // texels (a view that grazes a corner of the scene would otherwise ask for any size).
+    constexpr float kFinestSteps = 40.0f;
     const float steps = std::floor(-4.0f * std::log2(std::max(wanted, 1e-30f) / frame.radius));
     CascadeWindow window;
-    window.half = frame.radius * std::exp2(-std::max(steps, 0.0f) / 4.0f);
+    window.half = frame.radius * std::exp2(-std::clamp(steps, 0.0f, kFinestSteps) / 4.0f);
     if (window.half < wanted) window.half *= std::exp2(0.25f);  // rounding at the step's edge
     const float texel = 2.0f * window.half / static_cast<float>(size);
     window.centre = glm::floor(0.5f * (lo + hi) / texel + 0.5f) * texel;
@@ -97,7 +102,8 @@ std::optional<CascadeWindow> cascade_window(const scene::Camera& camera, float a
 
 }  // namespace
 
-std::vector<ShadowMaps::ViewCascade> ShadowMaps::fit_view_cascades(const scene::Aabb& bounds, const glm::vec3& light_direction,
+std::vector<ShadowMaps::ViewCascade> ShadowMaps::fit_view_cascades(const scene::Aabb& bounds,
+                                                                   const glm::vec3& light_direction,
                                                                    const scene::Camera& camera, int width, int height,
                                                                    int size, int cascades) {
     std::vector<ViewCascade> fitted;
@@ -117,35 +123,32 @@ std::vector<ShadowMaps::ViewCascade> ShadowMaps::fit_view_cascades(const scene::
         // what that one held (it sees farther), and takes its place.
         if (!(texel < scene_texel)) continue;
         if (!fitted.empty() && !(fitted.back().texel < texel)) fitted.pop_back();
-        fitted.push_back({directional_projection(window->centre, window->half, frame.radius) * frame.view, texel, depth});
+        const glm::mat4 projection = directional_projection(window->centre, window->half, frame.radius);
+        fitted.push_back({projection * frame.view, texel, depth});
     }
     return fitted;
 }
 
-void ShadowMaps::render_view_cascades(const PassContext& context, const gpu::ShaderProgram& program,
-                                      const scene::Light& light, LightMap& map, int size, int cascades) {
-    map.view_projections.clear();
-    map.view_texels.clear();
-    for (const ViewCascade& cascade : fit_view_cascades(context.scene.world_bounds(), light.direction, context.camera,
-                                                        context.width, context.height, size, cascades)) {
-        map.view_projections.push_back(cascade.view_projection);
-        map.view_texels.push_back(cascade.texel);
-    }
-    if (map.view_projections.empty()) {
+void ShadowMaps::render_view_cascades(const PassContext& context, const gpu::ShaderProgram& program, LightMap& map,
+                                      int size, std::vector<ViewCascade> cascades) {
+    map.view_cascades = std::move(cascades);
+    const auto layers = static_cast<int>(map.view_cascades.size());
+    if (layers == 0) {
         map.view_depth = gpu::Texture();
         return;
     }
-    if (!map.view_depth || map.view_depth.width() != size || map.view_depth.desc().depth != cascades) {
-        map.view_depth = make_depth_map(GL_TEXTURE_2D_ARRAY, size, cascades);
+    if (!map.view_depth || map.view_depth.width() != size || map.view_depth.desc().depth != layers) {
+        map.view_depth = make_depth_map(GL_TEXTURE_2D_ARRAY, size, layers);
     }
     program.set("u_store_distance", 0);
     const float far_depth = 1.0f;
-    for (std::size_t layer = 0; layer < map.view_projections.size(); ++layer) {
-        framebuffer_.attach_depth_layer(map.view_depth, static_cast<int>(layer));
+    for (int layer = 0; layer < layers; ++layer) {
+        framebuffer_.attach_depth_layer(map.view_depth, layer);
         framebuffer_.check_complete("a directional light's view cascade");
         glClearNamedFramebufferfv(framebuffer_.id(), GL_DEPTH, 0, &far_depth);
-        render_view(context, program, map.view_projections[layer]);
+        render_view(context, program, map.view_cascades[static_cast<std::size_t>(layer)].view_projection);
     }
+    view_cascades_drawn_ += static_cast<std::size_t>(layers);
 }
 
 void ShadowMaps::render_view(const PassContext& context, const gpu::ShaderProgram& program,
@@ -168,22 +171,29 @@ void ShadowMaps::render(const PassContext& context, int size, int view_cascades)
     const auto& lights = context.scene.lights;
     const std::uint64_t geometry = geometry_fingerprint(context.scene);
     std::vector<std::uint64_t> fingerprints(lights.size()), view_fingerprints(lights.size(), 0);
-    bool stale = maps_.size() != lights.size();
+    std::vector<std::vector<ViewCascade>> fitted(lights.size());
     for (std::size_t i = 0; i < lights.size(); ++i) {
         fingerprints[i] = shadow_map_fingerprint(lights[i], geometry, size);
         if (view_cascades > 0 && lights[i].type == scene::LightType::directional && has_power(lights[i])) {
-            view_fingerprints[i] = view_cascades_fingerprint(fingerprints[i], context, view_cascades);
+            fitted[i] = fit_view_cascades(context.scene.world_bounds(), lights[i].direction, context.camera,
+                                          context.width, context.height, size, view_cascades);
+            if (!fitted[i].empty()) view_fingerprints[i] = view_cascades_fingerprint(fingerprints[i], fitted[i]);
         }
-        stale = stale || maps_[i].fingerprint != fingerprints[i] || maps_[i].view_fingerprint != view_fingerprints[i];
     }
-    last_reused_ = !stale;
+    bool scene_stale = maps_.size() != lights.size(), view_stale = false;
+    for (std::size_t i = 0; i < lights.size() && !scene_stale; ++i) {
+        scene_stale = maps_[i].fingerprint != fingerprints[i];
+        view_stale = view_stale || maps_[i].view_fingerprint != view_fingerprints[i];
+    }
+    last_reused_ = !scene_stale && !view_stale;
     if (last_reused_) {
         ++frames_reused_;
         return;
     }
     // Timed only where maps are drawn: a frame's `shadow_maps` pass says it drew them, and what that
-    // took (the planner prices the maps by it, planning/costs.hpp).
-    gpu::GpuTimers::Scope timing(context.timers, "shadow_maps");
+    // took (the planner prices the maps by it, planning/costs.hpp); one that drew only the view
+    // cascades (its camera moved) is timed apart, so as not to pass for a change of the lights.
+    gpu::GpuTimers::Scope timing(context.timers, scene_stale ? "shadow_maps" : "shadow_view_cascades");
     ++frames_drawn_;
     maps_.resize(lights.size());
     const scene::Aabb bounds = context.scene.world_bounds();
@@ -191,7 +201,6 @@ void ShadowMaps::render(const PassContext& context, int size, int view_cascades)
         for (std::size_t i = 0; i < maps_.size(); ++i) {
             maps_[i] = LightMap{};
             maps_[i].fingerprint = fingerprints[i];
-            maps_[i].view_fingerprint = view_fingerprints[i];
         }
         return;
     }
@@ -208,13 +217,7 @@ void ShadowMaps::render(const PassContext& context, int size, int view_cascades)
         LightMap& map = maps_[i];
         if (map.view_fingerprint == view_fingerprints[i]) continue;
         map.view_fingerprint = view_fingerprints[i];
-        if (view_fingerprints[i] == 0) {
-            map.view_depth = gpu::Texture();
-            map.view_projections.clear();
-            map.view_texels.clear();
-            continue;
-        }
-        render_view_cascades(context, program, lights[i], map, size, view_cascades);
+        render_view_cascades(context, program, map, size, std::move(fitted[i]));
     }
     for (std::size_t i = 0; i < lights.size(); ++i) {
         const scene::Light& light = lights[i];
@@ -283,11 +286,11 @@ void ShadowMaps::bind(const gpu::ShaderProgram& program, std::size_t light_index
     BOUNCE_CHECK(has_map(light_index), "light {} has no shadow map", light_index);
     const LightMap& map = maps_[light_index];
     const bool view = coverage == Coverage::view && map.view_depth;
-    program.set("u_shadow_view_cascades", view ? static_cast<int>(map.view_projections.size()) : 0);
+    program.set("u_shadow_view_cascades", view ? static_cast<int>(map.view_cascades.size()) : 0);
     if (view) {
-        for (std::size_t k = 0; k < map.view_projections.size(); ++k) {
-            program.set(fmt::format("u_shadow_view_proj[{}]", k), map.view_projections[k]);
-            program.set(fmt::format("u_shadow_view_texel[{}]", k), map.view_texels[k]);
+        for (std::size_t k = 0; k < map.view_cascades.size(); ++k) {
+            program.set(fmt::format("u_shadow_view_proj[{}]", k), map.view_cascades[k].view_projection);
+            program.set(fmt::format("u_shadow_view_texel[{}]", k), map.view_cascades[k].texel);
         }
         glBindTextureUnit(BOUNCE_UNIT_SHADOW_VIEW, map.view_depth.id());
         glBindSampler(BOUNCE_UNIT_SHADOW_VIEW, 0);
@@ -305,7 +308,9 @@ void ShadowMaps::bind(const gpu::ShaderProgram& program, std::size_t light_index
 std::uint64_t ShadowMaps::bytes_for(const scene::Scene& scene, int size, int view_cascades) {
     std::uint64_t views = light_views_with_power(scene);
     for (const scene::Light& light : scene.lights) {
-        if (light.type == scene::LightType::directional && has_power(light)) views += static_cast<std::uint64_t>(view_cascades);
+        if (light.type == scene::LightType::directional && has_power(light)) {
+            views += static_cast<std::uint64_t>(view_cascades);
+        }
     }
     return views * static_cast<std::uint64_t>(size) * static_cast<std::uint64_t>(size) * 4;
 }
@@ -317,12 +322,13 @@ std::size_t ShadowMaps::bytes() const {
 }
 
 float ShadowMaps::finest_view_texel(std::size_t light_index) const {
-    if (light_index >= maps_.size() || maps_[light_index].view_texels.empty()) return 0.0f;
-    return maps_[light_index].view_texels.front();
+    if (light_index >= maps_.size() || maps_[light_index].view_cascades.empty()) return 0.0f;
+    return maps_[light_index].view_cascades.front().texel;
 }
 
 std::size_t ShadowMaps::map_count() const {
-    return static_cast<std::size_t>(std::count_if(maps_.begin(), maps_.end(), [](const LightMap& m) { return m.valid; }));
+    return static_cast<std::size_t>(
+        std::count_if(maps_.begin(), maps_.end(), [](const LightMap& m) { return m.valid; }));
 }
 
 }  // namespace bounce::passes

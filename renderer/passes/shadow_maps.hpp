@@ -30,8 +30,10 @@ public:
     // (shadow_map_fingerprint): a light dimmed or recoloured keeps it, and a light moved redraws its
     // own map alone.
     // With `view_cascades` (at most kMaxViewCascades) above 0, each directional light also gets that
-    // many cascades fitted to context.camera's view, redrawn when the camera or the frame's shape
-    // changes.
+    // many cascades fitted to context.camera's view, redrawn when the fit moves them (the camera
+    // moved by more than a texel, or turned). A frame that redraws only cascades is timed as
+    // `shadow_view_cascades`, not `shadow_maps`: the planner prices a change of the lights by the
+    // latter.
     void render(const PassContext& context, int size, int view_cascades = 0);
     static constexpr int kMaxViewCascades = 4;
     // Whether the last render() reused every map instead of drawing any.
@@ -39,6 +41,7 @@ public:
     std::size_t frames_drawn() const { return frames_drawn_; }
     std::size_t frames_reused() const { return frames_reused_; }
     std::size_t maps_drawn() const { return maps_drawn_; }  // light maps drawn, over every render()
+    std::size_t view_cascades_drawn() const { return view_cascades_drawn_; }  // cascades drawn, likewise
     // Whether light `index` has a map (false for lights without power).
     bool has_map(std::size_t light_index) const;
     // Sets the shadow uniforms of common/shadows.glsl on `program` and binds the light's map, and
@@ -78,17 +81,17 @@ private:
         std::uint64_t fingerprint = 0;  // shadow_map_fingerprint it was drawn for; 0: never drawn
         // Directional lights: the view cascades, finest first, layers of one array texture.
         gpu::Texture view_depth;
-        std::vector<glm::mat4> view_projections;
-        std::vector<float> view_texels;
-        std::uint64_t view_fingerprint = 0;  // the map's, the camera's and the frame's shape
+        std::vector<ViewCascade> view_cascades;
+        std::uint64_t view_fingerprint = 0;  // the map's and the fitted cascades'; 0: none
     };
-    void render_view_cascades(const PassContext& context, const gpu::ShaderProgram& program, const scene::Light& light,
-                              LightMap& map, int size, int cascades);
+    void render_view_cascades(const PassContext& context, const gpu::ShaderProgram& program, LightMap& map, int size,
+                              std::vector<ViewCascade> cascades);
     void render_view(const PassContext& context, const gpu::ShaderProgram& program, const glm::mat4& view_projection);
     std::vector<LightMap> maps_;
     gpu::Framebuffer framebuffer_;
     bool last_reused_ = false;
     std::size_t maps_drawn_ = 0;
+    std::size_t view_cascades_drawn_ = 0;
     std::size_t frames_drawn_ = 0;
     std::size_t frames_reused_ = 0;
 };

@@ -11,6 +11,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <string>
+#include <limits>
+#include <array>
 #include <filesystem>
 #include <fstream>
 #include <numbers>
@@ -210,11 +213,12 @@ TEST(DirectAnalytic, ASunsShadowEdgeInAWideSceneLiesWithinTheViewCascadesTexels)
     const glm::vec2 shadow_centre = glm::vec2(sun.direction.x, sun.direction.z) / -sun.direction.y;
     constexpr float kShadowHalf = 0.5f;
 
-    const auto cascades = passes::ShadowMaps::fit_view_cascades(setup.scene.world_bounds(), sun.direction, camera, kSize,
-                                                                kSize, kMapSize, 3);
+    const auto cascades = passes::ShadowMaps::fit_view_cascades(setup.scene.world_bounds(), sun.direction, camera,
+                                                                kSize, kSize, kMapSize, 3);
     ASSERT_FALSE(cascades.empty());
     const float texel = cascades.front().texel;
-    const float footprint = glm::distance(pixel_on_ground(camera, kSize, kSize, 0, 0), pixel_on_ground(camera, kSize, kSize, 1, 1));
+    const float footprint =
+        glm::distance(pixel_on_ground(camera, kSize, kSize, 0, 0), pixel_on_ground(camera, kSize, kSize, 1, 1));
     const float tolerance = 3.0f * texel + footprint;
     const float scene_texel = glm::length(setup.scene.world_bounds().extent()) / kMapSize;
     RecordProperty("finest_cascade_texel_mm", static_cast<int>(std::lround(1000.0f * texel)));
@@ -247,6 +251,101 @@ TEST(DirectAnalytic, ASunsShadowEdgeInAWideSceneLiesWithinTheViewCascadesTexels)
     const int by_the_scene_map = misplaced(0);
     RecordProperty("pixels_misplaced_by_the_scene_map", by_the_scene_map);
     EXPECT_GT(by_the_scene_map, 0) << "scene map texel " << scene_texel << " m";
+}
+
+// The same ground seen along it, with blockers at 15, 60 and 150 m: each shadow falls in a
+// cascade of its own (depths 33, 99 and 297 m here), and every pixel's side of the edges must be
+// the geometry's wherever it lies farther from them than the bound above, taken with the texel of
+// the cascade the lookup reads there (the finest whose window holds the point moved by its normal
+// offset, a texel in from the edge, as shaders/common/shadows.glsl picks it) and that pixel's own
+// footprint on the ground (which grows along the view). A cascade read with another's matrix would
+// put its shadows metres away.
+TEST(DirectAnalytic, ShadowEdgesAlongAWideGroundLieWithinTheTexelsOfTheirCascades) {
+    constexpr int kMapSize = 2048, kCascades = 3;
+    scene::Light sun = directional_light(glm::normalize(glm::vec3(0.3f, -1.0f, 0.2f)), 3.0f);
+    const scene::Material material = matte({0.6f, 0.6f, 0.6f});
+    auto setup = plane_under(material, sun);
+    setup.scene.objects.clear();
+    setup.scene.meshes.clear();
+    add_square(setup.scene, "ground", glm::vec3(0.0f), 200.0f, {0, 1, 0}, 0);
+    struct Blocker {
+        glm::vec3 centre;
+        float half;
+    };
+    const Blocker blockers[] = {
+        {{0.0f, 1.0f, 15.0f}, 1.0f}, {{0.0f, 1.0f, 60.0f}, 4.0f}, {{0.0f, 1.0f, 150.0f}, 10.0f}};
+    for (const Blocker& blocker : blockers) {
+        add_square(setup.scene, "blocker", blocker.centre, blocker.half, {0, -1, 0}, 0);
+    }
+    setup.request.camera = scene::Camera::look_at({0.0f, 8.0f, 0.0f}, {0.0f, 0.0f, 40.0f}, {0, 1, 0}, 1.0f);
+    const scene::Camera& camera = *setup.request.camera;
+    const auto cascades = passes::ShadowMaps::fit_view_cascades(setup.scene.world_bounds(), sun.direction, camera,
+                                                                kSize, kSize, kMapSize, kCascades);
+    ASSERT_EQ(cascades.size(), static_cast<std::size_t>(kCascades));
+    const float scene_texel = glm::length(setup.scene.world_bounds().extent()) / kMapSize;
+    // The texel the lookup reads at ground point p, and which cascade (kCascades: the scene's map).
+    const auto read_at = [&](const glm::vec3& p) -> std::pair<int, float> {
+        for (int k = 0; k < kCascades; ++k) {
+            const auto& cascade = cascades[static_cast<std::size_t>(k)];
+            const float texel = cascade.texel;
+            const glm::vec4 clip = cascade.view_projection * glm::vec4(p + glm::vec3(0, 1.5f * texel, 0), 1.0f);
+            const glm::vec2 uv = glm::vec2(clip) * 0.5f + 0.5f;
+            const float margin = 1.0f / kMapSize;
+            if (glm::all(glm::greaterThanEqual(uv, glm::vec2(margin))) &&
+                glm::all(glm::lessThanEqual(uv, glm::vec2(1.0f - margin)))) {
+                return {k, texel};
+            }
+        }
+        return {kCascades, scene_texel};
+    };
+    // Distance from p to the nearest shadow edge, and whether p is in a shadow.
+    const auto shadows_at = [&](const glm::vec3& p) {
+        float nearest = std::numeric_limits<float>::max();
+        bool inside = false;
+        for (const Blocker& blocker : blockers) {
+            const glm::vec2 centre = glm::vec2(blocker.centre.x, blocker.centre.z) +
+                                     blocker.centre.y * glm::vec2(sun.direction.x, sun.direction.z) / -sun.direction.y;
+            const glm::vec2 offset = glm::abs(glm::vec2(p.x, p.z) - centre) - glm::vec2(blocker.half);
+            const bool in = offset.x < 0.0f && offset.y < 0.0f;
+            inside = inside || in;
+            const float to_edge = in ? -std::max(offset.x, offset.y) : glm::length(glm::max(offset, glm::vec2(0.0f)));
+            nearest = std::min(nearest, to_edge);
+        }
+        return std::pair{inside, nearest};
+    };
+
+    const auto misplaced = [&](std::array<int, kCascades + 1>& edge_pixels_read) {
+        RenderRequest request = setup.request;
+        request.knobs = {{"shadow_map_size", kMapSize}, {"shadow_cascades", kCascades}};
+        const auto result = render_scene(setup.scene, request);
+        int far_from_edge = 0;
+        for (int y = 1; y + 1 < kSize; ++y) {
+            for (int x = 1; x + 1 < kSize; ++x) {
+                const glm::vec3 p = pixel_on_ground(camera, kSize, kSize, x, y);
+                if (!(p.z > 1.0f) || std::abs(p.x) > 190.0f || p.z > 190.0f) continue;  // the sky, past the ground
+                float footprint = 0.0f;
+                for (const glm::ivec2 step : {glm::ivec2(1, 0), glm::ivec2(-1, 0), glm::ivec2(0, 1), glm::ivec2(0, -1)}) {
+                    const glm::vec3 beside = pixel_on_ground(camera, kSize, kSize, x + step.x, y + step.y);
+                    footprint = std::max(footprint, glm::distance(p, beside));
+                }
+                const auto [in_shadow, edge] = shadows_at(p);
+                const auto [cascade, texel] = read_at(p);
+                const float tolerance = 3.0f * texel + footprint;
+                if (edge < 4.0f * tolerance) ++edge_pixels_read[static_cast<std::size_t>(cascade)];
+                const float lit = expected_radiance(material, sun, camera, p).r;
+                const bool dark = result.frame.at(x, y).r < 0.5f * lit;
+                if (dark != in_shadow && edge > tolerance) ++far_from_edge;
+            }
+        }
+        return far_from_edge;
+    };
+    std::array<int, kCascades + 1> edge_pixels{};
+    EXPECT_EQ(misplaced(edge_pixels), 0);
+    // Each cascade shadowed the edges of its own blocker.
+    for (int k = 0; k < kCascades; ++k) {
+        EXPECT_GT(edge_pixels[static_cast<std::size_t>(k)], 5) << "cascade " << k;
+        RecordProperty("edge_pixels_cascade" + std::to_string(k), edge_pixels[static_cast<std::size_t>(k)]);
+    }
 }
 
 TEST(DirectAnalytic, EmissionIsSeenAsItsRadiance) {

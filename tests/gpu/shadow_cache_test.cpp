@@ -95,8 +95,8 @@ TEST(ShadowMaps, EachMapIsRedrawnOnlyWhenItsOwnLightMovesOrReshapes) {
 }
 
 // A directional light's view cascades follow the camera: a camera that moves redraws them and not
-// the light's map over the scene; one that stays reuses both, and cascades no longer asked for are
-// let go.
+// the light's map over the scene; one that stays, or moves along the light (the cascades see the
+// same across it), reuses both; cascades no longer asked for are let go.
 TEST(ShadowMaps, ACameraThatMovesRedrawsTheViewCascadesAlone) {
     scene::Scene wide;
     wide.materials.push_back(matte({0.5f, 0.5f, 0.5f}));
@@ -108,6 +108,7 @@ TEST(ShadowMaps, ACameraThatMovesRedrawsTheViewCascadesAlone) {
 
     maps.render(drawn.context, 256, 2);
     EXPECT_EQ(maps.maps_drawn(), 1u);
+    EXPECT_EQ(maps.view_cascades_drawn(), 2u);
     const float scene_texel = glm::length(drawn.scene.world_bounds().extent()) / 256.0f;
     EXPECT_GT(maps.finest_view_texel(0), 0.0f);
     EXPECT_LT(maps.finest_view_texel(0), scene_texel);
@@ -116,11 +117,17 @@ TEST(ShadowMaps, ACameraThatMovesRedrawsTheViewCascadesAlone) {
     maps.render(drawn.context, 256, 2);
     EXPECT_TRUE(maps.last_render_reused());
 
+    scene::Camera along = drawn.scene.cameras[0];
+    along.position -= 0.5f * drawn.scene.lights[0].direction;
+    maps.render(drawn.seen_from(along), 256, 2);
+    EXPECT_TRUE(maps.last_render_reused());
+
     scene::Camera moved = drawn.scene.cameras[0];
     moved.position.x += 5.0f;
     maps.render(drawn.seen_from(moved), 256, 2);
     EXPECT_FALSE(maps.last_render_reused());
     EXPECT_EQ(maps.maps_drawn(), 1u);  // the map over the scene kept
+    EXPECT_EQ(maps.view_cascades_drawn(), 4u);
     EXPECT_EQ(maps.frames_drawn(), 2u);
     maps.render(drawn.seen_from(moved), 256, 2);
     EXPECT_TRUE(maps.last_render_reused());

@@ -63,7 +63,8 @@ double median(const std::map<std::string, double>& by_scene) {
     std::vector<double> values;
     for (const auto& entry : by_scene) values.push_back(entry.second);
     std::sort(values.begin(), values.end());
-    return values.size() % 2 ? values[values.size() / 2] : 0.5 * (values[values.size() / 2 - 1] + values[values.size() / 2]);
+    const std::size_t middle = values.size() / 2;
+    return values.size() % 2 ? values[middle] : 0.5 * (values[middle - 1] + values[middle]);
 }
 
 // The corpus scenes where the analysis finds vct's voxels at `preset` leaking (ThinWalls): left out

@@ -20,8 +20,8 @@ public:
     std::vector<ResidentStructure> resident() const override {
         return {{"gbuffer", gbuffer_.bytes(), "surface attributes at the frame size"},
                 {"shadow_maps", shadows_.bytes(),
-                 fmt::format("{} lights with power, one map each; drawn for {} frames, reused for {} "
-                             "(nothing they depend on changed)",
+                 fmt::format("{} lights with power, one map each and a sun's view cascades; drawn for {} frames, "
+                             "reused for {} (nothing they depend on changed)",
                              shadows_.map_count(), shadows_.frames_drawn(), shadows_.frames_reused())}};
     }
 
