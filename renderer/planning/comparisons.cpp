@@ -144,7 +144,12 @@ std::optional<Comparison> FrameComparisons::compare(const RenderResult& gpu_fram
     // (lacking 0.005) and measures 0.052 against the whole; the bound says 0.075.
     const bool bound = extra_light > 0.0;
     if (bound) c.own_error = std::pow(std::sqrt(c.own_error) + std::sqrt(extra_light), 2.0);
-    measurements.record_own_error(c.method, c.preset, c.bounces, c.own_error, bound ? view : std::nullopt);
+    if (view && !bound) {
+        measurements.record_own_estimate(c.method, c.preset, c.bounces, c.own_error, *view,
+                                         c.reference_noise + c.bounce_gap + c.cross_beyond);
+    } else {
+        measurements.record_own_error(c.method, c.preset, c.bounces, c.own_error, bound ? view : std::nullopt);
+    }
     return c;
 }
 

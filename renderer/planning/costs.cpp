@@ -414,13 +414,27 @@ void SceneMeasurements::record_own_error(const std::string& method, const std::s
     auto& kept = own_errors_[{method, preset, bounces}];
     if (bound_of_view) {
         for (auto& recorded : kept) {
-            if (recorded.bound_of_view == bound_of_view) {
-                recorded.rel_mse = std::min(recorded.rel_mse, rel_mse);
-                return;
-            }
+            if (recorded.view != bound_of_view) continue;
+            if (recorded.bound) recorded.rel_mse = std::min(recorded.rel_mse, rel_mse);
+            return;  // the least bound holds; an estimate of the view tells more than any bound
         }
     }
-    kept.push_back({rel_mse, bound_of_view});
+    kept.push_back({rel_mse, bound_of_view, bound_of_view.has_value(), 0.0});
+    if (kept.size() > kKept) kept.pop_front();
+}
+
+void SceneMeasurements::record_own_estimate(const std::string& method, const std::string& preset, int bounces,
+                                            double rel_mse, std::uint64_t view, double taken_out) {
+    if (!(rel_mse >= 0.0) || !std::isfinite(rel_mse) || !(taken_out >= 0.0)) return;
+    const std::lock_guard lock(mutex_);
+    auto& kept = own_errors_[{method, preset, bounces}];
+    const RecordedOwnError estimate{rel_mse, view, false, taken_out};
+    for (auto& recorded : kept) {
+        if (recorded.view != view) continue;
+        if (recorded.bound || taken_out < recorded.taken_out) recorded = estimate;
+        return;
+    }
+    kept.push_back(estimate);
     if (kept.size() > kKept) kept.pop_front();
 }
 
