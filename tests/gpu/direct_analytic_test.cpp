@@ -197,60 +197,67 @@ TEST(DirectAnalytic, BlockerCastsTheShadowGeometryPredicts) {
 // moves its shadow along the ground by 1.5 t tan(theta) < 1.5 t (the sun is 20 degrees off the
 // vertical), the bilinear filter crosses half its value within half a texel of the stored edge, and
 // the stored edge lies within a texel of the true one. One pixel's footprint is added for where the
-// pixel centre falls.
+// pixel centre falls. The same holds with the whole scene scaled by 1e-3 and 1e4 (a ground of 40 cm
+// and of 4 km): the fit, the offsets and the depths are all relative to the scene.
 TEST(DirectAnalytic, ASunsShadowEdgeInAWideSceneLiesWithinTheViewCascadesTexels) {
     constexpr int kMapSize = 2048;
-    scene::Light sun = directional_light(glm::normalize(glm::vec3(0.3f, -1.0f, 0.2f)), 3.0f);
+    const scene::Light sun = directional_light(glm::normalize(glm::vec3(0.3f, -1.0f, 0.2f)), 3.0f);
     const scene::Material material = matte({0.6f, 0.6f, 0.6f});
-    auto setup = plane_under(material, sun);
-    setup.scene.objects.clear();
-    setup.scene.meshes.clear();
-    add_square(setup.scene, "ground", glm::vec3(0.0f), 200.0f, {0, 1, 0}, 0);
-    add_square(setup.scene, "blocker", {0.0f, 1.0f, 0.0f}, 0.5f, {0, -1, 0}, 0);  // culled from above, casts
-    setup.request.camera = top_down_camera(3.0f, 1.0f);
-    const scene::Camera& camera = *setup.request.camera;
-    // The shadow: the blocker moved along the light onto the ground.
-    const glm::vec2 shadow_centre = glm::vec2(sun.direction.x, sun.direction.z) / -sun.direction.y;
-    constexpr float kShadowHalf = 0.5f;
+    for (const float scale : {1.0f, 1e-3f, 1e4f}) {
+        SCOPED_TRACE("scale " + std::to_string(scale));
+        auto setup = plane_under(material, sun);
+        setup.scene.objects.clear();
+        setup.scene.meshes.clear();
+        add_square(setup.scene, "ground", glm::vec3(0.0f), 200.0f * scale, {0, 1, 0}, 0);
+        // Culled from above, it still casts.
+        add_square(setup.scene, "blocker", {0.0f, scale, 0.0f}, 0.5f * scale, {0, -1, 0}, 0);
+        setup.request.camera = top_down_camera(3.0f * scale, 1.0f);
+        const scene::Camera& camera = *setup.request.camera;
+        // The shadow: the blocker moved along the light onto the ground.
+        const glm::vec2 shadow_centre = scale * glm::vec2(sun.direction.x, sun.direction.z) / -sun.direction.y;
+        const float shadow_half = 0.5f * scale;
 
-    const auto cascades = passes::ShadowMaps::fit_view_cascades(setup.scene.world_bounds(), sun.direction, camera,
-                                                                kSize, kSize, kMapSize, 3);
-    ASSERT_FALSE(cascades.empty());
-    const float texel = cascades.front().texel;
-    const float footprint =
-        glm::distance(pixel_on_ground(camera, kSize, kSize, 0, 0), pixel_on_ground(camera, kSize, kSize, 1, 1));
-    const float tolerance = 3.0f * texel + footprint;
-    const float scene_texel = glm::length(setup.scene.world_bounds().extent()) / kMapSize;
-    RecordProperty("finest_cascade_texel_mm", static_cast<int>(std::lround(1000.0f * texel)));
-    RecordProperty("scene_map_texel_mm", static_cast<int>(std::lround(1000.0f * scene_texel)));
-    ASSERT_LT(tolerance, 0.5f * kShadowHalf) << "the test's shadow must be resolved by the cascade";
-
-    // Pixels whose side of the edge differs from the geometry's, farther from it than `tolerance`.
-    const auto misplaced = [&](int view_cascades) {
-        RenderRequest request = setup.request;
-        request.knobs = {{"shadow_map_size", kMapSize}, {"shadow_cascades", view_cascades}};
-        const auto result = render_scene(setup.scene, request);
-        int far_from_edge = 0, shadowed = 0;
-        for (int y = 0; y < kSize; ++y) {
-            for (int x = 0; x < kSize; ++x) {
-                const glm::vec3 p = pixel_on_ground(camera, kSize, kSize, x, y);
-                const glm::vec2 offset = glm::abs(glm::vec2(p.x, p.z) - shadow_centre);
-                const float chebyshev = std::max(offset.x, offset.y);
-                const bool in_shadow = chebyshev < kShadowHalf;
-                const float lit = expected_radiance(material, sun, camera, p).r;
-                const bool dark = result.frame.at(x, y).r < 0.5f * lit;
-                shadowed += in_shadow;
-                if (dark != in_shadow && std::abs(chebyshev - kShadowHalf) > tolerance) ++far_from_edge;
-            }
+        const auto cascades = passes::ShadowMaps::fit_view_cascades(setup.scene.world_bounds(), sun.direction, camera,
+                                                                    kSize, kSize, kMapSize, 3);
+        ASSERT_FALSE(cascades.empty());
+        const float texel = cascades.front().texel;
+        const float footprint =
+            glm::distance(pixel_on_ground(camera, kSize, kSize, 0, 0), pixel_on_ground(camera, kSize, kSize, 1, 1));
+        const float tolerance = 3.0f * texel + footprint;
+        const float scene_texel = glm::length(setup.scene.world_bounds().extent()) / kMapSize;
+        if (scale == 1.0f) {
+            RecordProperty("finest_cascade_texel_mm", static_cast<int>(std::lround(1000.0f * texel)));
+            RecordProperty("scene_map_texel_mm", static_cast<int>(std::lround(1000.0f * scene_texel)));
         }
-        EXPECT_GT(shadowed, 200);
-        return far_from_edge;
-    };
-    EXPECT_EQ(misplaced(3), 0) << "cascade texel " << texel << " m, tolerance " << tolerance << " m";
-    // The scene's map alone, whose texels are larger, fails the same bound: the test tells them apart.
-    const int by_the_scene_map = misplaced(0);
-    RecordProperty("pixels_misplaced_by_the_scene_map", by_the_scene_map);
-    EXPECT_GT(by_the_scene_map, 0) << "scene map texel " << scene_texel << " m";
+        ASSERT_LT(tolerance, 0.5f * shadow_half) << "the test's shadow must be resolved by the cascade";
+
+        // Pixels whose side of the edge differs from the geometry's, farther from it than `tolerance`.
+        const auto misplaced = [&](int view_cascades) {
+            RenderRequest request = setup.request;
+            request.knobs = {{"shadow_map_size", kMapSize}, {"shadow_cascades", view_cascades}};
+            const auto result = render_scene(setup.scene, request);
+            int far_from_edge = 0, shadowed = 0;
+            for (int y = 0; y < kSize; ++y) {
+                for (int x = 0; x < kSize; ++x) {
+                    const glm::vec3 p = pixel_on_ground(camera, kSize, kSize, x, y);
+                    const glm::vec2 offset = glm::abs(glm::vec2(p.x, p.z) - shadow_centre);
+                    const float chebyshev = std::max(offset.x, offset.y);
+                    const bool in_shadow = chebyshev < shadow_half;
+                    const float lit = expected_radiance(material, sun, camera, p).r;
+                    const bool dark = result.frame.at(x, y).r < 0.5f * lit;
+                    shadowed += in_shadow;
+                    if (dark != in_shadow && std::abs(chebyshev - shadow_half) > tolerance) ++far_from_edge;
+                }
+            }
+            EXPECT_GT(shadowed, 200);
+            return far_from_edge;
+        };
+        EXPECT_EQ(misplaced(3), 0) << "cascade texel " << texel << ", tolerance " << tolerance;
+        // The scene's map alone, whose texels are larger, fails the same bound: the test tells them apart.
+        const int by_the_scene_map = misplaced(0);
+        if (scale == 1.0f) RecordProperty("pixels_misplaced_by_the_scene_map", by_the_scene_map);
+        EXPECT_GT(by_the_scene_map, 0) << "scene map texel " << scene_texel;
+    }
 }
 
 // The same ground seen along it, with blockers at 15, 60 and 150 m: each shadow falls in a
