@@ -294,7 +294,8 @@ int main(int argc, char** argv) {
                 methods::KnobValues knobs;
                 for (const auto& [name, value] : options.knobs) {
                     const auto& declared = registry.find(method).knobs;
-                    if (std::any_of(declared.begin(), declared.end(), [&](const auto& knob) { return knob.name == name; })) {
+                    const std::string& knob_name = name;  // a lambda may not capture a structured binding (clang)
+                    if (std::any_of(declared.begin(), declared.end(), [&](const auto& knob) { return knob.name == knob_name; })) {
                         knobs[name] = value;
                     }
                 }

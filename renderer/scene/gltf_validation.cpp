@@ -542,11 +542,32 @@ std::string_view glb_json_chunk(std::span<const std::uint8_t> bytes) {
     if (total_length < 20) {  // and total_length - 20 below would wrap around
         reject(fmt::format("truncated GLB: header says {} bytes, its headers alone take 20", total_length));
     }
+    if (total_length < bytes.size()) {
+        reject(fmt::format("GLB: header says {} bytes, the file has {} (data past its end)", total_length,
+                           bytes.size()));
+    }
     const std::uint32_t json_length = read_u32_le(bytes.data() + 12);
     const std::uint32_t chunk_type = read_u32_le(bytes.data() + 16);
     if (chunk_type != 0x4E4F534Au) reject("GLB: the first chunk is not JSON");
     if (json_length > total_length - 20) {
         reject(fmt::format("truncated GLB: JSON chunk of {} bytes exceeds the file", json_length));
+    }
+    // Every chunk, not only the JSON one, lies within the file and starts on 4 bytes, as the format
+    // requires: tinygltf reads the chunk after the JSON one by its own header, and a JSON length one
+    // byte off (a single flipped bit) made it copy past the end of the data.
+    for (std::uint64_t offset = 12; offset < total_length;) {
+        if (total_length - offset < 8) {
+            reject(fmt::format("truncated GLB: a chunk header at byte {} needs 8 bytes, {} are left", offset,
+                               total_length - offset));
+        }
+        const std::uint32_t length = read_u32_le(bytes.data() + offset);
+        if (length % 4 != 0) {
+            reject(fmt::format("GLB: the chunk at byte {} is {} bytes, not a multiple of 4", offset, length));
+        }
+        if (length > total_length - offset - 8) {
+            reject(fmt::format("truncated GLB: the chunk at byte {} of {} bytes exceeds the file", offset, length));
+        }
+        offset += 8 + static_cast<std::uint64_t>(length);
     }
     return {reinterpret_cast<const char*>(bytes.data() + 20), json_length};
 }

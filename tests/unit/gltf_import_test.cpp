@@ -526,6 +526,47 @@ TEST(GltfImportMemory, RefusesGarbage) {
     }
 }
 
+// The chunks must tile the file, each within it and a multiple of 4 bytes long, as the format
+// requires: tinygltf finds the chunk after the JSON one by the JSON chunk's length, and a GLB whose
+// JSON length was one byte long (a flipped bit, found by scripts/fuzz; its request is in
+// server/fuzz/corpus) made it copy past the end of the data. Each such file is refused by name.
+TEST(GltfImportMemory, RefusesChunksThatDoNotTileTheFile) {
+    const std::vector<std::uint8_t> box =
+        read_bytes(assimp_dir / "BoxTextured-glTF-Binary/BoxTextured.glb");
+    ASSERT_NO_THROW(import_glb_memory(box, "upload"));
+    const auto u32_at = [](const std::vector<std::uint8_t>& bytes, std::size_t offset) {
+        std::uint32_t value = 0;
+        for (std::size_t i = 0; i < 4; ++i) value |= static_cast<std::uint32_t>(bytes[offset + i]) << (8 * i);
+        return value;
+    };
+    const auto set_u32 = [](std::vector<std::uint8_t>& bytes, std::size_t offset, std::uint32_t value) {
+        for (std::size_t i = 0; i < 4; ++i) bytes[offset + i] = static_cast<std::uint8_t>(value >> (8 * i));
+    };
+    const auto refusal = [](const std::vector<std::uint8_t>& bytes) {
+        try {
+            import_glb_memory(bytes, "upload");
+        } catch (const InputError& error) {
+            return std::string(error.what());
+        }
+        return std::string("loaded");
+    };
+    std::vector<std::uint8_t> json_long = box;
+    set_u32(json_long, 12, u32_at(json_long, 12) + 1);
+    EXPECT_NE(refusal(json_long).find("not a multiple of 4"), std::string::npos) << refusal(json_long);
+    std::vector<std::uint8_t> bin_past_the_end = box;
+    const std::size_t bin_header = 20 + u32_at(bin_past_the_end, 12);
+    set_u32(bin_past_the_end, bin_header, u32_at(bin_past_the_end, bin_header) + 4);
+    EXPECT_NE(refusal(bin_past_the_end).find("exceeds the file"), std::string::npos)
+        << refusal(bin_past_the_end);
+    std::vector<std::uint8_t> trailing = box;
+    trailing.insert(trailing.end(), {0, 0, 0, 0});
+    EXPECT_NE(refusal(trailing).find("data past its end"), std::string::npos) << refusal(trailing);
+    std::vector<std::uint8_t> header_cut = box;  // a last chunk of a header and nothing more
+    header_cut.insert(header_cut.end(), {4, 0, 0, 0});
+    set_u32(header_cut, 8, static_cast<std::uint32_t>(header_cut.size()));
+    EXPECT_NE(refusal(header_cut).find("needs 8 bytes"), std::string::npos) << refusal(header_cut);
+}
+
 TEST(GltfImportMemory, RefusesALengthShorterThanItsHeaders) {
     // A total length under the 20 bytes of headers once let a JSON chunk length past the input through.
     std::vector<std::uint8_t> glb = {'g', 'l', 'T', 'F', 2, 0, 0, 0, 0, 0, 0, 0,  // total length 0
