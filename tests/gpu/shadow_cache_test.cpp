@@ -5,6 +5,9 @@
 
 #include <gtest/gtest.h>
 
+#include <string>
+#include <vector>
+
 namespace bounce::test {
 namespace {
 
@@ -122,10 +125,21 @@ TEST(ShadowMaps, ACameraThatMovesRedrawsTheViewCascadesAlone) {
     maps.render(drawn.seen_from(along), 256, 2);
     EXPECT_TRUE(maps.last_render_reused());
 
+    // The first frame's passes: the maps over the scene and their cascades, timed as `shadow_maps`.
+    const auto pass_names = [&] {
+        std::vector<std::string> names;
+        for (const gpu::PassTiming& pass : drawn.timers.resolve()) names.push_back(pass.pass);
+        drawn.timers.begin_frame();
+        return names;
+    };
+    EXPECT_EQ(pass_names(), std::vector<std::string>{"shadow_maps"});
+
     scene::Camera moved = drawn.scene.cameras[0];
     moved.position.x += 5.0f;
     maps.render(drawn.seen_from(moved), 256, 2);
     EXPECT_FALSE(maps.last_render_reused());
+    // Cascades alone, timed apart: the planner prices a change of the lights by `shadow_maps`.
+    EXPECT_EQ(pass_names(), std::vector<std::string>{"shadow_view_cascades"});
     EXPECT_EQ(maps.maps_drawn(), 1u);  // the map over the scene kept
     EXPECT_EQ(maps.view_cascades_drawn(), 4u);
     EXPECT_EQ(maps.frames_drawn(), 2u);
