@@ -63,6 +63,11 @@ struct Options {
     // The relit passes: each time budget asked right after the lights change, after the same budget's
     // frame, then after another budget's.
     bool relit = true;
+    // The moved-camera pass: each time budget asked of a view just left and come back to.
+    bool moved = true;
+    // With --camera-as-warm, the moved-camera pass plans as if a moved camera redid nothing (as the
+    // planner did before FrameChange::view): what pricing the view cascades buys.
+    bool camera_as_warm = false;
 };
 
 constexpr std::string_view kBegin = "<!-- planner: bench/planner writes it -->";
@@ -263,8 +268,10 @@ double change_lights(scene::Scene& scene, const std::vector<scene::Light>& origi
 Measured render_as_it_comes(Renderer& renderer, SceneResources& resources, const scene::Scene& scene,
                             const SceneAnalysis& analysis, const planning::DeviceCosts& device,
                             planning::SceneMeasurements& costs, const planning::Candidate& plan, int size,
-                            const image::Frame& truth, double light_factor) {
+                            const image::Frame& truth, double light_factor,
+                            const std::optional<scene::Camera>& camera = std::nullopt) {
     RenderRequest request = bench::linear_request(plan.method, plan.preset, plan.knobs, size);
+    request.camera = camera;
     std::tie(request.width, request.height) = planning::scaled_size(size, size, plan.scale);
     const FramePlan frame_plan = plan_frame(request);
     if (frame_plan.site == FrameSite::gpu) warm_gpu_clock(renderer);
@@ -311,6 +318,37 @@ Measured relit_fixed_plan(Renderer& renderer, SceneResources& resources, scene::
     return relit;
 }
 
+// The scene's camera moved aside by 2% of the scene's diagonal, as a client's preview moves it from
+// one frame to the next: far more than a cascade's texel, so every sun's view cascades are fitted
+// anew.
+scene::Camera moved_aside(const scene::Camera& camera, const scene::Aabb& bounds) {
+    scene::Camera aside = camera;
+    aside.position += 0.02f * glm::length(bounds.extent()) * (camera.orientation * glm::vec3(1.0f, 0.0f, 0.0f));
+    return aside;
+}
+
+// A fixed GPU plan's frame of the scene's view right after a frame from `aside`: of three such
+// frames (each after a warm frame at the view), the one of the median time, with its error.
+// Not recorded: a daemon would not render it.
+Measured moved_fixed_plan(Renderer& renderer, SceneResources& resources, const Measured& fixed, int size,
+                          const image::Frame& truth, const scene::Camera& aside) {
+    const RenderRequest request = bench::linear_request(fixed.method, fixed.preset, fixed.knobs, size);
+    RenderRequest aside_request = request;
+    aside_request.camera = aside;
+    std::vector<std::pair<double, double>> frames;  // ms, relMSE
+    warm_gpu_clock(renderer);
+    for (int repeat = 0; repeat < 3; ++repeat) {
+        renderer.render(resources, request);
+        renderer.render(resources, aside_request);
+        const RenderResult result = renderer.render(resources, request);
+        frames.emplace_back(result.stats.render_ms, image::compare(result.frame, truth).rel_mse);
+    }
+    std::sort(frames.begin(), frames.end());
+    Measured moved = fixed;
+    std::tie(moved.ms, moved.rel_mse) = frames[1];
+    return moved;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -333,10 +371,12 @@ int main(int argc, char** argv) {
         else if (flag == "--references-only") options.references_only = true;
         else if (flag == "--passes") options.passes = arguments.number();
         else if (flag == "--no-relit") options.relit = false;
+        else if (flag == "--no-moved") options.moved = false;
+        else if (flag == "--camera-as-warm") options.camera_as_warm = true;
         else {
             std::fprintf(stderr,
                          "usage: bounce_bench_planner [--size N] [--reference-spp N] [--reference-bounces N] [--cache DIR] "
-                         "[--scene NAME]... [--errors E,E] [--budgets-ms T,T] [--passes N] [--no-relit] [--out DIR] [--markdown FILE] "
+                         "[--scene NAME]... [--errors E,E] [--budgets-ms T,T] [--passes N] [--no-relit] [--no-moved | --camera-as-warm] [--out DIR] [--markdown FILE] "
                          "[--analysis-only [--analysis-spp N] [--analysis-size N] | --references-only]\n");
             return 2;
         }
@@ -549,7 +589,9 @@ int main(int argc, char** argv) {
                     light_changes > 0 ? bench::change_every_light(scene, original_lights, light_changes) : 1.0;
                 // A frame as the daemon renders it for `budget`, with the lights as they are now.
                 const auto plan_and_render = [&](double budget) {
-                    relit_inputs.change = planning::changes_on(*resources);  // of the scene as it is now
+                    // Of the scene as it is now, seen from its camera.
+                    relit_inputs.change = planning::changes_on(
+                        *resources, resources->view_of(bench::linear_request("direct", "draft", {}, options.size)));
                     const planning::Plan plan = planning::plan(relit_inputs, {budget, std::nullopt});
                     // The reference keeps nothing between frames: rendered as in the other passes (its
                     // error the mean over seeds); a GPU plan as it comes.
@@ -592,6 +634,72 @@ int main(int argc, char** argv) {
                     }
                 }
                 scene.lights = original_lights;
+            }
+            // The moved-camera pass: each time budget asked of the scene's view by a client that had it
+            // a while, then moved the camera aside for a frame and back. The frame back redraws the
+            // suns' view cascades (FrameChange::view); the comparator is the most accurate fixed plan
+            // whose frame back fits, timed and measured the same way.
+            if (options.moved && !options.budgets_ms.empty()) {
+                const double largest = *std::max_element(options.budgets_ms.begin(), options.budgets_ms.end());
+                const scene::Camera aside =
+                    moved_aside(camera_for(scene, bench::linear_request("direct", "draft", {}, options.size)),
+                                scene.world_bounds());
+                std::vector<Measured> moved_fixed;
+                for (const Measured& m : fixed) {
+                    if (m.ms > largest) continue;
+                    moved_fixed.push_back(m.method == "reference"
+                                              ? m
+                                              : moved_fixed_plan(renderer, *resources, m, options.size, truth, aside));
+                    log::info("bench", "{} fixed {}: {:.1f} ms warm, {:.1f} ms back from a view aside", bench_scene.name,
+                              m.label, m.ms, moved_fixed.back().ms);
+                }
+                planning::PlanningInputs moved_inputs = inputs;
+                // A frame as the daemon renders it for `budget`, seen from `camera` (the scene's own: none).
+                const auto plan_and_render = [&](double budget, const std::optional<scene::Camera>& camera) {
+                    RenderRequest seen = bench::linear_request("direct", "draft", {}, options.size);
+                    seen.camera = camera;
+                    moved_inputs.change = planning::changes_on(*resources, resources->view_of(seen));
+                    if (options.camera_as_warm) {
+                        moved_inputs.change = [changes = moved_inputs.change](const std::string& method,
+                                                                              const std::string& preset,
+                                                                              const methods::KnobValues& knobs) {
+                            const FrameChange change = changes(method, preset, knobs);
+                            return change == FrameChange::view ? FrameChange::none : change;
+                        };
+                    }
+                    const planning::Plan plan = planning::plan(moved_inputs, {budget, std::nullopt});
+                    const Measured frame =
+                        plan.chosen.method == "reference" && !camera
+                            ? render_plan(renderer, *resources, scene, analysis, device, costs, plan.chosen.method,
+                                          plan.chosen.preset, plan.chosen.knobs, options.size, truth)
+                            : render_as_it_comes(renderer, *resources, scene, analysis, device, costs, plan.chosen,
+                                                 options.size, truth, 1.0, camera);
+                    return std::pair{plan, frame};
+                };
+                for (const double budget : options.budgets_ms) {
+                    for (int before = 0; before < 3; ++before) {
+                        const auto [steady, frame] = plan_and_render(budget, std::nullopt);
+                        if (steady.chosen.redoes == FrameChange::none) break;
+                    }
+                    const auto [away, away_frame] = plan_and_render(budget, aside);
+                    log::info("bench", "{} aside, ≤ {:g} ms: {} (redid {}, {:.1f} ms; its error is not of this view)",
+                              bench_scene.name, budget, away_frame.label, to_string(away.chosen.redoes), away_frame.ms);
+                    const auto [plan, planned] = plan_and_render(budget, std::nullopt);
+                    BudgetRow row;
+                    row.pass = options.passes + (options.relit ? 3 : 1);
+                    row.scene = bench_scene.name;
+                    row.budget = fmt::format("≤ {:g} ms, camera moved", budget);
+                    row.plan = label(plan.chosen.method, plan.chosen.preset, plan.chosen.knobs) +
+                               (plan.chosen.scale != 1.0 ? fmt::format(" at 1/{:g} size", 1.0 / plan.chosen.scale) : "") +
+                               fmt::format(" (redoes {})", to_string(plan.chosen.redoes));
+                    row.predicted_ms = plan.chosen.predicted_ms;
+                    row.predicted_error = plan.chosen.predicted_error;
+                    row.why = plan.why;
+                    log::info("bench", "{} {}: {}", bench_scene.name, row.budget, plan.why);
+                    row.planned = planned;
+                    judge_time_budget(row, budget, moved_fixed);
+                    rows.push_back(row);
+                }
             }
             std::string ratios;
             for (const auto& [bounces, ratio] : costs.noise_ratios()) ratios += fmt::format(" {}:{:.2f}", bounces, ratio);
@@ -674,7 +782,11 @@ int main(int argc, char** argv) {
               "it switches method or preset), and "
               "the frame is rendered as it comes, once, not warmed first; its comparator is the most accurate fixed "
               "plan whose frame right after such a change (built; of three, the one of the median time, with its own "
-              "error) fits. Before any GPU frame "
+              "error) fits. The last pass (`camera moved`) asks each time budget of the scene's view right after a "
+              "frame of the same budget from a camera moved aside by 2% of the scene's diagonal (its frames of the "
+              "view before it rendered as they come until one redoes nothing, three at most): the frame back draws "
+              "each sun's view cascades again; its comparator is the most accurate fixed plan whose frame back so "
+              "(of three, the one of the median time) fits. Before any GPU frame "
               "is timed, a small frame of another scene is rendered until the GPU is at the clock it runs the others "
               "at (warm_gpu_clock: an idle GPU clocks down, and right after the reference's CPU-only frames an H200 "
               "took five times as long).\n\n"

@@ -4,6 +4,9 @@
 // (planning/costs.hpp):
 //
 //   none:     nothing: a warm frame, as the bench measures methods;
+//   view:     the camera moved or turned, or the frame's shape changed, where a directional light
+//             casts view cascades (passes/shadow_maps.hpp) that the method reads: those cascades,
+//             redrawn (a camera moved along the light keeps them: the frame then says `none`);
 //   light_power: a light's colour or intensity alone: what its power feeds (vct's injected light,
 //             which it scales where every light's power changed by one factor and no surface emits;
 //             cssm's atlas solve, isr's light views and VPL tree), not the shadow maps, which hold
@@ -27,11 +30,12 @@
 
 namespace bounce {
 
-enum class FrameChange { none, light_power, lights, objects, knobs, knobs_and_scene };
+enum class FrameChange { none, view, light_power, lights, objects, knobs, knobs_and_scene };
 
 constexpr std::string_view to_string(FrameChange change) {
     switch (change) {
     case FrameChange::none: return "none";
+    case FrameChange::view: return "view";
     case FrameChange::light_power: return "light_power";
     case FrameChange::lights: return "lights";
     case FrameChange::objects: return "objects";
@@ -47,17 +51,28 @@ struct MethodState {
     std::uint64_t lights = 0;        // lights_fingerprint (renderer.hpp)
     std::uint64_t light_places = 0;  // the same without colour and intensity: what shadow maps depend on
     std::uint64_t geometry = 0;  // passes::geometry_fingerprint: meshes and their transforms
+    std::uint64_t view = 0;      // passes::ShadowMaps::view_fingerprint: the suns' view cascades; 0: none
     bool lit = false;            // a frame lit them: a `bake` request builds structures and solves no light
 };
 
-// What a frame in `next` redoes after a method's last frame in `last` (none yet: everything).
+// Whether a method at these knobs (resolved) reads view cascades: its `shadow_cascades` knob.
+inline bool reads_view_cascades(const methods::KnobValues& knobs) {
+    const auto cascades = knobs.find("shadow_cascades");
+    return cascades != knobs.end() && cascades->second > 0.0;
+}
+
+// What a frame in `next` redoes after a method's last frame in `last` (none yet: everything). A
+// light dimmed while the camera moved redoes the light's work and the cascades: priced as a move of
+// the lights, which redraws every map, the cascades among them.
 inline FrameChange change_between(const std::optional<MethodState>& last, const MethodState& next) {
     if (!last) return FrameChange::knobs_and_scene;
     const bool scene = !last->lit || last->lights != next.lights || last->geometry != next.geometry;
     if (last->knobs != next.knobs) return scene ? FrameChange::knobs_and_scene : FrameChange::knobs;
     if (last->geometry != next.geometry) return FrameChange::objects;
     if (!last->lit || last->light_places != next.light_places) return FrameChange::lights;
-    return scene ? FrameChange::light_power : FrameChange::none;
+    const bool view = last->view != next.view && reads_view_cascades(next.knobs);
+    if (scene) return view ? FrameChange::lights : FrameChange::light_power;
+    return view ? FrameChange::view : FrameChange::none;
 }
 
 }  // namespace bounce

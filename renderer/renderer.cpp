@@ -7,6 +7,7 @@
 #include "renderer/base/log.hpp"
 #include "renderer/memory_admission.hpp"
 #include "renderer/passes/light_geometry.hpp"
+#include "renderer/passes/shadow_maps.hpp"
 
 #include "common/shared_layout.h"
 
@@ -90,12 +91,25 @@ std::uint64_t lights_fingerprint(const scene::Scene& scene) {
     return hash.value();
 }
 
-MethodState SceneResources::state_now(const methods::KnobValues& knobs) const {
+MethodState SceneResources::state_now(const methods::KnobValues& knobs, const FrameView& view) const {
     const scene::Scene& scene = gpu_scene.scene();
     Hasher places;
     for (const scene::Light& light : scene.lights) places.add(passes::shadow_map_fingerprint(light, 0, 0));
     places.add(scene.lights.size());
-    return {knobs, lights_fingerprint(scene), places.value(), passes::geometry_fingerprint(scene), true};
+    return {knobs, lights_fingerprint(scene), places.value(), passes::geometry_fingerprint(scene),
+            view_cascades_now(knobs, view), true};
+}
+
+std::uint64_t SceneResources::view_cascades_now(const methods::KnobValues& knobs, const FrameView& view) const {
+    const auto size = knobs.find("shadow_map_size");
+    const auto cascades = knobs.find("shadow_cascades");
+    if (size == knobs.end() || cascades == knobs.end()) return 0;
+    return passes::ShadowMaps::view_fingerprint(gpu_scene.scene(), view.camera, view.width, view.height,
+                                                static_cast<int>(size->second), static_cast<int>(cascades->second));
+}
+
+FrameView SceneResources::view_of(const RenderRequest& request) const {
+    return {camera_for(gpu_scene.scene(), request), request.width, request.height};
 }
 
 void SceneResources::record_state(const std::string& method, std::optional<MethodState> state) {
@@ -104,8 +118,9 @@ void SceneResources::record_state(const std::string& method, std::optional<Metho
     else method_states_.erase(method);
 }
 
-FrameChange SceneResources::change_for(const std::string& method, const methods::KnobValues& knobs) const {
-    return change_for(method, state_now(knobs));
+FrameChange SceneResources::change_for(const std::string& method, const methods::KnobValues& knobs,
+                                       const FrameView& view) const {
+    return change_for(method, state_now(knobs, view));
 }
 
 FrameChange SceneResources::change_for(const std::string& method, const MethodState& next) const {
@@ -314,7 +329,8 @@ FrameStats Renderer::prepare(SceneResources& resources, const RenderRequest& req
     FrameStats stats;
     with_frame(resources, request, precompute, [&](methods::Method& method, const methods::FrameContext& frame,
                                                    const methods::KnobValues& knobs) {
-        const FrameChange change = resources.change_for(request.method, knobs);
+        const FrameView view = resources.view_of(request);
+        const FrameChange change = resources.change_for(request.method, knobs, view);
         timers_.begin_frame();
         const bool built = method.prepare(frame);
         fill_stats(stats, request, knobs, method, resources);
@@ -322,7 +338,7 @@ FrameStats Renderer::prepare(SceneResources& resources, const RenderRequest& req
         // Structures built for these knobs and this geometry, no light solved with them (unless a
         // frame already did: nothing changed since).
         if (built && change != FrameChange::none) {
-            MethodState unlit = resources.state_now(knobs);
+            MethodState unlit = resources.state_now(knobs, view);
             unlit.lit = false;
             resources.record_state(request.method, std::move(unlit));
         }
@@ -351,10 +367,11 @@ RenderResult Renderer::render(SceneResources& resources, const RenderRequest& re
     RenderResult result;
     with_frame(resources, request, precompute_, [&](methods::Method& method, const methods::FrameContext& frame,
                                                     const methods::KnobValues& knobs) {
-        result.stats.change = resources.change_for(request.method, knobs);
+        const FrameView view = resources.view_of(request);
+        result.stats.change = resources.change_for(request.method, knobs, view);
         timers_.begin_frame();
         method.render(frame);
-        resources.record_state(request.method, resources.state_now(knobs));
+        resources.record_state(request.method, resources.state_now(knobs, view));
         const gpu::Texture* display = nullptr;
         if (request.make_display_image) display = &tonemap_.run(shaders_, state_, timers_, output_, request.display);
 
@@ -366,6 +383,11 @@ RenderResult Renderer::render(SceneResources& resources, const RenderRequest& re
         result.stats.readback_ms = ms_since(readback_start);
 
         fill_stats(result.stats, request, knobs, method, resources);
+        // The prediction hashes the cascades the maps would fit (ShadowMaps::view_fingerprint); a
+        // frame that drew none all the same redid nothing, and is a warm frame for the planner.
+        if (result.stats.change == FrameChange::view && !result.stats.ran("shadow_view_cascades")) {
+            result.stats.change = FrameChange::none;
+        }
     }, cancelled);
     result.stats.render_ms = ms_since(start);
     return result;

@@ -17,6 +17,7 @@
 #include "renderer/planning/costs.hpp"
 #include "renderer/scene_analysis.hpp"
 
+#include <algorithm>
 #include <atomic>
 #include <filesystem>
 #include <functional>
@@ -62,6 +63,9 @@ struct FrameStats {
         for (const gpu::PassTiming& timing : passes) ms += timing.pass == name ? timing.gpu_ms : 0.0;
         return ms;
     }
+    bool ran(std::string_view name) const {
+        return std::any_of(passes.begin(), passes.end(), [&](const gpu::PassTiming& timing) { return timing.pass == name; });
+    }
 };
 
 struct RenderResult {
@@ -94,6 +98,13 @@ RenderResult render_on_cpu(const scene::Scene& scene, const RenderRequest& reque
 
 // A scene's resident GPU state: its geometry and textures and the methods that rendered it (with
 // their precomputed structures). Destroy it on the render thread, before the Renderer.
+// The camera a frame sees the scene with and its size: what the suns' view cascades are fitted to
+// besides the scene (a frame rendered smaller to be upsampled, of the same shape, fits the same).
+struct FrameView {
+    scene::Camera camera;
+    int width = 0, height = 0;
+};
+
 class SceneResources {
 public:
     explicit SceneResources(const scene::Scene& scene);
@@ -118,13 +129,19 @@ public:
     // it was made with (lights_fingerprint of that copy); analysis() makes it anew if they changed.
     void install_analysis(SceneAnalysis analysis, std::uint64_t lights);
 
-    // What a frame of `method` at `knobs` (resolved, as plan_frame resolves them) would redo now,
-    // against the method's last frame on these resources (frame_change.hpp). Thread-safe.
-    FrameChange change_for(const std::string& method, const methods::KnobValues& knobs) const;
-    // The same for a state made once by state_now() (the planner asks for hundreds of plans).
+    // What a frame of `method` at `knobs` (resolved, as plan_frame resolves them) seen as `view`
+    // would redo now, against the method's last frame on these resources (frame_change.hpp).
+    // Thread-safe.
+    FrameChange change_for(const std::string& method, const methods::KnobValues& knobs, const FrameView& view) const;
+    // The same for a state made by state_now() (the planner asks for hundreds of plans).
     FrameChange change_for(const std::string& method, const MethodState& next) const;
-    // The state a frame at `knobs` would leave now: the scene's lights and geometry as they are.
-    MethodState state_now(const methods::KnobValues& knobs) const;
+    // The state a frame at `knobs` seen as `view` would leave now: the scene's lights and geometry as
+    // they are, and the suns' view cascades it fits (passes::ShadowMaps::view_fingerprint).
+    MethodState state_now(const methods::KnobValues& knobs, const FrameView& view) const;
+    // The state's view cascades for other knobs.
+    std::uint64_t view_cascades_now(const methods::KnobValues& knobs, const FrameView& view) const;
+    // The camera and frame size a request renders with on this scene.
+    FrameView view_of(const RenderRequest& request) const;
 
     // What this scene's frames measured, for the planner (renderer/planning/). Shared: CPU frames
     // record into it from the CPU pool, and may outlive the resources.

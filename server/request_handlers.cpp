@@ -388,9 +388,14 @@ void RequestHandlers::plan_budgeted(RenderOrder& order, Renderer& renderer, Scen
     const planning::DeviceCosts& device = device_costs(renderer);
     RenderRequest& frame = order.request;
     const std::optional<std::string> method = frame.method == "auto" ? std::nullopt : std::optional(frame.method);
+    // What each plan's frame would redo is judged from the view it renders (a camera moved redraws
+    // the suns' view cascades).
+    RenderRequest seen = frame;
+    if (auto camera = view_camera(*entry.scene, order)) seen.camera = std::move(camera);
+    const FrameView view = entry.resources->view_of(seen);
     const planning::Plan plan = planning::plan({entry.resources->analysis(), device, entry.resources->measurements.get(),
                                                 frame.width, frame.height, method, resample_errors(order, renderer, entry),
-                                                planning::changes_on(*entry.resources)},
+                                                planning::changes_on(*entry.resources, view)},
                                                *order.budget);
     frame.method = plan.chosen.method;
     frame.preset = plan.chosen.preset;

@@ -129,6 +129,22 @@ std::vector<ShadowMaps::ViewCascade> ShadowMaps::fit_view_cascades(const scene::
     return fitted;
 }
 
+std::uint64_t ShadowMaps::view_fingerprint(const scene::Scene& scene, const scene::Camera& camera, int width, int height,
+                                           int size, int cascades) {
+    if (cascades <= 0) return 0;
+    Hasher hash;
+    bool any = false;
+    const scene::Aabb bounds = scene.world_bounds();
+    for (const scene::Light& light : scene.lights) {
+        if (light.type != scene::LightType::directional || !has_power(light)) continue;
+        const auto fitted = fit_view_cascades(bounds, light.direction, camera, width, height, size, cascades);
+        for (const ViewCascade& cascade : fitted) hash.add(cascade.view_projection).add(cascade.texel);
+        hash.add(fitted.size());
+        any = any || !fitted.empty();
+    }
+    return any ? hash.value() | 1u : 0u;
+}
+
 void ShadowMaps::render_view_cascades(const PassContext& context, const gpu::ShaderProgram& program, LightMap& map,
                                       int size, std::vector<ViewCascade> cascades) {
     map.view_cascades = std::move(cascades);

@@ -64,6 +64,12 @@ public:
     static std::vector<ViewCascade> fit_view_cascades(const scene::Aabb& bounds, const glm::vec3& light_direction,
                                                       const scene::Camera& camera, int width, int height, int size,
                                                       int cascades);
+    // A hash of the view cascades render(context, size, cascades) fits for every directional light
+    // with power in `scene`, seen by `camera` in a frame of `width` x `height` pixels: what a moved
+    // camera changes of the maps (the same cascades, the same hash; 0 where none are fitted). The
+    // renderer classifies a frame whose hash changed as redrawing them (frame_change.hpp).
+    static std::uint64_t view_fingerprint(const scene::Scene& scene, const scene::Camera& camera, int width, int height,
+                                          int size, int cascades);
     // The world texel edge of light `index`'s finest view cascade (0 where it has none): what the
     // view cascades bought, for tests and statistics.
     float finest_view_texel(std::size_t light_index) const;

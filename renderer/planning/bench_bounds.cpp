@@ -105,7 +105,7 @@ double change_margin(const std::string& method, FrameChange change) {
         if (method != margin.method) continue;
         return change == FrameChange::none          ? 0.0
                : change == FrameChange::light_power ? margin.light_power
-               : change == FrameChange::lights      ? margin.lights
+               : change == FrameChange::lights || change == FrameChange::view ? margin.lights
                                                     : margin.knobs;
     }
     return 0.0;
@@ -118,7 +118,8 @@ double change_cost_bound(const std::string& method, const std::string& preset, F
     // pass read less than a dimmed frame took (isr draft in the furnished room: 0.07 against 0.40).
     if (change == FrameChange::light_power) return most->light_power;
     const double lights = besides_maps ? most->lights_besides_maps : most->lights;
-    if (change == FrameChange::lights) return lights;
+    // A moved camera redraws the view cascades, which a move of the lights redraws with the rest.
+    if (change == FrameChange::lights || change == FrameChange::view) return lights;
     // Structures built anew redo the lights' work too (a cold frame measured under a relit one only
     // where it kept maps of the same size, or by the noise of one frame).
     return std::max(lights, besides_maps ? most->knobs_besides_maps : most->knobs);

@@ -33,8 +33,9 @@ double typical_bounce_cost(const std::string& method, const std::string& preset,
 // and a moved object as that, since either may rebuild what the knobs select (cssm rebakes an
 // object it took for static). `besides_maps`: less the shadow maps such frames drew, for a scene
 // that prices those from its own timings (SceneMeasurements::shadow_maps_ms): their cost follows
-// the scene's triangles and lights, not the warm frame's pixels. 0 for FrameChange::none and for
-// methods the bench has no figure of.
+// the scene's triangles and lights, not the warm frame's pixels. A moved camera (view) as a move of
+// the lights, which redraws its cascades and more. 0 for FrameChange::none and for methods the bench
+// has no figure of.
 inline constexpr double kChangePriorPixels = 128.0 * 128.0;
 // What a device's calibrated figure for a change fell short of the bench corpus's frames, at most, in
 // warm frames at kChangePriorPixels (bench/change_margins.py): added to it, since the calibration

@@ -31,7 +31,8 @@ CostLine CostLine::through(double pixels_a, double ms_a, double pixels_b, double
 
 double ChangeCost::beyond_warm(FrameChange change) const {
     switch (change) {
-    case FrameChange::none: return 0.0;
+    case FrameChange::none:
+    case FrameChange::view: return 0.0;  // its cascades are all it redoes, priced as the scene's maps
     case FrameChange::light_power: return light_power;
     case FrameChange::lights: return lights;
     case FrameChange::objects:
@@ -154,26 +155,41 @@ void SceneMeasurements::record(const std::string& method, const std::string& pre
     if (kept.size() > kKept) kept.pop_front();
 }
 
-void SceneMeasurements::record_shadow_maps(int size, double ms) {
-    if (size <= 0 || !(ms >= 0.0)) return;
+void SceneMeasurements::record_maps(MapsKey key, double ms) {
+    if (std::get<2>(key) <= 0 || !(ms >= 0.0)) return;
     const std::lock_guard lock(mutex_);
-    auto& kept = shadow_maps_[size];
+    auto& kept = shadow_maps_[key];
     kept.push_back(ms);
     if (kept.size() > kKept) kept.pop_front();
 }
 
-std::optional<double> SceneMeasurements::shadow_maps_ms(int size) const {
+std::optional<double> SceneMeasurements::maps_ms(bool view_only, int cascades, int size) const {
     const std::lock_guard lock(mutex_);
-    if (shadow_maps_.empty()) return std::nullopt;
     const auto largest = [](const std::deque<double>& kept) { return *std::max_element(kept.begin(), kept.end()); };
-    const auto above = shadow_maps_.lower_bound(size);
-    if (above != shadow_maps_.end() && above->first == size) return largest(above->second);
-    if (above != shadow_maps_.begin()) {
+    const auto same_kind = [&](const auto it) {
+        return it != shadow_maps_.end() && std::get<0>(it->first) == view_only && std::get<1>(it->first) == cascades;
+    };
+    const auto above = shadow_maps_.lower_bound({view_only, cascades, size});
+    if (same_kind(above) && std::get<2>(above->first) == size) return largest(above->second);
+    if (above != shadow_maps_.begin() && same_kind(std::prev(above))) {
         const auto below = std::prev(above);
-        const double texels = static_cast<double>(size) / below->first;
+        const double texels = static_cast<double>(size) / std::get<2>(below->first);
         return largest(below->second) * texels * texels;
     }
-    return largest(above->second);
+    if (same_kind(above)) return largest(above->second);
+    return std::nullopt;
+}
+
+void SceneMeasurements::record_shadow_maps(int size, int cascades, double ms) { record_maps({false, cascades, size}, ms); }
+
+std::optional<double> SceneMeasurements::shadow_maps_ms(int size, int cascades) const {
+    return maps_ms(false, cascades, size);
+}
+
+void SceneMeasurements::record_view_cascades(int size, int cascades, double ms) { record_maps({true, cascades, size}, ms); }
+
+std::optional<double> SceneMeasurements::view_cascades_ms(int size, int cascades) const {
+    return maps_ms(true, cascades, size);
 }
 
 std::vector<SceneMeasurements::FrameTime> SceneMeasurements::changed_frames(const std::string& method,

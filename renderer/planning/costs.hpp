@@ -177,15 +177,21 @@ public:
     // of 64 pixels a side and more have their quarter-size draft (16x); smaller ones keep the ratio.
     static constexpr double kLineSpan = 8.0;
 
-    // The shadow_maps pass of GPU frames that drew maps, by map size (the `shadow_map_size` knob):
-    // every GPU method draws the same maps of the scene's lights, and on a scene of many triangles
-    // they are most of what a change of the lights costs (the furnished room's, 262K triangles and
-    // lamps in cube maps, took 1.5 s at 2048 texels on llvmpipe, where a warm frame of direct took
-    // 7 ms). shadow_maps_ms(): the largest of the last kKept at the size (a frame that reused some
-    // maps drew less); else the nearest size measured below it, scaled by the ratio of texels, else
-    // the nearest above as measured (never lowered); nullopt when none was measured.
-    void record_shadow_maps(int size, double ms);
-    std::optional<double> shadow_maps_ms(int size) const;
+    // The shadow_maps pass of GPU frames that drew maps, by map size and view cascades (the
+    // `shadow_map_size` and `shadow_cascades` knobs): every GPU method draws the same maps of the
+    // scene's lights, and on a scene of many triangles they are most of what a change of the lights
+    // costs (the furnished room's, 262K triangles and lamps in cube maps, took 1.5 s at 2048 texels
+    // on llvmpipe, where a warm frame of direct took 7 ms). shadow_maps_ms(): the largest of the last
+    // kKept at the size (a frame that reused some maps drew less); else the nearest size measured
+    // below it, scaled by the ratio of texels, else the nearest above as measured (never lowered);
+    // nullopt when none was measured with that many cascades (they fill their texels with what the
+    // camera sees, where the scene's map is mostly empty: 613 against 54 ms in the bench street).
+    void record_shadow_maps(int size, int cascades, double ms);
+    std::optional<double> shadow_maps_ms(int size, int cascades = 0) const;
+    // The same of the shadow_view_cascades pass: frames whose camera moved, which redrew the view
+    // cascades alone (FrameChange::view).
+    void record_view_cascades(int size, int cascades, double ms);
+    std::optional<double> view_cascades_ms(int size, int cascades) const;
 
     // A reference frame's noise per sample (methods::reference::noise_per_sample) at a bounce count,
     // as a multiple of what the analysis measured there: over a whole frame's samples it meets rare
@@ -264,7 +270,11 @@ private:
         double ratio = 0.0, spp = 0.0;
     };
     std::map<int, NoiseRatio> noise_;
-    std::map<int, std::deque<double>> shadow_maps_;  // by size
+    // By whether the cascades alone were drawn, the cascades, and the map size.
+    using MapsKey = std::tuple<bool, int, int>;
+    std::map<MapsKey, std::deque<double>> shadow_maps_;
+    void record_maps(MapsKey key, double ms);
+    std::optional<double> maps_ms(bool view_only, int cascades, int size) const;
     std::deque<double> noise_scales_, compared_noise_scales_;
     struct RecordedOwnError {
         double rel_mse = 0.0;

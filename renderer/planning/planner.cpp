@@ -281,20 +281,38 @@ PlanningInputs at_pixels(const PlanningInputs& inputs, double pixels) {
 }
 
 // A change's class in the device's calibration (ChangeCost::beyond_warm): a dimming, a move of the
-// lights, or structures built anew.
+// lights, or structures built anew. A moved camera has none (its cascades are all it redoes).
 int calibration_class(FrameChange change) {
-    return change == FrameChange::light_power ? 0 : change == FrameChange::lights ? 1 : 2;
+    return change == FrameChange::view          ? -1
+           : change == FrameChange::light_power ? 0
+           : change == FrameChange::lights      ? 1
+                                                : 2;
+}
+
+// A plan's `shadow_map_size` and `shadow_cascades` knobs, resolved; nullopt for a method without maps.
+std::optional<std::pair<int, int>> map_knobs(const std::string& method, const std::string& preset,
+                                             const methods::KnobValues& knobs) {
+    const methods::KnobValues resolved = methods::MethodRegistry::builtin().resolve(method, preset, knobs);
+    const auto map_size = resolved.find("shadow_map_size");
+    if (map_size == resolved.end()) return std::nullopt;
+    const auto cascades = resolved.find("shadow_cascades");
+    return std::pair{static_cast<int>(map_size->second), cascades == resolved.end() ? 0 : static_cast<int>(cascades->second)};
 }
 
 // The shadow maps a frame of the preset draws after `change`: none for a change of power alone; the
-// scene's timing of them at the preset's map size; nullopt where the scene has none.
+// scene's timing of them at the preset's map size and cascades; nullopt where the scene has none.
+// After a moved camera, the view cascades alone, as this scene's frames that redrew them alone took;
+// before any did, as its frames that drew every map took (the cascades are a part of those).
 std::optional<double> maps_redrawn_ms(const PlanningInputs& inputs, const std::string& method, const std::string& preset,
                                       const methods::KnobValues& knobs, FrameChange change) {
     if (change == FrameChange::light_power) return 0.0;
-    const methods::KnobValues resolved = methods::MethodRegistry::builtin().resolve(method, preset, knobs);
-    const auto map_size = resolved.find("shadow_map_size");
-    if (!inputs.scene || map_size == resolved.end()) return std::nullopt;
-    return inputs.scene->shadow_maps_ms(static_cast<int>(map_size->second));
+    const auto maps = map_knobs(method, preset, knobs);
+    if (!inputs.scene || !maps) return std::nullopt;
+    const auto [size, cascades] = *maps;
+    if (change == FrameChange::view) {
+        if (const auto view = inputs.scene->view_cascades_ms(size, cascades)) return view;
+    }
+    return inputs.scene->shadow_maps_ms(size, cascades);
 }
 
 // How many times what the device's calibration priced it this scene's frames of the method redid
@@ -349,12 +367,13 @@ std::optional<SceneScale> scene_scale_of_calibration(const PlanningInputs& input
 
 }  // namespace
 
-PlanningInputs::ChangeOf changes_on(const SceneResources& resources) {
-    const MethodState now = resources.state_now({});  // the scene's lights and geometry, hashed once
-    return [&resources, now](const std::string& method, const std::string& preset, const methods::KnobValues& knobs) {
+PlanningInputs::ChangeOf changes_on(const SceneResources& resources, const FrameView& view) {
+    const MethodState now = resources.state_now({}, view);  // the scene's lights and geometry, hashed once
+    return [&resources, now, view](const std::string& method, const std::string& preset, const methods::KnobValues& knobs) {
         try {
             MethodState next = now;
             next.knobs = methods::MethodRegistry::builtin().resolve(method, preset, knobs);  // as plan_frame does
+            next.view = resources.view_cascades_now(next.knobs, view);  // the cascades its maps' knobs fit
             return resources.change_for(method, next);
         } catch (const InputError&) {
             return FrameChange::knobs_and_scene;
@@ -383,6 +402,22 @@ double predicted_ms(const PlanningInputs& inputs, const std::string& method, con
         extra = std::max(0.0, median(beyond_warm));
         source = fmt::format("as {} such frame{} of the preset measured here beyond a warm one", beyond_warm.size(),
                              beyond_warm.size() == 1 ? "" : "s");
+    } else if (change == FrameChange::view) {
+        // The cascades are all a moved camera redoes: as this scene timed them, else at most what a
+        // move of the lights costs, which redraws them and more.
+        const auto maps = map_knobs(method, preset, knobs);
+        const auto alone = inputs.scene && maps ? inputs.scene->view_cascades_ms(maps->first, maps->second) : std::nullopt;
+        if (const auto maps_ms = maps_redrawn_ms(inputs, method, preset, knobs, change)) {
+            extra = *maps_ms;
+            source = alone ? "the view cascades, as this scene's frames redrew them alone"
+                           : "at most the shadow maps, cascades among them, as this scene's frames drew them all";
+        } else {
+            const double bound = change_cost_bound(method, preset, FrameChange::lights);
+            extra = bound * warm_ms(at_pixels(inputs, kChangePriorPixels), method, preset, knobs, nullptr);
+            source = fmt::format("at most a move of the lights, {:.2g} x its warm frame at 128x128, the most the bench "
+                                 "measured",
+                                 bound);
+        }
     } else {
         // The shadow maps from this scene's own timings of them at the plan's map size, where it has
         // any, and the rest from the device's calibration of such frames as a multiple of a warm
@@ -425,7 +460,9 @@ double predicted_ms(const PlanningInputs& inputs, const std::string& method, con
     }
     if (basis) {
         *basis += fmt::format("; + {:.1f} ms redone: {} ({})", extra,
-                              change == FrameChange::light_power ? "a light's colour or intensity changed since the method's last frame"
+                              change == FrameChange::view ? "the camera moved since the method's last frame, and with it "
+                                                            "the sun's view cascades"
+                              : change == FrameChange::light_power ? "a light's colour or intensity changed since the method's last frame"
                               : change == FrameChange::lights  ? "the lights changed since the method's last frame"
                               : change == FrameChange::objects ? "objects moved since the method's last frame"
                               : change == FrameChange::knobs   ? "the method's last frame here had other knobs"
@@ -690,11 +727,15 @@ void record_frame(SceneMeasurements& measurements, const SceneAnalysis* analysis
         measurements.record(stats.method, stats.preset, bounces_knob(stats.knobs).value_or(-1), stats.render_ms, *baseline,
                             static_cast<double>(width) * height, stats.change);
     }
-    // The pass is timed only in frames that drew maps (passes::ShadowMaps).
+    // The passes are timed only in frames that drew maps (passes::ShadowMaps).
     const auto map_size = stats.knobs.find("shadow_map_size");
     if (map_size != stats.knobs.end()) {
+        const auto cascades_knob = stats.knobs.find("shadow_cascades");
+        const int size = static_cast<int>(map_size->second);
+        const int cascades = cascades_knob == stats.knobs.end() ? 0 : static_cast<int>(cascades_knob->second);
         for (const auto& pass : stats.passes) {
-            if (pass.pass == "shadow_maps") measurements.record_shadow_maps(static_cast<int>(map_size->second), pass.gpu_ms);
+            if (pass.pass == "shadow_maps") measurements.record_shadow_maps(size, cascades, pass.gpu_ms);
+            if (pass.pass == "shadow_view_cascades") measurements.record_view_cascades(size, cascades, pass.gpu_ms);
         }
     }
     record_reference_noise(measurements, analysis, stats);

@@ -122,10 +122,11 @@ struct PlanningInputs {
 };
 
 // PlanningInputs::change for a scene's resources as the scene is now (its lights and geometry hashed
-// at the call: make it for each plan): each plan's knobs resolved as plan_frame resolves them (the
-// registry's preset with its overrides), then
-// SceneResources::change_for. Plans it cannot resolve count as built anew (knobs_and_scene).
-PlanningInputs::ChangeOf changes_on(const SceneResources& resources);
+// at the call: make it for each plan), seen as `view` (SceneResources::view_of the frame's request):
+// each plan's knobs resolved as plan_frame resolves them (the registry's preset with its overrides),
+// the view cascades they fit, then SceneResources::change_for. Plans it cannot resolve count as
+// built anew (knobs_and_scene).
+PlanningInputs::ChangeOf changes_on(const SceneResources& resources, const FrameView& view);
 
 // Every plan the planner predicts for a frame, at full size and at each scale of its method's
 // `resample_errors`, with those the analysis rules out left out (and named in `ruled_out`).

@@ -380,6 +380,49 @@ TEST(Budget, AFrameAfterALightChangeSaysWhatItRedoesAndIsPricedWithIt) {
     EXPECT_NE(switched_why.find("as the device's calibration measured"), std::string::npos) << switched_why;
 }
 
+// A camera that moves redraws a sun's view cascades: with a sun added to the box, a budgeted frame
+// from another camera says it redoes `view` and is priced with the cascades (the scene's timing of
+// its maps, the cascades among them, before any frame redrew them alone); the frame says it redid
+// `view`, timed the pass `shadow_view_cascades`, and the next from the same camera redoes nothing.
+// Without a sun the camera is nothing a frame redoes.
+TEST(Budget, AFrameFromAMovedCameraRedoesTheSunsViewCascades) {
+    BudgetDaemon d;
+    // Inside the box, so that the cascades near the camera are finer than the sun's map over it (a
+    // camera that sees all of a scene has none).
+    const json eye = {{"position", {0.5, 1.2, 0.6}}, {"look_at", {-0.5, 0.5, -0.5}}, {"fov_deg", 40}};
+    json aside = eye;
+    aside["position"] = {0.2, 1.2, 0.6};
+    const auto budgeted = [&](const json& camera) {
+        return d.render({{"method", "direct"}, {"camera", camera}, {"budget", {{"max_ms", 1.0e5}}}});
+    };
+    budgeted(eye);
+    const auto no_sun = budgeted(aside);
+    EXPECT_EQ(no_sun.body["plan"]["redoes"], "none") << no_sun.body["plan"].dump();
+    EXPECT_EQ(no_sun.body["redid"], "none");
+    d.client.request(MessageType::light_set, {{"scene", "cornell"}, {"light", "sun"}, {"type", "directional"},
+                                              {"direction", {0.3, -1.0, 0.2}}, {"intensity", 2.0}});
+    const auto lit = budgeted(eye);
+    EXPECT_EQ(lit.body["redid"], "lights");
+    EXPECT_TRUE(lit.body["timings_ms"]["passes"].contains("shadow_maps"));
+    EXPECT_EQ(budgeted(eye).body["redid"], "none");
+    const auto moved = budgeted(aside);
+    EXPECT_EQ(moved.body["plan"]["redoes"], "view") << moved.body["plan"].dump();
+    EXPECT_EQ(moved.body["redid"], "view");
+    EXPECT_TRUE(moved.body["timings_ms"]["passes"].contains("shadow_view_cascades"));
+    EXPECT_FALSE(moved.body["timings_ms"]["passes"].contains("shadow_maps"));
+    const std::string why = moved.body["plan"]["why"].get<std::string>();
+    EXPECT_NE(why.find("the camera moved"), std::string::npos) << why;
+    EXPECT_NE(why.find("at most the shadow maps"), std::string::npos) << why;
+    const auto again = budgeted(aside);
+    EXPECT_EQ(again.body["plan"]["redoes"], "none") << again.body["plan"].dump();
+    EXPECT_EQ(again.body["redid"], "none");
+    // Back to the first camera: priced now as the frame that redrew the cascades alone.
+    const auto back = budgeted(eye);
+    EXPECT_EQ(back.body["redid"], "view");
+    const std::string back_why = back.body["plan"]["why"].get<std::string>();
+    EXPECT_NE(back_why.find("as 1 such frame"), std::string::npos) << back_why;
+}
+
 TEST(Budget, MalformedBudgetsAreRefusedNamingTheField) {
     BudgetDaemon d;
     const auto refused = [&](json body, const std::string& field) {

@@ -589,7 +589,7 @@ TEST(Costs, AReferenceFrameRecordsItsNoiseAgainstTheAnalysis) {
 // A method keeps its structures between frames, so what a frame redoes depends on what changed
 // since its method's last frame on the scene.
 TEST(FrameChange, AFrameRedoesWhatChangedSinceItsMethodsLastFrame) {
-    const MethodState last{{{"resolution", 64}}, 1, 5, 2, true};
+    const MethodState last{.knobs = {{"resolution", 64}}, .lights = 1, .light_places = 5, .geometry = 2, .lit = true};
     EXPECT_EQ(change_between(std::nullopt, last), FrameChange::knobs_and_scene);  // the method's first frame
     EXPECT_EQ(change_between(last, last), FrameChange::none);
     MethodState next = last;
@@ -607,6 +607,32 @@ TEST(FrameChange, AFrameRedoesWhatChangedSinceItsMethodsLastFrame) {
     MethodState baked = last;
     baked.lit = false;  // a bake built the structures and solved no light
     EXPECT_EQ(change_between(baked, last), FrameChange::lights);
+}
+
+// A camera that moved redraws the view cascades of a method that reads them, and nothing of one
+// that does not; with a light's power changed too, the frame redoes the light's work and the
+// cascades, and is priced as a move of the lights (which redraws every map).
+TEST(FrameChange, AMovedCameraRedrawsTheViewCascadesOfAMethodThatReadsThem) {
+    const MethodState last{.knobs = {{"shadow_cascades", 3}}, .lights = 1, .light_places = 5, .geometry = 2, .view = 7,
+                           .lit = true};
+    MethodState moved = last;
+    moved.view = 8;
+    EXPECT_EQ(change_between(last, moved), FrameChange::view);
+    MethodState without = last, moved_without = moved;
+    without.knobs["shadow_cascades"] = 0;
+    moved_without.knobs["shadow_cascades"] = 0;
+    EXPECT_EQ(change_between(without, moved_without), FrameChange::none);
+    MethodState no_knob = last, moved_no_knob = moved;
+    no_knob.knobs.clear();
+    moved_no_knob.knobs.clear();
+    EXPECT_EQ(change_between(no_knob, moved_no_knob), FrameChange::none);  // the reference, say
+    moved.lights = 3;
+    EXPECT_EQ(change_between(last, moved), FrameChange::lights);
+    moved.light_places = 6;
+    EXPECT_EQ(change_between(last, moved), FrameChange::lights);
+    moved.geometry = 3;
+    EXPECT_EQ(change_between(last, moved), FrameChange::objects);
+    EXPECT_EQ(to_string(FrameChange::view), "view");
 }
 
 // Frames that redid work are kept apart: a relit frame is not a slow warm frame, and a warm one does
@@ -689,13 +715,22 @@ TEST(Planner, AFrameIsPricedWithWhatItWouldRedo) {
 // does: a scene that timed its maps prices them at that time, and the rest of the work by the
 // bench's bound without them.
 TEST(Planner, ShadowMapsArePricedFromTheScenesOwnTimingsOfThem) {
+    const int cascades = static_cast<int>(methods::MethodRegistry::builtin().resolve("vct", "medium", {}).at("shadow_cascades"));
+    ASSERT_GT(cascades, 0);
     SceneMeasurements scene;
-    EXPECT_FALSE(scene.shadow_maps_ms(1024));
-    scene.record_shadow_maps(1024, 100.0);
-    scene.record_shadow_maps(1024, 5.0);  // most maps reused
-    EXPECT_DOUBLE_EQ(*scene.shadow_maps_ms(1024), 100.0);
-    EXPECT_DOUBLE_EQ(*scene.shadow_maps_ms(2048), 400.0);  // four times the texels
-    EXPECT_DOUBLE_EQ(*scene.shadow_maps_ms(512), 100.0);   // never lowered
+    EXPECT_FALSE(scene.shadow_maps_ms(1024, cascades));
+    scene.record_shadow_maps(1024, cascades, 100.0);
+    scene.record_shadow_maps(1024, cascades, 5.0);  // most maps reused
+    EXPECT_DOUBLE_EQ(*scene.shadow_maps_ms(1024, cascades), 100.0);
+    EXPECT_DOUBLE_EQ(*scene.shadow_maps_ms(2048, cascades), 400.0);  // four times the texels
+    EXPECT_DOUBLE_EQ(*scene.shadow_maps_ms(512, cascades), 100.0);   // never lowered
+    // Maps drawn with other cascades, or the cascades drawn alone, are not these maps.
+    EXPECT_FALSE(scene.shadow_maps_ms(1024, 0));
+    EXPECT_FALSE(scene.view_cascades_ms(1024, cascades));
+    scene.record_shadow_maps(4096, 0, 1.0);
+    scene.record_view_cascades(512, cascades, 1.0);
+    EXPECT_DOUBLE_EQ(*scene.shadow_maps_ms(2048, cascades), 400.0);
+    EXPECT_DOUBLE_EQ(*scene.shadow_maps_ms(4096, 0), 1.0);
 
     const SceneAnalysis analysis = made_up_analysis();
     DeviceCosts device("test");
@@ -706,7 +741,7 @@ TEST(Planner, ShadowMapsArePricedFromTheScenesOwnTimingsOfThem) {
     const double besides = change_cost_bound("vct", "medium", FrameChange::lights, true);
     EXPECT_LE(besides, change_cost_bound("vct", "medium", FrameChange::lights));
     std::string basis;
-    EXPECT_DOUBLE_EQ(predicted_ms(inputs, "vct", "medium", {}, &basis), 10.0 + *scene.shadow_maps_ms(map_size) + besides * 10.0);
+    EXPECT_DOUBLE_EQ(predicted_ms(inputs, "vct", "medium", {}, &basis), 10.0 + *scene.shadow_maps_ms(map_size, cascades) + besides * 10.0);
     EXPECT_NE(basis.find("of shadow maps as this scene's frames drew them"), std::string::npos) << basis;
     // Planned with smaller maps: priced at the time of the smaller maps.
     EXPECT_DOUBLE_EQ(predicted_ms(inputs, "vct", "medium", {{"shadow_map_size", 1024}}), 10.0 + 100.0 + besides * 10.0);
@@ -715,6 +750,43 @@ TEST(Planner, ShadowMapsArePricedFromTheScenesOwnTimingsOfThem) {
     EXPECT_DOUBLE_EQ(predicted_ms(inputs, "vct", "medium", {}, &basis),
                      10.0 + change_cost_bound("vct", "medium", FrameChange::light_power) * 10.0);
     EXPECT_NE(basis.find("colour or intensity"), std::string::npos) << basis;
+}
+
+// A moved camera redraws a sun's view cascades and nothing else: before the scene measured any such
+// frame, at most what a move of the lights costs (the bench's bound); once it drew its maps, at most
+// their time (the cascades are among them); once it redrew the cascades alone, at that time; once
+// frames of the class were measured, at what they took beyond a warm frame. The device's
+// calibration of other changes plays no part.
+TEST(Planner, AMovedCameraIsPricedAsTheViewCascadesItRedraws) {
+    const SceneAnalysis analysis = made_up_analysis();
+    DeviceCosts device("test");
+    device.set("direct", "ultra", {2.0, 0.0});
+    device.set_change_cost("direct", "ultra", {64.0 * 64.0, 5.0, 5.0, 5.0});  // would show if it counted
+    SceneMeasurements scene;
+    PlanningInputs inputs{analysis, device, &scene, 64, 64, std::nullopt};
+    inputs.change = [](const std::string&, const std::string&, const methods::KnobValues&) { return FrameChange::view; };
+    const auto resolved = methods::MethodRegistry::builtin().resolve("direct", "ultra", {});
+    const int map_size = static_cast<int>(resolved.at("shadow_map_size"));
+    const int cascades = static_cast<int>(resolved.at("shadow_cascades"));
+    std::string basis;
+    const double bound = change_cost_bound("direct", "ultra", FrameChange::lights);
+    EXPECT_EQ(change_cost_bound("direct", "ultra", FrameChange::view), bound);
+    EXPECT_DOUBLE_EQ(predicted_ms(inputs, "direct", "ultra", {}, &basis), 2.0 + bound * 2.0);
+    EXPECT_NE(basis.find("the camera moved"), std::string::npos) << basis;
+    EXPECT_NE(basis.find("at most a move of the lights"), std::string::npos) << basis;
+    scene.record_shadow_maps(map_size, cascades, 600.0);
+    EXPECT_DOUBLE_EQ(predicted_ms(inputs, "direct", "ultra", {}, &basis), 2.0 + 600.0);
+    EXPECT_NE(basis.find("at most the shadow maps"), std::string::npos) << basis;
+    scene.record_view_cascades(map_size, cascades, 450.0);
+    EXPECT_DOUBLE_EQ(predicted_ms(inputs, "direct", "ultra", {}, &basis), 2.0 + 450.0);
+    EXPECT_NE(basis.find("redrew them alone"), std::string::npos) << basis;
+    // Planned without cascades: the timings of maps drawn with them do not price it.
+    EXPECT_DOUBLE_EQ(predicted_ms(inputs, "direct", "ultra", {{"shadow_cascades", 0}}), 2.0 + bound * 2.0);
+    scene.record("direct", "ultra", -1, 2.0 + 300.0, 2.0, 64.0 * 64.0, FrameChange::view);
+    EXPECT_DOUBLE_EQ(predicted_ms(inputs, "direct", "ultra", {}, &basis), 2.0 + 300.0);
+    EXPECT_NE(basis.find("as 1 such frame"), std::string::npos) << basis;
+    // Such a frame is no warm frame: the warm line is as the device's.
+    EXPECT_FALSE(scene.ratio("direct", "ultra"));
 }
 
 // A device whose calibration timed frames after changes prices what a frame redoes from those
@@ -742,7 +814,8 @@ TEST(Planner, ChangesArePricedFromTheDevicesCalibrationOfThem) {
                      warm_128 + change_cost_bound("cssm", "low", FrameChange::lights) * warm_128);
     EXPECT_NE(basis.find("the most the bench measured"), std::string::npos) << basis;
     const int map_size = static_cast<int>(methods::MethodRegistry::builtin().resolve("cssm", "low", {}).at("shadow_map_size"));
-    scene.record_shadow_maps(map_size, 30.0);
+    const int cascades = static_cast<int>(methods::MethodRegistry::builtin().resolve("cssm", "low", {}).at("shadow_cascades"));
+    scene.record_shadow_maps(map_size, cascades, 30.0);
     EXPECT_DOUBLE_EQ(predicted_ms(inputs, "cssm", "low", {}, &basis), warm_128 + 30.0 + 0.5 * warm_64 + margin(now));
     EXPECT_NE(basis.find("as the device's calibration measured"), std::string::npos) << basis;
     // A switch of knobs, or a moved object, rebuilds: its own figure, never under the lights'.
@@ -786,8 +859,10 @@ TEST(Planner, ASceneScalesTheCalibrationByItsFramesOfTheMethodsOtherPresets) {
     const auto map_size = [&](const char* preset) {
         return static_cast<int>(registry.resolve("cssm", preset, {}).at("shadow_map_size"));
     };
-    scene.record_shadow_maps(map_size("low"), 30.0);
-    const double maps_medium = scene.shadow_maps_ms(map_size("medium")).value();  // as the scene times them
+    const int cascades = static_cast<int>(registry.resolve("cssm", "low", {}).at("shadow_cascades"));
+    ASSERT_EQ(cascades, static_cast<int>(registry.resolve("cssm", "medium", {}).at("shadow_cascades")));
+    scene.record_shadow_maps(map_size("low"), cascades, 30.0);
+    const double maps_medium = scene.shadow_maps_ms(map_size("medium"), cascades).value();  // as the scene times them
     PlanningInputs inputs{analysis, device, &scene, 128, 128, std::nullopt};
     FrameChange now = FrameChange::knobs_and_scene;
     inputs.change = [&](const std::string&, const std::string&, const methods::KnobValues&) { return now; };
