@@ -1,8 +1,9 @@
 #!/usr/bin/python3
 """Plots bench/planner's results: per scene, relMSE against time of every fixed plan (one colour a
 method), their Pareto front (no plan both faster and more accurate), and the frames the planner
-planned for each budget, pass 1, pass 2 and the relit passes (time budgets right after a light
-change, frames rendered as they come: after the same budget's frame, then after another budget's),
+planned for each budget, pass 1, pass 2, the relit passes (time budgets right after a light
+change, frames rendered as they come: after the same budget's frame, then after another budget's)
+and the moved-camera pass (time budgets of the view right after a frame from a camera moved aside),
 labelled by their budget."""
 import csv
 import os
@@ -47,7 +48,7 @@ def main(results: str) -> None:
             if row["scene"] != scene or float(row["measured_rel_mse"]) <= 0:
                 continue
             marker = ("x" if row["pass"] == "1" else "v" if "another budget" in row["budget"]
-                      else "^" if "relit" in row["budget"] else "+")
+                      else "^" if "relit" in row["budget"] else "s" if "camera moved" in row["budget"] else "+")
             colour = "black" if row["holds"] == "true" else "red"
             x, y = float(row["measured_ms"]), float(row["measured_rel_mse"])
             axis.scatter([x], [y], marker=marker, s=60, color=colour, linewidths=1.5)
@@ -57,6 +58,7 @@ def main(results: str) -> None:
         axis.scatter([], [], marker="+", color="black", label="planned, pass 2")
         axis.scatter([], [], marker="^", color="black", label="planned right after a light change")
         axis.scatter([], [], marker="v", color="black", label="the same, after another budget's frame")
+        axis.scatter([], [], marker="s", color="black", label="planned right after the camera moved")
         axis.set_xscale("log")
         axis.set_yscale("log")
         axis.set_xlabel("render time (ms)")

@@ -4,9 +4,9 @@
 // (planning/costs.hpp):
 //
 //   none:     nothing: a warm frame, as the bench measures methods;
-//   view:     the camera moved or turned, or the frame's shape changed, where a directional light
-//             casts view cascades (passes/shadow_maps.hpp) that the method reads: those cascades,
-//             redrawn (a camera moved along the light keeps them: the frame then says `none`);
+//   view:     the camera moved or turned, or the frame's shape changed, so that the view cascades a
+//             directional light casts for the method (passes/shadow_maps.hpp) fit elsewhere: those,
+//             redrawn (a camera moved along the light fits the same: `none`);
 //   light_power: a light's colour or intensity alone: what its power feeds (vct's injected light,
 //             which it scales where every light's power changed by one factor and no surface emits;
 //             cssm's atlas solve, isr's light views and VPL tree), not the shadow maps, which hold
@@ -17,6 +17,8 @@
 //   knobs:    other knobs than the method's last frame (a preset or bounce count of its own), the
 //             scene as it was: the structures those knobs select (an octree, a bake), and whatever of
 //             the lights' work they size (maps of another size);
+//   knobs_and_view: the same, and the camera moved (view): the view cascades too, which a switch
+//             that keeps the maps' size would otherwise keep;
 //   knobs_and_scene: other knobs, and the lights or objects changed too, or the method's first frame
 //             on the scene: everything. A preset switch costs far more after a change of the lights
 //             than before one (presets that share their shadow maps' size keep them otherwise).
@@ -30,7 +32,7 @@
 
 namespace bounce {
 
-enum class FrameChange { none, view, light_power, lights, objects, knobs, knobs_and_scene };
+enum class FrameChange { none, view, light_power, lights, objects, knobs, knobs_and_view, knobs_and_scene };
 
 constexpr std::string_view to_string(FrameChange change) {
     switch (change) {
@@ -40,6 +42,7 @@ constexpr std::string_view to_string(FrameChange change) {
     case FrameChange::lights: return "lights";
     case FrameChange::objects: return "objects";
     case FrameChange::knobs: return "knobs";
+    case FrameChange::knobs_and_view: return "knobs_and_view";
     case FrameChange::knobs_and_scene: return "knobs_and_scene";
     }
     return "knobs";
@@ -61,16 +64,30 @@ inline bool reads_view_cascades(const methods::KnobValues& knobs) {
     return cascades != knobs.end() && cascades->second > 0.0;
 }
 
+// Whether two frames' knobs draw the same shadow maps: maps of another size, or other cascades, are
+// all drawn anew whatever the camera did.
+inline bool same_maps(const methods::KnobValues& a, const methods::KnobValues& b) {
+    const auto knob = [](const methods::KnobValues& knobs, const char* name) {
+        const auto it = knobs.find(name);
+        return it == knobs.end() ? -1.0 : it->second;
+    };
+    return knob(a, "shadow_map_size") == knob(b, "shadow_map_size") &&
+           knob(a, "shadow_cascades") == knob(b, "shadow_cascades");
+}
+
 // What a frame in `next` redoes after a method's last frame in `last` (none yet: everything). A
-// light dimmed while the camera moved redoes the light's work and the cascades: priced as a move of
-// the lights, which redraws every map, the cascades among them.
+// light dimmed while the camera moved redoes the light's work and the cascades: predicted as a move
+// of the lights, which redraws every map, the cascades among them (the frame then says
+// `light_power`: Renderer::render reads which maps it drew).
 inline FrameChange change_between(const std::optional<MethodState>& last, const MethodState& next) {
     if (!last) return FrameChange::knobs_and_scene;
     const bool scene = !last->lit || last->lights != next.lights || last->geometry != next.geometry;
-    if (last->knobs != next.knobs) return scene ? FrameChange::knobs_and_scene : FrameChange::knobs;
+    const bool view = last->view != next.view && reads_view_cascades(next.knobs) && same_maps(last->knobs, next.knobs);
+    if (last->knobs != next.knobs) {
+        return scene ? FrameChange::knobs_and_scene : view ? FrameChange::knobs_and_view : FrameChange::knobs;
+    }
     if (last->geometry != next.geometry) return FrameChange::objects;
     if (!last->lit || last->light_places != next.light_places) return FrameChange::lights;
-    const bool view = last->view != next.view && reads_view_cascades(next.knobs);
     if (scene) return view ? FrameChange::lights : FrameChange::light_power;
     return view ? FrameChange::view : FrameChange::none;
 }

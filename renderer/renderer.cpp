@@ -124,9 +124,13 @@ FrameChange SceneResources::change_for(const std::string& method, const methods:
 }
 
 FrameChange SceneResources::change_for(const std::string& method, const MethodState& next) const {
+    return change_between(state_of(method), next);
+}
+
+std::optional<MethodState> SceneResources::state_of(const std::string& method) const {
     const std::lock_guard lock(states_mutex_);
     const auto last = method_states_.find(method);
-    return change_between(last == method_states_.end() ? std::nullopt : std::optional(last->second), next);
+    return last == method_states_.end() ? std::nullopt : std::optional(last->second);
 }
 
 const SceneAnalysis& SceneResources::analysis() {
@@ -368,10 +372,15 @@ RenderResult Renderer::render(SceneResources& resources, const RenderRequest& re
     with_frame(resources, request, precompute_, [&](methods::Method& method, const methods::FrameContext& frame,
                                                     const methods::KnobValues& knobs) {
         const FrameView view = resources.view_of(request);
-        result.stats.change = resources.change_for(request.method, knobs, view);
+        const std::optional<MethodState> last = resources.state_of(request.method);
+        MethodState next = resources.state_now(knobs, view);
+        result.stats.change = change_between(last, next);
+        // A light dimmed as the camera moved, predicted as a move of the lights (frame_change.hpp).
+        const bool dimmed_as_moved = result.stats.change == FrameChange::lights && last->lit &&
+                                     last->light_places == next.light_places;
         timers_.begin_frame();
         method.render(frame);
-        resources.record_state(request.method, resources.state_now(knobs, view));
+        resources.record_state(request.method, std::move(next));
         const gpu::Texture* display = nullptr;
         if (request.make_display_image) display = &tonemap_.run(shaders_, state_, timers_, output_, request.display);
 
@@ -384,9 +393,16 @@ RenderResult Renderer::render(SceneResources& resources, const RenderRequest& re
 
         fill_stats(result.stats, request, knobs, method, resources);
         // The prediction hashes the cascades the maps would fit (ShadowMaps::view_fingerprint); a
-        // frame that drew none all the same redid nothing, and is a warm frame for the planner.
+        // frame that drew none all the same redid nothing, and is a warm frame for the planner. A
+        // light dimmed as the camera moved is priced as a move of the lights (frame_change.hpp), and
+        // said to be what it was: a change of power that drew no shadow map but the cascades, so as
+        // not to price the next move of the lights by it.
         if (result.stats.change == FrameChange::view && !result.stats.ran("shadow_view_cascades")) {
             result.stats.change = FrameChange::none;
+        }
+        if (dimmed_as_moved && !result.stats.ran("shadow_maps")) result.stats.change = FrameChange::light_power;
+        if (result.stats.change == FrameChange::knobs_and_view && !result.stats.ran("shadow_view_cascades")) {
+            result.stats.change = FrameChange::knobs;
         }
     }, cancelled);
     result.stats.render_ms = ms_since(start);

@@ -96,15 +96,15 @@ FramePlan plan_frame(const RenderRequest& request);
 RenderResult render_on_cpu(const scene::Scene& scene, const RenderRequest& request, const FramePlan& plan,
                            const std::atomic<bool>* cancelled = nullptr);
 
-// A scene's resident GPU state: its geometry and textures and the methods that rendered it (with
-// their precomputed structures). Destroy it on the render thread, before the Renderer.
-// The camera a frame sees the scene with and its size: what the suns' view cascades are fitted to
-// besides the scene (a frame rendered smaller to be upsampled, of the same shape, fits the same).
+// The camera a frame sees the scene with and the size it renders at: what the suns' view cascades
+// are fitted to besides the scene (of the size, only the shape counts).
 struct FrameView {
     scene::Camera camera;
     int width = 0, height = 0;
 };
 
+// A scene's resident GPU state: its geometry and textures and the methods that rendered it (with
+// their precomputed structures). Destroy it on the render thread, before the Renderer.
 class SceneResources {
 public:
     explicit SceneResources(const scene::Scene& scene);
@@ -130,11 +130,14 @@ public:
     void install_analysis(SceneAnalysis analysis, std::uint64_t lights);
 
     // What a frame of `method` at `knobs` (resolved, as plan_frame resolves them) seen as `view`
-    // would redo now, against the method's last frame on these resources (frame_change.hpp).
-    // Thread-safe.
+    // would redo now, against the method's last frame on these resources (frame_change.hpp). On the
+    // render thread, or wherever the scene does not change meanwhile (it reads the scene's lights,
+    // geometry and bounds); the methods' states are locked.
     FrameChange change_for(const std::string& method, const methods::KnobValues& knobs, const FrameView& view) const;
     // The same for a state made by state_now() (the planner asks for hundreds of plans).
     FrameChange change_for(const std::string& method, const MethodState& next) const;
+    // The state the method's structures were last made for here; nullopt before its first frame.
+    std::optional<MethodState> state_of(const std::string& method) const;
     // The state a frame at `knobs` seen as `view` would leave now: the scene's lights and geometry as
     // they are, and the suns' view cascades it fits (passes::ShadowMaps::view_fingerprint).
     MethodState state_now(const methods::KnobValues& knobs, const FrameView& view) const;

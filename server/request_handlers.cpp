@@ -392,10 +392,10 @@ void RequestHandlers::plan_budgeted(RenderOrder& order, Renderer& renderer, Scen
     // the suns' view cascades).
     RenderRequest seen = frame;
     if (auto camera = view_camera(*entry.scene, order)) seen.camera = std::move(camera);
-    const FrameView view = entry.resources->view_of(seen);
+    const scene::Camera camera = entry.resources->view_of(seen).camera;
     const planning::Plan plan = planning::plan({entry.resources->analysis(), device, entry.resources->measurements.get(),
                                                 frame.width, frame.height, method, resample_errors(order, renderer, entry),
-                                                planning::changes_on(*entry.resources, view)},
+                                                planning::changes_on(*entry.resources, camera)},
                                                *order.budget);
     frame.method = plan.chosen.method;
     frame.preset = plan.chosen.preset;

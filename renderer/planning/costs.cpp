@@ -37,6 +37,7 @@ double ChangeCost::beyond_warm(FrameChange change) const {
     case FrameChange::lights: return lights;
     case FrameChange::objects:
     case FrameChange::knobs:
+    case FrameChange::knobs_and_view:
     case FrameChange::knobs_and_scene: return std::max(lights, rebuild);
     }
     return std::max(lights, rebuild);

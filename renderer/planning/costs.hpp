@@ -187,7 +187,7 @@ public:
     // nullopt when none was measured with that many cascades (they fill their texels with what the
     // camera sees, where the scene's map is mostly empty: 613 against 54 ms in the bench street).
     void record_shadow_maps(int size, int cascades, double ms);
-    std::optional<double> shadow_maps_ms(int size, int cascades = 0) const;
+    std::optional<double> shadow_maps_ms(int size, int cascades) const;
     // The same of the shadow_view_cascades pass: frames whose camera moved, which redrew the view
     // cascades alone (FrameChange::view).
     void record_view_cascades(int size, int cascades, double ms);

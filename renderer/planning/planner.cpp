@@ -10,7 +10,10 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
+#include <memory>
 #include <set>
+#include <tuple>
 
 namespace bounce::planning {
 namespace {
@@ -301,15 +304,16 @@ std::optional<std::pair<int, int>> map_knobs(const std::string& method, const st
 
 // The shadow maps a frame of the preset draws after `change`: none for a change of power alone; the
 // scene's timing of them at the preset's map size and cascades; nullopt where the scene has none.
-// After a moved camera, the view cascades alone, as this scene's frames that redrew them alone took;
-// before any did, as its frames that drew every map took (the cascades are a part of those).
+// After a moved camera (with or without a switch of knobs that keeps the maps' size), the view
+// cascades alone, as this scene's frames that redrew them alone took; before any did, as its frames
+// that drew every map took (the cascades are a part of those).
 std::optional<double> maps_redrawn_ms(const PlanningInputs& inputs, const std::string& method, const std::string& preset,
                                       const methods::KnobValues& knobs, FrameChange change) {
     if (change == FrameChange::light_power) return 0.0;
     const auto maps = map_knobs(method, preset, knobs);
     if (!inputs.scene || !maps) return std::nullopt;
     const auto [size, cascades] = *maps;
-    if (change == FrameChange::view) {
+    if (change == FrameChange::view || change == FrameChange::knobs_and_view) {
         if (const auto view = inputs.scene->view_cascades_ms(size, cascades)) return view;
     }
     return inputs.scene->shadow_maps_ms(size, cascades);
@@ -367,13 +371,23 @@ std::optional<SceneScale> scene_scale_of_calibration(const PlanningInputs& input
 
 }  // namespace
 
-PlanningInputs::ChangeOf changes_on(const SceneResources& resources, const FrameView& view) {
-    const MethodState now = resources.state_now({}, view);  // the scene's lights and geometry, hashed once
-    return [&resources, now, view](const std::string& method, const std::string& preset, const methods::KnobValues& knobs) {
+PlanningInputs::ChangeOf changes_on(const SceneResources& resources, const scene::Camera& camera) {
+    const MethodState now = resources.state_now({}, {camera, 0, 0});  // the scene's lights and geometry, hashed once
+    // The fit, per map size, cascade count and frame size: the planner asks for hundreds of plans.
+    using FitKey = std::tuple<double, double, int, int>;
+    auto fits = std::make_shared<std::map<FitKey, std::uint64_t>>();
+    return [&resources, now, camera, fits](const std::string& method, const std::string& preset,
+                                          const methods::KnobValues& knobs, int width, int height) {
         try {
             MethodState next = now;
             next.knobs = methods::MethodRegistry::builtin().resolve(method, preset, knobs);  // as plan_frame does
-            next.view = resources.view_cascades_now(next.knobs, view);  // the cascades its maps' knobs fit
+            const FitKey key{methods::knob_or(next.knobs, "shadow_map_size", 0.0),
+                             methods::knob_or(next.knobs, "shadow_cascades", 0.0), width, height};
+            auto fit = fits->find(key);
+            if (fit == fits->end()) {
+                fit = fits->emplace(key, resources.view_cascades_now(next.knobs, {camera, width, height})).first;
+            }
+            next.view = fit->second;
             return resources.change_for(method, next);
         } catch (const InputError&) {
             return FrameChange::knobs_and_scene;
@@ -381,13 +395,12 @@ PlanningInputs::ChangeOf changes_on(const SceneResources& resources, const Frame
     };
 }
 
-double predicted_ms(const PlanningInputs& inputs, const std::string& method, const std::string& preset,
-                    const methods::KnobValues& knobs, std::string* basis) {
-    const double warm = warm_ms(inputs, method, preset, knobs, basis);
-    if (!std::isfinite(warm) || !inputs.change || method == "reference") return warm;
-    const FrameChange change = inputs.change(method, preset, knobs);
-    if (change == FrameChange::none) return warm;
-    const int bounces = bounces_knob(knobs).value_or(preset_bounces(method, preset));
+namespace {
+
+// What a frame of the plan that redoes `change` takes beyond its warm frame, and whence (`source`):
+// predicted_ms's pricing (planner.hpp).
+double redone_ms(const PlanningInputs& inputs, const std::string& method, const std::string& preset,
+                 const methods::KnobValues& knobs, int bounces, FrameChange change, std::string& source) {
     std::vector<double> beyond_warm;
     if (inputs.scene) {
         for (const SceneMeasurements::FrameTime& frame : inputs.scene->changed_frames(method, preset, bounces, change)) {
@@ -397,7 +410,6 @@ double predicted_ms(const PlanningInputs& inputs, const std::string& method, con
         }
     }
     double extra = 0.0;
-    std::string source;
     if (!beyond_warm.empty()) {
         extra = std::max(0.0, median(beyond_warm));
         source = fmt::format("as {} such frame{} of the preset measured here beyond a warm one", beyond_warm.size(),
@@ -458,6 +470,31 @@ double predicted_ms(const PlanningInputs& inputs, const std::string& method, con
                                  besides_maps ? " besides" : "");
         }
     }
+    return extra;
+}
+
+}  // namespace
+
+double predicted_ms(const PlanningInputs& inputs, const std::string& method, const std::string& preset,
+                    const methods::KnobValues& knobs, std::string* basis) {
+    const double warm = warm_ms(inputs, method, preset, knobs, basis);
+    if (!std::isfinite(warm) || !inputs.change || method == "reference") return warm;
+    const FrameChange change = inputs.change(method, preset, knobs, inputs.width, inputs.height);
+    if (change == FrameChange::none) return warm;
+    const int bounces = bounces_knob(knobs).value_or(preset_bounces(method, preset));
+    std::string source;
+    double extra = 0.0;
+    const bool measured =
+        inputs.scene && !inputs.scene->changed_frames(method, preset, bounces, change).empty();
+    if (change == FrameChange::knobs_and_view && !measured) {
+        // Before such frames were measured: a switch that keeps the maps, and the cascades it redraws.
+        std::string switched, moved;
+        extra = redone_ms(inputs, method, preset, knobs, bounces, FrameChange::knobs, switched) +
+                redone_ms(inputs, method, preset, knobs, bounces, FrameChange::view, moved);
+        source = fmt::format("the switch {}; the cascades {}", switched, moved);
+    } else {
+        extra = redone_ms(inputs, method, preset, knobs, bounces, change, source);
+    }
     if (basis) {
         *basis += fmt::format("; + {:.1f} ms redone: {} ({})", extra,
                               change == FrameChange::view ? "the camera moved since the method's last frame, and with it "
@@ -466,6 +503,8 @@ double predicted_ms(const PlanningInputs& inputs, const std::string& method, con
                               : change == FrameChange::lights  ? "the lights changed since the method's last frame"
                               : change == FrameChange::objects ? "objects moved since the method's last frame"
                               : change == FrameChange::knobs   ? "the method's last frame here had other knobs"
+                              : change == FrameChange::knobs_and_view ? "the method's last frame here had other knobs, "
+                                                                        "and the camera moved since"
                                                                : "the method's last frame here had other knobs, or none, "
                                                                  "and the scene changed since",
                               source);
@@ -507,7 +546,9 @@ std::vector<Candidate> candidates(const PlanningInputs& inputs, std::vector<std:
                     candidate.cost_basis += fmt::format("; expected {:.1f} ms: {}", expected, typical_basis);
                 }
             }
-            if (inputs.change && method != "reference") candidate.redoes = inputs.change(method, preset, knobs);
+            if (inputs.change && method != "reference") {
+                candidate.redoes = inputs.change(method, preset, knobs, scaled.width, scaled.height);
+            }
             if (std::isfinite(candidate.predicted_ms)) all.push_back(std::move(candidate));
         }
     };

@@ -109,10 +109,12 @@ struct PlanningInputs {
     // Per GPU method, scales below 1 to offer and the error upsampling adds at each
     // (measure_resample_errors); a method without: its plans at full size only.
     std::map<std::string, std::map<double, double>> resample_errors = {};
-    // What a frame of a GPU plan would redo now (SceneResources::change_for, its knobs resolved);
-    // unset: nothing, every plan priced as a warm frame (the bench's fixed plans are warm frames).
-    using ChangeOf =
-        std::function<FrameChange(const std::string& method, const std::string& preset, const methods::KnobValues& knobs)>;
+    // What a frame of a GPU plan would redo now (SceneResources::change_for, its knobs resolved),
+    // rendered at `width` x `height` (a plan at a smaller scale renders smaller, and the suns' view
+    // cascades fit the shape it renders at); unset: nothing, every plan priced as a warm frame (the
+    // bench's fixed plans are warm frames).
+    using ChangeOf = std::function<FrameChange(const std::string& method, const std::string& preset,
+                                               const methods::KnobValues& knobs, int width, int height)>;
     ChangeOf change = {};
     // How bounce counts the scene has not measured are priced: by the most the bench measured them
     // cost (bounce_cost_bound, the planner's predicted_ms), or by what they typically cost
@@ -122,11 +124,12 @@ struct PlanningInputs {
 };
 
 // PlanningInputs::change for a scene's resources as the scene is now (its lights and geometry hashed
-// at the call: make it for each plan), seen as `view` (SceneResources::view_of the frame's request):
-// each plan's knobs resolved as plan_frame resolves them (the registry's preset with its overrides),
-// the view cascades they fit, then SceneResources::change_for. Plans it cannot resolve count as
-// built anew (knobs_and_scene).
-PlanningInputs::ChangeOf changes_on(const SceneResources& resources, const FrameView& view);
+// at the call: make it for each plan), seen from `camera` (SceneResources::view_of the frame's
+// request): each plan's knobs resolved as plan_frame resolves them (the registry's preset with its
+// overrides), the view cascades they fit at the plan's size (fitted once per map size, cascade
+// count and size), then SceneResources::change_for. Plans it cannot resolve count as built anew
+// (knobs_and_scene). Call it where change_for may be called.
+PlanningInputs::ChangeOf changes_on(const SceneResources& resources, const scene::Camera& camera);
 
 // Every plan the planner predicts for a frame, at full size and at each scale of its method's
 // `resample_errors`, with those the analysis rules out left out (and named in `ruled_out`).
@@ -166,8 +169,11 @@ Plan plan(const PlanningInputs& inputs, const Budget& budget);
 // (planner.cpp, scene_scale_of_calibration), else plus change_margin() times
 // that frame at kChangePriorPixels; else change_cost_bound(besides_maps)
 // times the frame at kChangePriorPixels. With no timing of the maps, change_cost_bound() times that
-// frame. The work is the scene's (shadow maps, an atlas, an octree), not the frame's pixels: a
-// smaller frame redoes as much.
+// frame. A moved camera (view) redoes the suns' view cascades alone: priced, before frames of the
+// class were measured, at the scene's timing of the cascades drawn alone, else of all its maps (the
+// cascades among them), else change_cost_bound() for a move of the lights; the device's calibration
+// plays no part. The work is the scene's (shadow maps, an atlas, an octree), not the frame's pixels:
+// a smaller frame redoes as much.
 double predicted_ms(const PlanningInputs& inputs, const std::string& method, const std::string& preset,
                     const methods::KnobValues& knobs, std::string* basis = nullptr);
 

@@ -633,6 +633,17 @@ TEST(FrameChange, AMovedCameraRedrawsTheViewCascadesOfAMethodThatReadsThem) {
     moved.geometry = 3;
     EXPECT_EQ(change_between(last, moved), FrameChange::objects);
     EXPECT_EQ(to_string(FrameChange::view), "view");
+    // Other knobs from a moved camera: the cascades too where the maps are the same, else the maps
+    // are all drawn anew as the knobs' own work.
+    MethodState switched = last;
+    switched.view = 8;
+    switched.knobs["bounces"] = 2;
+    EXPECT_EQ(change_between(last, switched), FrameChange::knobs_and_view);
+    EXPECT_EQ(to_string(FrameChange::knobs_and_view), "knobs_and_view");
+    switched.knobs["shadow_map_size"] = 4096;
+    EXPECT_EQ(change_between(last, switched), FrameChange::knobs);
+    switched.lights = 3;
+    EXPECT_EQ(change_between(last, switched), FrameChange::knobs_and_scene);
 }
 
 // Frames that redid work are kept apart: a relit frame is not a slow warm frame, and a warm one does
@@ -664,7 +675,7 @@ TEST(Costs, FramesThatRedidWorkAreKeptApartFromWarmFrames) {
     record_frame(scene, &analysis, device, relit, 64, 64);
     // As many such frames as are kept: had they counted, they would have pushed the relit frame's out.
     for (std::size_t i = 0; i < SceneMeasurements::kKept; ++i) record_frame(scene, &analysis, device, warm, 64, 64);
-    EXPECT_DOUBLE_EQ(*scene.shadow_maps_ms(2048), 120.0);
+    EXPECT_DOUBLE_EQ(*scene.shadow_maps_ms(2048, 0), 120.0);
 }
 
 // A plan whose frame would redo work is priced with it: before the scene measured it, the bench's
@@ -677,7 +688,7 @@ TEST(Planner, AFrameIsPricedWithWhatItWouldRedo) {
     SceneMeasurements scene;
     PlanningInputs inputs{analysis, device, &scene, 64, 64, std::nullopt};
     FrameChange now = FrameChange::none;
-    inputs.change = [&](const std::string& method, const std::string&, const methods::KnobValues&) {
+    inputs.change = [&](const std::string& method, const std::string&, const methods::KnobValues&, int, int) {
         return method == "vct" ? now : FrameChange::none;
     };
     const double warm_64 = 10.0 + 4.096, warm_128 = 10.0 + 16.384;
@@ -719,14 +730,15 @@ TEST(Planner, ShadowMapsArePricedFromTheScenesOwnTimingsOfThem) {
     ASSERT_GT(cascades, 0);
     SceneMeasurements scene;
     EXPECT_FALSE(scene.shadow_maps_ms(1024, cascades));
+    scene.record_view_cascades(4096, cascades, 9.0);  // another kind, sorting before and after these
     scene.record_shadow_maps(1024, cascades, 100.0);
     scene.record_shadow_maps(1024, cascades, 5.0);  // most maps reused
     EXPECT_DOUBLE_EQ(*scene.shadow_maps_ms(1024, cascades), 100.0);
     EXPECT_DOUBLE_EQ(*scene.shadow_maps_ms(2048, cascades), 400.0);  // four times the texels
     EXPECT_DOUBLE_EQ(*scene.shadow_maps_ms(512, cascades), 100.0);   // never lowered
+    EXPECT_DOUBLE_EQ(*scene.view_cascades_ms(1024, cascades), 9.0);  // the nearest above, as measured
     // Maps drawn with other cascades, or the cascades drawn alone, are not these maps.
     EXPECT_FALSE(scene.shadow_maps_ms(1024, 0));
-    EXPECT_FALSE(scene.view_cascades_ms(1024, cascades));
     scene.record_shadow_maps(4096, 0, 1.0);
     scene.record_view_cascades(512, cascades, 1.0);
     EXPECT_DOUBLE_EQ(*scene.shadow_maps_ms(2048, cascades), 400.0);
@@ -736,7 +748,9 @@ TEST(Planner, ShadowMapsArePricedFromTheScenesOwnTimingsOfThem) {
     DeviceCosts device("test");
     device.set("vct", "medium", {10.0, 0.0});
     PlanningInputs inputs{analysis, device, &scene, 64, 64, std::nullopt};
-    inputs.change = [](const std::string&, const std::string&, const methods::KnobValues&) { return FrameChange::lights; };
+    inputs.change = [](const std::string&, const std::string&, const methods::KnobValues&, int, int) {
+        return FrameChange::lights;
+    };
     const int map_size = static_cast<int>(methods::MethodRegistry::builtin().resolve("vct", "medium", {}).at("shadow_map_size"));
     const double besides = change_cost_bound("vct", "medium", FrameChange::lights, true);
     EXPECT_LE(besides, change_cost_bound("vct", "medium", FrameChange::lights));
@@ -746,7 +760,9 @@ TEST(Planner, ShadowMapsArePricedFromTheScenesOwnTimingsOfThem) {
     // Planned with smaller maps: priced at the time of the smaller maps.
     EXPECT_DOUBLE_EQ(predicted_ms(inputs, "vct", "medium", {{"shadow_map_size", 1024}}), 10.0 + 100.0 + besides * 10.0);
     // A light dimmed: no maps to draw, whatever the scene timed of them.
-    inputs.change = [](const std::string&, const std::string&, const methods::KnobValues&) { return FrameChange::light_power; };
+    inputs.change = [](const std::string&, const std::string&, const methods::KnobValues&, int, int) {
+        return FrameChange::light_power;
+    };
     EXPECT_DOUBLE_EQ(predicted_ms(inputs, "vct", "medium", {}, &basis),
                      10.0 + change_cost_bound("vct", "medium", FrameChange::light_power) * 10.0);
     EXPECT_NE(basis.find("colour or intensity"), std::string::npos) << basis;
@@ -764,7 +780,9 @@ TEST(Planner, AMovedCameraIsPricedAsTheViewCascadesItRedraws) {
     device.set_change_cost("direct", "ultra", {64.0 * 64.0, 5.0, 5.0, 5.0});  // would show if it counted
     SceneMeasurements scene;
     PlanningInputs inputs{analysis, device, &scene, 64, 64, std::nullopt};
-    inputs.change = [](const std::string&, const std::string&, const methods::KnobValues&) { return FrameChange::view; };
+    inputs.change = [](const std::string&, const std::string&, const methods::KnobValues&, int, int) {
+        return FrameChange::view;
+    };
     const auto resolved = methods::MethodRegistry::builtin().resolve("direct", "ultra", {});
     const int map_size = static_cast<int>(resolved.at("shadow_map_size"));
     const int cascades = static_cast<int>(resolved.at("shadow_cascades"));
@@ -780,13 +798,21 @@ TEST(Planner, AMovedCameraIsPricedAsTheViewCascadesItRedraws) {
     scene.record_view_cascades(map_size, cascades, 450.0);
     EXPECT_DOUBLE_EQ(predicted_ms(inputs, "direct", "ultra", {}, &basis), 2.0 + 450.0);
     EXPECT_NE(basis.find("redrew them alone"), std::string::npos) << basis;
-    // Planned without cascades: the timings of maps drawn with them do not price it.
-    EXPECT_DOUBLE_EQ(predicted_ms(inputs, "direct", "ultra", {{"shadow_cascades", 0}}), 2.0 + bound * 2.0);
     scene.record("direct", "ultra", -1, 2.0 + 300.0, 2.0, 64.0 * 64.0, FrameChange::view);
     EXPECT_DOUBLE_EQ(predicted_ms(inputs, "direct", "ultra", {}, &basis), 2.0 + 300.0);
     EXPECT_NE(basis.find("as 1 such frame"), std::string::npos) << basis;
     // Such a frame is no warm frame: the warm line is as the device's.
     EXPECT_FALSE(scene.ratio("direct", "ultra"));
+    // A switch of knobs from a moved camera: the switch as such frames were measured, and the
+    // cascades, until frames of the two together were.
+    inputs.change = [](const std::string&, const std::string&, const methods::KnobValues&, int, int) {
+        return FrameChange::knobs_and_view;
+    };
+    scene.record("direct", "ultra", -1, 2.0 + 40.0, 2.0, 64.0 * 64.0, FrameChange::knobs);
+    EXPECT_DOUBLE_EQ(predicted_ms(inputs, "direct", "ultra", {}, &basis), 2.0 + 40.0 + 300.0);
+    EXPECT_NE(basis.find("other knobs, and the camera moved"), std::string::npos) << basis;
+    scene.record("direct", "ultra", -1, 2.0 + 200.0, 2.0, 64.0 * 64.0, FrameChange::knobs_and_view);
+    EXPECT_DOUBLE_EQ(predicted_ms(inputs, "direct", "ultra", {}), 2.0 + 200.0);
 }
 
 // A device whose calibration timed frames after changes prices what a frame redoes from those
@@ -800,7 +826,7 @@ TEST(Planner, ChangesArePricedFromTheDevicesCalibrationOfThem) {
     SceneMeasurements scene;
     PlanningInputs inputs{analysis, device, &scene, 128, 128, std::nullopt};
     FrameChange now = FrameChange::light_power;
-    inputs.change = [&](const std::string&, const std::string&, const methods::KnobValues&) { return now; };
+    inputs.change = [&](const std::string&, const std::string&, const methods::KnobValues&, int, int) { return now; };
     const double warm_128 = 2.0 + 16.384, warm_64 = 2.0 + 4.096;
     const auto margin = [&](FrameChange change) { return change_margin("cssm", change) * warm_128; };
     std::string basis;
@@ -865,7 +891,7 @@ TEST(Planner, ASceneScalesTheCalibrationByItsFramesOfTheMethodsOtherPresets) {
     const double maps_medium = scene.shadow_maps_ms(map_size("medium"), cascades).value();  // as the scene times them
     PlanningInputs inputs{analysis, device, &scene, 128, 128, std::nullopt};
     FrameChange now = FrameChange::knobs_and_scene;
-    inputs.change = [&](const std::string&, const std::string&, const methods::KnobValues&) { return now; };
+    inputs.change = [&](const std::string&, const std::string&, const methods::KnobValues&, int, int) { return now; };
     const double low_128 = 2.0 + 16.384, low_64 = 2.0 + 4.096;
     const double medium_128 = 4.0 + 32.768, medium_64 = 4.0 + 8.192;
     const int medium_bounces = static_cast<int>(registry.resolve("cssm", "medium", {}).at("bounces"));
@@ -926,7 +952,7 @@ TEST(Planner, ATimeBudgetCountsWhatTheFrameWouldRedo) {
     for (const char* preset : {"draft", "low", "medium", "high", "ultra"}) {
         scene.record("vct", preset, 1, 200.0, 20.0, 64.0 * 64.0, FrameChange::lights);  // a relight: 180 ms more
     }
-    inputs.change = [](const std::string& method, const std::string&, const methods::KnobValues&) {
+    inputs.change = [](const std::string& method, const std::string&, const methods::KnobValues&, int, int) {
         return method == "vct" ? FrameChange::lights : FrameChange::none;
     };
     const Plan relit = plan(inputs, within_50);
