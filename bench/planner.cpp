@@ -319,6 +319,26 @@ Measured relit_fixed_plan(Renderer& renderer, SceneResources& resources, scene::
     return relit;
 }
 
+// The row of a time budget asked after a change (the relit and moved-camera passes): its frame
+// rendered as it came, judged against `comparators` measured after the same change.
+BudgetRow changed_budget_row(int pass, const std::string& scene, std::string budget_text, const planning::Plan& plan,
+                             const Measured& planned, double budget, const std::vector<Measured>& comparators) {
+    BudgetRow row;
+    row.pass = pass;
+    row.scene = scene;
+    row.budget = std::move(budget_text);
+    row.plan = label(plan.chosen.method, plan.chosen.preset, plan.chosen.knobs) +
+               (plan.chosen.scale != 1.0 ? fmt::format(" at 1/{:g} size", 1.0 / plan.chosen.scale) : "") +
+               fmt::format(" (redoes {})", to_string(plan.chosen.redoes));
+    row.predicted_ms = plan.chosen.predicted_ms;
+    row.predicted_error = plan.chosen.predicted_error;
+    row.why = plan.why;
+    log::info("bench", "{} {}: {}", scene, row.budget, plan.why);
+    row.planned = planned;
+    judge_time_budget(row, budget, comparators);
+    return row;
+}
+
 // The scene's camera moved aside by 2% of the scene's diagonal, as a client's preview moves it from
 // one frame to the next: far more than a cascade's texel, so every sun's view cascades are fitted
 // anew.
@@ -618,20 +638,10 @@ int main(int argc, char** argv) {
                         }
                         light_factor = change_lights(scene, original_lights, light_changes);
                         const auto [plan, planned] = plan_and_render(budget);
-                        BudgetRow row;
-                        row.pass = options.passes + (after_its_own ? 1 : 2);
-                        row.scene = bench_scene.name;
-                        row.budget = fmt::format("≤ {:g} ms, relit{}", budget, after_its_own ? "" : " after another budget");
-                        row.plan = label(plan.chosen.method, plan.chosen.preset, plan.chosen.knobs) +
-                                   (plan.chosen.scale != 1.0 ? fmt::format(" at 1/{:g} size", 1.0 / plan.chosen.scale) : "") +
-                                   fmt::format(" (redoes {})", to_string(plan.chosen.redoes));
-                        row.predicted_ms = plan.chosen.predicted_ms;
-                        row.predicted_error = plan.chosen.predicted_error;
-                        row.why = plan.why;
-                        log::info("bench", "{} {}: {}", bench_scene.name, row.budget, plan.why);
-                        row.planned = planned;
-                        judge_time_budget(row, budget, relit_fixed);
-                        rows.push_back(row);
+                        rows.push_back(changed_budget_row(
+                            options.passes + (after_its_own ? 1 : 2), bench_scene.name,
+                            fmt::format("≤ {:g} ms, relit{}", budget, after_its_own ? "" : " after another budget"), plan,
+                            planned, budget, relit_fixed));
                     }
                 }
                 scene.lights = original_lights;
@@ -695,20 +705,9 @@ int main(int argc, char** argv) {
                     log::info("bench", "{} aside, ≤ {:g} ms: {} (redid {}, {:.1f} ms; its error is not of this view)",
                               bench_scene.name, budget, away_frame.label, to_string(away.chosen.redoes), away_frame.ms);
                     const auto [plan, planned] = plan_and_render(budget, std::nullopt);
-                    BudgetRow row;
-                    row.pass = options.passes + (options.relit ? 3 : 1);
-                    row.scene = bench_scene.name;
-                    row.budget = fmt::format("≤ {:g} ms, camera moved", budget);
-                    row.plan = label(plan.chosen.method, plan.chosen.preset, plan.chosen.knobs) +
-                               (plan.chosen.scale != 1.0 ? fmt::format(" at 1/{:g} size", 1.0 / plan.chosen.scale) : "") +
-                               fmt::format(" (redoes {})", to_string(plan.chosen.redoes));
-                    row.predicted_ms = plan.chosen.predicted_ms;
-                    row.predicted_error = plan.chosen.predicted_error;
-                    row.why = plan.why;
-                    log::info("bench", "{} {}: {}", bench_scene.name, row.budget, plan.why);
-                    row.planned = planned;
-                    judge_time_budget(row, budget, moved_fixed);
-                    rows.push_back(row);
+                    rows.push_back(changed_budget_row(options.passes + (options.relit ? 3 : 1), bench_scene.name,
+                                                      fmt::format("≤ {:g} ms, camera moved", budget), plan, planned, budget,
+                                                      moved_fixed));
                 }
             }
             std::string ratios;
