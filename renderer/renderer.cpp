@@ -338,7 +338,8 @@ FrameStats Renderer::prepare(SceneResources& resources, const RenderRequest& req
         timers_.begin_frame();
         const bool built = method.prepare(frame);
         fill_stats(stats, request, knobs, method, resources);
-        stats.change = built ? change : FrameChange::none;
+        // A bake draws no view cascades: a switch from a moved camera bakes what the knobs select.
+        stats.change = !built ? FrameChange::none : change == FrameChange::knobs_and_view ? FrameChange::knobs : change;
         // Structures built for these knobs and this geometry, no light solved with them (unless a
         // frame already did: nothing changed since).
         if (built && change != FrameChange::none) {
