@@ -676,7 +676,9 @@ int main(int argc, char** argv) {
                                                                               const methods::KnobValues& knobs,
                                                                               int width, int height) {
                             const FrameChange change = changes(method, preset, knobs, width, height);
-                            return change == FrameChange::view ? FrameChange::none : change;
+                            return change == FrameChange::view             ? FrameChange::none
+                                   : change == FrameChange::knobs_and_view ? FrameChange::knobs
+                                                                           : change;
                         };
                     }
                     const planning::Plan plan = planning::plan(moved_inputs, {budget, std::nullopt});

@@ -64,8 +64,9 @@ inline bool reads_view_cascades(const methods::KnobValues& knobs) {
     return cascades != knobs.end() && cascades->second > 0.0;
 }
 
-// Whether two frames' knobs draw the same shadow maps: maps of another size, or other cascades, are
-// all drawn anew whatever the camera did.
+// Whether two frames' knobs draw the same shadow maps: maps of another size are all drawn anew, and
+// another count of cascades draws the cascades anew, whatever the camera did (a switch of knobs'
+// own work, `knobs`).
 inline bool same_maps(const methods::KnobValues& a, const methods::KnobValues& b) {
     const auto knob = [](const methods::KnobValues& knobs, const char* name) {
         const auto it = knobs.find(name);

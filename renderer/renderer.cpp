@@ -377,7 +377,7 @@ RenderResult Renderer::render(SceneResources& resources, const RenderRequest& re
         MethodState next = resources.state_now(knobs, view);
         result.stats.change = change_between(last, next);
         // A light dimmed as the camera moved, predicted as a move of the lights (frame_change.hpp).
-        const bool dimmed_as_moved = result.stats.change == FrameChange::lights && last->lit &&
+        const bool dimmed_as_moved = result.stats.change == FrameChange::lights && last && last->lit &&
                                      last->light_places == next.light_places;
         timers_.begin_frame();
         method.render(frame);

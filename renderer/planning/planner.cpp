@@ -374,15 +374,15 @@ std::optional<SceneScale> scene_scale_of_calibration(const PlanningInputs& input
 PlanningInputs::ChangeOf changes_on(const SceneResources& resources, const scene::Camera& camera) {
     const MethodState now = resources.state_now({}, {camera, 0, 0});  // the scene's lights and geometry, hashed once
     // The fit, per map size, cascade count and frame size: the planner asks for hundreds of plans.
-    using FitKey = std::tuple<double, double, int, int>;
+    using FitKey = std::tuple<int, int, int, int>;
     auto fits = std::make_shared<std::map<FitKey, std::uint64_t>>();
     return [&resources, now, camera, fits](const std::string& method, const std::string& preset,
                                           const methods::KnobValues& knobs, int width, int height) {
         try {
             MethodState next = now;
             next.knobs = methods::MethodRegistry::builtin().resolve(method, preset, knobs);  // as plan_frame does
-            const FitKey key{methods::knob_or(next.knobs, "shadow_map_size", 0.0),
-                             methods::knob_or(next.knobs, "shadow_cascades", 0.0), width, height};
+            const FitKey key{static_cast<int>(methods::knob_or(next.knobs, "shadow_map_size", 0.0)),
+                             static_cast<int>(methods::knob_or(next.knobs, "shadow_cascades", 0.0)), width, height};
             auto fit = fits->find(key);
             if (fit == fits->end()) {
                 fit = fits->emplace(key, resources.view_cascades_now(next.knobs, {camera, width, height})).first;
@@ -398,9 +398,11 @@ PlanningInputs::ChangeOf changes_on(const SceneResources& resources, const scene
 namespace {
 
 // What a frame of the plan that redoes `change` takes beyond its warm frame, and whence (`source`):
-// predicted_ms's pricing (planner.hpp).
+// predicted_ms's pricing (planner.hpp). `maps_kept`: the frame keeps the shadow maps (a switch
+// that keeps their size), so none of them is priced here.
 double redone_ms(const PlanningInputs& inputs, const std::string& method, const std::string& preset,
-                 const methods::KnobValues& knobs, int bounces, FrameChange change, std::string& source) {
+                 const methods::KnobValues& knobs, int bounces, FrameChange change, std::string& source,
+                 bool maps_kept = false) {
     std::vector<double> beyond_warm;
     if (inputs.scene) {
         for (const SceneMeasurements::FrameTime& frame : inputs.scene->changed_frames(method, preset, bounces, change)) {
@@ -436,8 +438,8 @@ double redone_ms(const PlanningInputs& inputs, const std::string& method, const 
         // one, scaled as the scene's frames of the method's other presets measured it, else plus
         // the margin for a heavier scene; without the scene's maps, or without the device's
         // figure, all from the bench's bound.
-        const bool maps_drawn = change != FrameChange::light_power;
-        const auto maps_ms = maps_redrawn_ms(inputs, method, preset, knobs, change);
+        const bool maps_drawn = change != FrameChange::light_power && !maps_kept;
+        const auto maps_ms = maps_kept ? std::optional(0.0) : maps_redrawn_ms(inputs, method, preset, knobs, change);
         const auto calibrated = inputs.device.change_cost(method, preset);
         const std::string maps_text =
             maps_drawn && maps_ms ? fmt::format("{:.1f} ms of shadow maps as this scene's frames drew them, and ", *maps_ms)
@@ -463,11 +465,11 @@ double redone_ms(const PlanningInputs& inputs, const std::string& method, const 
             }
         } else {
             const double warm_at_prior = warm_ms(at_pixels(inputs, kChangePriorPixels), method, preset, knobs, nullptr);
-            const bool besides_maps = maps_drawn && maps_ms;
+            const bool besides_maps = (maps_drawn && maps_ms) || maps_kept;
             const double bound = change_cost_bound(method, preset, change, besides_maps);
             extra = bound * warm_at_prior + (besides_maps ? *maps_ms : 0.0);
             source = fmt::format("{}{:.2g} x its warm frame at 128x128{}, the most the bench measured", maps_text, bound,
-                                 besides_maps ? " besides" : "");
+                                 besides_maps ? " besides its maps" : "");
         }
     }
     return extra;
@@ -487,9 +489,10 @@ double predicted_ms(const PlanningInputs& inputs, const std::string& method, con
     const bool measured =
         inputs.scene && !inputs.scene->changed_frames(method, preset, bounces, change).empty();
     if (change == FrameChange::knobs_and_view && !measured) {
-        // Before such frames were measured: a switch that keeps the maps, and the cascades it redraws.
+        // Before such frames were measured: a switch that keeps the maps (priced without them), and
+        // the cascades it redraws.
         std::string switched, moved;
-        extra = redone_ms(inputs, method, preset, knobs, bounces, FrameChange::knobs, switched) +
+        extra = redone_ms(inputs, method, preset, knobs, bounces, FrameChange::knobs, switched, /*maps_kept=*/true) +
                 redone_ms(inputs, method, preset, knobs, bounces, FrameChange::view, moved);
         source = fmt::format("the switch {}; the cascades {}", switched, moved);
     } else {
@@ -765,7 +768,12 @@ void record_reference_noise(SceneMeasurements& measurements, const SceneAnalysis
 void record_frame(SceneMeasurements& measurements, const SceneAnalysis* analysis, const DeviceCosts& device,
                   const FrameStats& stats, int width, int height) {
     if (const auto baseline = baseline_ms(analysis, device, stats.method, stats.preset, stats.knobs, width, height)) {
-        measurements.record(stats.method, stats.preset, bounces_knob(stats.knobs).value_or(-1), stats.render_ms, *baseline,
+        // A light dimmed as the camera moved drew the view cascades too: a change of power is kept
+        // without them (they are priced as the camera's, from the pass recorded below).
+        const double measured_ms = stats.change == FrameChange::light_power
+                                       ? std::max(0.0, stats.render_ms - stats.pass_ms("shadow_view_cascades"))
+                                       : stats.render_ms;
+        measurements.record(stats.method, stats.preset, bounces_knob(stats.knobs).value_or(-1), measured_ms, *baseline,
                             static_cast<double>(width) * height, stats.change);
     }
     // The passes are timed only in frames that drew maps (passes::ShadowMaps).

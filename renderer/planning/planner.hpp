@@ -172,8 +172,9 @@ Plan plan(const PlanningInputs& inputs, const Budget& budget);
 // frame. A moved camera (view) redoes the suns' view cascades alone: priced, before frames of the
 // class were measured, at the scene's timing of the cascades drawn alone, else of all its maps (the
 // cascades among them), else change_cost_bound() for a move of the lights; the device's calibration
-// plays no part. The work is the scene's (shadow maps, an atlas, an octree), not the frame's pixels:
-// a smaller frame redoes as much.
+// plays no part. A switch of knobs from a moved camera that keeps the maps (knobs_and_view), before
+// frames of the class were measured: the switch without its maps, and the cascades. The work is the
+// scene's (shadow maps, an atlas, an octree), not the frame's pixels: a smaller frame redoes as much.
 double predicted_ms(const PlanningInputs& inputs, const std::string& method, const std::string& preset,
                     const methods::KnobValues& knobs, std::string* basis = nullptr);
 

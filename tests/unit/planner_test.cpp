@@ -678,6 +678,29 @@ TEST(Costs, FramesThatRedidWorkAreKeptApartFromWarmFrames) {
     EXPECT_DOUBLE_EQ(*scene.shadow_maps_ms(2048, 0), 120.0);
 }
 
+// A light dimmed as the camera moved drew the view cascades besides the light's work: the frame is
+// kept as a change of power without them, and the cascades as the camera's, so that neither a
+// dimming nor a move of the lights is priced by the other's work.
+TEST(Costs, ALightDimmedAsTheCameraMovedIsKeptWithoutItsCascades) {
+    SceneMeasurements scene;
+    const SceneAnalysis analysis = made_up_analysis();
+    DeviceCosts device("test");
+    device.set("direct", "ultra", {2.0, 0.0});
+    FrameStats dimmed;
+    dimmed.method = "direct";
+    dimmed.preset = "ultra";
+    dimmed.knobs = {{"shadow_map_size", 4096}, {"shadow_cascades", 3}};
+    dimmed.passes = {{"shadow_view_cascades", 300.0}, {"direct_light", 1.0}};
+    dimmed.render_ms = 303.0;
+    dimmed.change = FrameChange::light_power;
+    record_frame(scene, &analysis, device, dimmed, 64, 64);
+    const auto frames = scene.changed_frames("direct", "ultra", -1, FrameChange::light_power);
+    ASSERT_EQ(frames.size(), 1u);
+    EXPECT_DOUBLE_EQ(frames.front().measured_ms, 3.0);
+    EXPECT_DOUBLE_EQ(*scene.view_cascades_ms(4096, 3), 300.0);
+    EXPECT_FALSE(scene.shadow_maps_ms(4096, 3));
+}
+
 // A plan whose frame would redo work is priced with it: before the scene measured it, the bench's
 // bound times the preset's warm frame at 128x128 (the work is the scene's, not the pixels'); once
 // measured, what those frames took beyond a warm frame at their size, the median of them.
@@ -798,6 +821,9 @@ TEST(Planner, AMovedCameraIsPricedAsTheViewCascadesItRedraws) {
     scene.record_view_cascades(map_size, cascades, 450.0);
     EXPECT_DOUBLE_EQ(predicted_ms(inputs, "direct", "ultra", {}, &basis), 2.0 + 450.0);
     EXPECT_NE(basis.find("redrew them alone"), std::string::npos) << basis;
+    // Timings of maps drawn with cascades do not price maps drawn without (the change function here
+    // is made up: a plan without cascades redoes no view).
+    EXPECT_DOUBLE_EQ(predicted_ms(inputs, "direct", "ultra", {{"shadow_cascades", 0}}), 2.0 + bound * 2.0);
     scene.record("direct", "ultra", -1, 2.0 + 300.0, 2.0, 64.0 * 64.0, FrameChange::view);
     EXPECT_DOUBLE_EQ(predicted_ms(inputs, "direct", "ultra", {}, &basis), 2.0 + 300.0);
     EXPECT_NE(basis.find("as 1 such frame"), std::string::npos) << basis;
@@ -808,6 +834,11 @@ TEST(Planner, AMovedCameraIsPricedAsTheViewCascadesItRedraws) {
     inputs.change = [](const std::string&, const std::string&, const methods::KnobValues&, int, int) {
         return FrameChange::knobs_and_view;
     };
+    // The switch not measured: the device's calibration of a switch without its maps, which the
+    // switch keeps (the 600 ms of all the maps are not counted), and the cascades.
+    const double calibrated_switch = 5.0 * 2.0 + change_margin("direct", FrameChange::knobs) * 2.0;
+    EXPECT_DOUBLE_EQ(predicted_ms(inputs, "direct", "ultra", {}, &basis), 2.0 + calibrated_switch + 300.0);
+    EXPECT_NE(basis.find("the switch"), std::string::npos) << basis;
     scene.record("direct", "ultra", -1, 2.0 + 40.0, 2.0, 64.0 * 64.0, FrameChange::knobs);
     EXPECT_DOUBLE_EQ(predicted_ms(inputs, "direct", "ultra", {}, &basis), 2.0 + 40.0 + 300.0);
     EXPECT_NE(basis.find("other knobs, and the camera moved"), std::string::npos) << basis;
