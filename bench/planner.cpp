@@ -14,10 +14,12 @@
 // first as the daemon tries them, and the request's time is the check's reference, every frame tried
 // and, where none passed, the reference plan's frame. The budgets run in two passes: the second
 // after the first's frames were compared; then the time budgets once more, each right after the
-// lights change, with frames rendered as they come (what they redo priced and timed).
+// lights change, with frames rendered as they come (what they redo priced and timed); then each
+// right after a frame from a camera moved aside (the suns' view cascades drawn again).
 #include "bench/common.hpp"
 #include "bench/corpus.hpp"
 #include "bench/markdown_blocks.hpp"
+#include "bench/planner_rows.hpp"
 #include "bench/reference_cache.hpp"
 #include "renderer/base/log.hpp"
 #include "renderer/image/metrics.hpp"
@@ -40,6 +42,13 @@
 
 namespace fs = std::filesystem;
 using namespace bounce;
+
+using bench::BudgetRow;
+using bench::Measured;
+using bench::changed_budget_row;
+using bench::error_text;
+using bench::judge_time_budget;
+using bench::label;
 
 namespace {
 
@@ -73,74 +82,6 @@ struct Options {
 
 constexpr std::string_view kBegin = "<!-- planner: bench/planner writes it -->";
 constexpr std::string_view kEnd = "<!-- end of planner -->";
-
-struct Measured {
-    std::string label;
-    double ms = 0.0, rel_mse = 0.0;
-    // Over the frames rendered of the plan: the largest relMSE less the smallest. A reference's
-    // frames are traced with other seeds, so this is how much two frames of one plan differ by
-    // chance (the floor under which one plan is not worse than another); GPU frames differ only where
-    // float atomics add in another order (vct). A relit comparator's three frames each follow another
-    // change of the lights (relit_fixed_plan), as the planned frame follows its own.
-    double rel_mse_spread = 0.0;
-    std::string method, preset;  // what to render it again with
-    methods::KnobValues knobs;
-    // A target error's comparator, timed again right after the planned frame (fixed plans are timed
-    // first, minutes earlier, and a frame of a few milliseconds on two loaded cores varies between
-    // such moments by more than the 1.5x it is judged by: the foliage's `direct high` took 2.2 ms as
-    // a fixed plan and 4.0 ms as the planned frame, the same plan). 0 where not timed again.
-    double ms_again = 0.0;
-    double comparator_ms() const { return ms_again > 0.0 ? ms_again : ms; }
-};
-
-struct BudgetRow {
-    int pass = 1;
-    std::string scene, budget, plan;
-    double predicted_ms = 0, predicted_error = 0;
-    Measured planned;
-    std::optional<Measured> fixed;  // the comparator
-    bool met = false, holds = false;
-    bool holds_strictly = false;  // a time budget's error compared with no noise floor
-    std::string why;
-    // Spot-checked plans tried before the reference plan (planning::spot_checks), each with the bound
-    // its check read, and the check's reference time (included in planned.ms).
-    std::string checks;
-    double check_ms = 0.0;
-};
-
-// How much two frames of the same plan differ by chance, for the planned plan or the comparator.
-double noise_floor(const BudgetRow& row) {
-    return std::max(row.planned.rel_mse_spread, row.fixed ? row.fixed->rel_mse_spread : 0.0);
-}
-
-// A time budget T holds when the planned frame took at most 1.2 T, with error no worse than the most
-// accurate of `comparators` within T: by no more than two frames of one of the two plans differ by
-// chance (holds_strictly: by nothing). A planned frame of the comparator's own plan is no worse than
-// it whatever it read: after a change of the lights, direct medium in the furnished room read
-// 0.19384 as planned and as its comparator, apart by less than 5e-6, where the comparator's three
-// frames happened to lie closer still.
-void judge_time_budget(BudgetRow& row, double budget, const std::vector<Measured>& comparators) {
-    row.met = row.planned.ms <= 1.2 * budget;
-    for (const Measured& m : comparators) {
-        if (m.ms <= budget && (!row.fixed || m.rel_mse < row.fixed->rel_mse)) row.fixed = m;
-    }
-    row.holds_strictly = row.met && (!row.fixed || row.planned.rel_mse <= row.fixed->rel_mse);
-    row.holds = row.met && (!row.fixed || row.planned.label == row.fixed->label ||
-                            row.planned.rel_mse <= row.fixed->rel_mse + noise_floor(row));
-}
-
-std::string error_text(const Measured& m) {
-    return m.rel_mse_spread >= 0.001 ? fmt::format("{:.3f} ± {:.3f}", m.rel_mse, m.rel_mse_spread / 2.0)
-                                  : fmt::format("{:.3f}", m.rel_mse);
-}
-
-std::string label(const std::string& method, const std::string& preset, const methods::KnobValues& knobs) {
-    std::string text = method == "reference" ? "reference" : method + " " + preset;
-    for (const auto& [knob, value] : knobs) {
-        if (knob != "pixel_jitter") text += fmt::format(" {}={:g}", knob, value);
-    }
-    return text;
-}
 
 // A GPU idles at a fraction of its clock and raises it only after a while under load (an H200: 345
 // against 1980 MHz). Right after the reference's CPU-only frames, an H200 took five times as long
@@ -317,26 +258,6 @@ Measured relit_fixed_plan(Renderer& renderer, SceneResources& resources, scene::
                                                    [](const auto& a, const auto& b) { return a.second < b.second; });
     relit.rel_mse_spread = most->second - least->second;
     return relit;
-}
-
-// The row of a time budget asked after a change (the relit and moved-camera passes): its frame
-// rendered as it came, judged against `comparators` measured after the same change.
-BudgetRow changed_budget_row(int pass, const std::string& scene, std::string budget_text, const planning::Plan& plan,
-                             const Measured& planned, double budget, const std::vector<Measured>& comparators) {
-    BudgetRow row;
-    row.pass = pass;
-    row.scene = scene;
-    row.budget = std::move(budget_text);
-    row.plan = label(plan.chosen.method, plan.chosen.preset, plan.chosen.knobs) +
-               (plan.chosen.scale != 1.0 ? fmt::format(" at 1/{:g} size", 1.0 / plan.chosen.scale) : "") +
-               fmt::format(" (redoes {})", to_string(plan.chosen.redoes));
-    row.predicted_ms = plan.chosen.predicted_ms;
-    row.predicted_error = plan.chosen.predicted_error;
-    row.why = plan.why;
-    log::info("bench", "{} {}: {}", scene, row.budget, plan.why);
-    row.planned = planned;
-    judge_time_budget(row, budget, comparators);
-    return row;
 }
 
 // The scene's camera moved aside by 2% of the scene's diagonal, as a client's preview moves it from
