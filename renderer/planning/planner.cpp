@@ -515,7 +515,8 @@ double predicted_ms(const PlanningInputs& inputs, const std::string& method, con
     return warm + extra;
 }
 
-std::vector<Candidate> candidates(const PlanningInputs& inputs, std::vector<std::string>* ruled_out) {
+std::vector<Candidate> candidates(const PlanningInputs& inputs, std::vector<std::string>* ruled_out,
+                                  std::optional<double> fill_ms) {
     const auto& registry = methods::MethodRegistry::builtin();
     std::vector<Candidate> all;
     const auto add = [&](const std::string& method, const std::string& preset, const methods::KnobValues& knobs) {
@@ -558,10 +559,24 @@ std::vector<Candidate> candidates(const PlanningInputs& inputs, std::vector<std:
     for (const std::string& method : registry.names()) {
         if (inputs.method && *inputs.method != method) continue;
         if (method == "reference") {
+            const auto knobs_of = [](int spp, int bounces) {
+                return methods::KnobValues{{"spp", spp}, {"bounces", bounces}, {"pixel_jitter", 0}};
+            };
             for (const int bounces : kReferenceBounces) {
+                int within = 0, past = 0;  // the ladder's last step within fill_ms, and its first past it
                 for (const int spp : kReferenceSpp) {
-                    add(method, "medium", {{"spp", spp}, {"bounces", bounces}, {"pixel_jitter", 0}});
+                    const std::size_t offered = all.size();
+                    add(method, "medium", knobs_of(spp, bounces));
+                    if (!fill_ms || past || all.size() == offered) continue;
+                    (all.back().predicted_ms <= *fill_ms ? within : past) = spp;
                 }
+                // Filled by bisection: its price rises with every sample.
+                int below = within, above = past;
+                while (within && above - below > 1) {
+                    const int spp = (below + above) / 2;
+                    (predicted_ms(inputs, method, "medium", knobs_of(spp, bounces)) <= *fill_ms ? below : above) = spp;
+                }
+                if (below > within) add(method, "medium", knobs_of(below, bounces));
             }
             continue;
         }
@@ -580,7 +595,7 @@ std::vector<Candidate> candidates(const PlanningInputs& inputs, std::vector<std:
 
 Plan plan(const PlanningInputs& inputs, const Budget& budget) {
     std::vector<std::string> ruled_out;
-    const std::vector<Candidate> all = candidates(inputs, &ruled_out);
+    const std::vector<Candidate> all = candidates(inputs, &ruled_out, budget.max_ms);
     if (all.empty()) {
         throw InputError(fmt::format("no plan can be predicted for {}: {}", inputs.method.value_or("any method"),
                                      ruled_out.empty() ? "no cost is known" : fmt::format("{}", fmt::join(ruled_out, "; "))));

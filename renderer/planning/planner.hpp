@@ -133,7 +133,14 @@ PlanningInputs::ChangeOf changes_on(const SceneResources& resources, const scene
 
 // Every plan the planner predicts for a frame, at full size and at each scale of its method's
 // `resample_errors`, with those the analysis rules out left out (and named in `ruled_out`).
-std::vector<Candidate> candidates(const PlanningInputs& inputs, std::vector<std::string>* ruled_out = nullptr);
+// The reference is offered on a ladder of sample counts in steps of about 1.5. With `fill_ms`, a
+// time budget, each of its bounce counts is also offered at the most samples predicted within it
+// (where that falls between two steps): a step would leave up to a third of the budget unused where
+// the reference is the most accurate plan, and its noise falls with every sample. A target error
+// keeps the steps, and with them their slack: a frame a little over its time budget still keeps it
+// (bench/planner judges frames within 1.2 T), a frame over its target error does not.
+std::vector<Candidate> candidates(const PlanningInputs& inputs, std::vector<std::string>* ruled_out = nullptr,
+                                  std::optional<double> fill_ms = std::nullopt);
 
 // For a target error E whose chosen plan is the reference (nothing on the scene promises a GPU plan
 // within E): GPU plans at full size whose own error is not measured here, which the bench's typical

@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <random>
 
 namespace bounce::planning {
@@ -242,6 +243,44 @@ TEST(Planner, VctIsOfferedWithItsSecondBounce) {
     EXPECT_GT(*own_error_prior("vct", "medium", 2), *own_error_prior("vct", "medium", 1));
     EXPECT_DOUBLE_EQ(find(1)->predicted_ms, 8.0);
     EXPECT_DOUBLE_EQ(find(2)->predicted_ms, 8.0 * bounce_cost_bound("vct", "medium", 2));
+}
+
+TEST(Planner, ATimeBudgetIsFilledWithTheReferencesSamples) {
+    const SceneAnalysis analysis = made_up_analysis();
+    DeviceCosts device("test");
+    const PlanningInputs inputs{analysis, device, nullptr, 64, 64, std::string("reference")};
+    const auto spp_of = [](const Candidate& c) { return static_cast<int>(c.knobs.at("spp")); };
+    const auto ms_at = [&](int spp, int bounces) {
+        return predicted_ms(inputs, "reference", "medium", {{"spp", spp}, {"bounces", bounces}, {"pixel_jitter", 0}});
+    };
+    const std::vector<Candidate> ladder = candidates(inputs);
+    for (const double budget : {50.0, 500.0, 5000.0}) {
+        SCOPED_TRACE(budget);
+        const std::vector<Candidate> filled = candidates(inputs, nullptr, budget);
+        // Per bounce count, its most samples within the budget: one more would not fit. The ladder's
+        // steps of 1.5 leave some of it unused at every bounce count here.
+        std::map<int, int> most;
+        for (const Candidate& c : filled) {
+            const int bounces = static_cast<int>(c.knobs.at("bounces"));
+            if (c.predicted_ms <= budget) most[bounces] = std::max(most[bounces], spp_of(c));
+        }
+        int off_the_ladder = 0;
+        for (const auto& [bounces, spp] : most) {
+            EXPECT_GT(ms_at(spp + 1, bounces), budget) << bounces << " bounces at " << spp << " spp";
+            off_the_ladder += std::none_of(ladder.begin(), ladder.end(), [&](const Candidate& c) {
+                return spp_of(c) == spp && c.knobs.at("bounces") == bounces;
+            });
+        }
+        EXPECT_GT(off_the_ladder, 0);
+        EXPECT_EQ(filled.size(), ladder.size() + off_the_ladder);  // nothing else added
+        const Plan plan_in_time = plan(inputs, {budget, std::nullopt});
+        EXPECT_LE(plan_in_time.chosen.predicted_ms, budget);
+        EXPECT_GT(ms_at(spp_of(plan_in_time.chosen) + 1, static_cast<int>(plan_in_time.chosen.knobs.at("bounces"))), budget);
+        // With a target error too, the time budget is filled as well.
+        EXPECT_EQ(plan(inputs, {budget, 0.5}).considered, static_cast<int>(filled.size()));
+    }
+    // A target error alone keeps the ladder's steps, and their slack.
+    EXPECT_EQ(plan(inputs, {std::nullopt, 0.05}).considered, static_cast<int>(ladder.size()));
 }
 
 TEST(Costs, ALineThroughTwoFramesAndItsClamps) {
