@@ -5,8 +5,9 @@
 //
 //   none:     nothing: a warm frame, as the bench measures methods;
 //   view:     the camera moved or turned, or the frame's shape changed, so that the view cascades a
-//             directional light casts for the method (passes/shadow_maps.hpp) fit elsewhere: those,
-//             redrawn (a camera moved along the light fits the same: `none`);
+//             directional light casts for the method (passes/shadow_maps.hpp) fit elsewhere, or the
+//             `shadow_cascades` knob alone changed: those, redrawn (a camera moved along the light
+//             fits the same, and cascades turned off are dropped: `none`);
 //   light_power: a light's colour or intensity alone: what its power feeds (vct's injected light,
 //             which it scales where every light's power changed by one factor and no surface emits;
 //             cssm's atlas solve, isr's light views and VPL tree), not the shadow maps, which hold
@@ -58,10 +59,18 @@ struct MethodState {
     bool lit = false;            // a frame lit them: a `bake` request builds structures and solves no light
 };
 
-// Whether a method at these knobs (resolved) reads view cascades: its `shadow_cascades` knob.
+// Whether a frame at these knobs (resolved) renders ambient occlusion (`ao`) instead of light: it
+// draws no shadow maps (vct), whatever its map knobs say.
+inline bool renders_occlusion(const methods::KnobValues& knobs) {
+    const auto ao = knobs.find("ao");
+    return ao != knobs.end() && ao->second != 0.0;
+}
+
+// Whether a method at these knobs (resolved) reads view cascades: its `shadow_cascades` knob, where
+// it renders light.
 inline bool reads_view_cascades(const methods::KnobValues& knobs) {
     const auto cascades = knobs.find("shadow_cascades");
-    return cascades != knobs.end() && cascades->second > 0.0;
+    return cascades != knobs.end() && cascades->second > 0.0 && !renders_occlusion(knobs);
 }
 
 // Whether two frames' knobs draw the same shadow maps: maps of another size are all drawn anew, and
@@ -76,6 +85,17 @@ inline bool same_maps(const methods::KnobValues& a, const methods::KnobValues& b
            knob(a, "shadow_cascades") == knob(b, "shadow_cascades");
 }
 
+// Whether two frames' knobs differ in their count of view cascades alone. No method's structures
+// depend on it, and the maps over the scene are the same: such a switch redraws the cascades (or
+// drops them), as a moved camera does, and is classed as one.
+inline bool cascades_alone_differ(const methods::KnobValues& a, const methods::KnobValues& b) {
+    if (a == b) return false;
+    methods::KnobValues a_rest = a, b_rest = b;
+    a_rest.erase("shadow_cascades");
+    b_rest.erase("shadow_cascades");
+    return a_rest == b_rest;
+}
+
 // What a frame in `next` redoes after a method's last frame in `last` (none yet: everything). A
 // light dimmed while the camera moved redoes the light's work and the cascades: predicted as a move
 // of the lights, which redraws every map, the cascades among them (the frame then says
@@ -83,8 +103,10 @@ inline bool same_maps(const methods::KnobValues& a, const methods::KnobValues& b
 inline FrameChange change_between(const std::optional<MethodState>& last, const MethodState& next) {
     if (!last) return FrameChange::knobs_and_scene;
     const bool scene = !last->lit || last->lights != next.lights || last->geometry != next.geometry;
-    const bool view = last->view != next.view && reads_view_cascades(next.knobs) && same_maps(last->knobs, next.knobs);
-    if (last->knobs != next.knobs) {
+    const bool recascaded = cascades_alone_differ(last->knobs, next.knobs);
+    const bool view = last->view != next.view && reads_view_cascades(next.knobs) &&
+                      (same_maps(last->knobs, next.knobs) || recascaded);
+    if (last->knobs != next.knobs && !recascaded) {
         return scene ? FrameChange::knobs_and_scene : view ? FrameChange::knobs_and_view : FrameChange::knobs;
     }
     if (last->geometry != next.geometry) return FrameChange::objects;

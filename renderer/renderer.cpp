@@ -103,7 +103,7 @@ MethodState SceneResources::state_now(const methods::KnobValues& knobs, const Fr
 std::uint64_t SceneResources::view_cascades_now(const methods::KnobValues& knobs, const FrameView& view) const {
     const auto size = knobs.find("shadow_map_size");
     const auto cascades = knobs.find("shadow_cascades");
-    if (size == knobs.end() || cascades == knobs.end()) return 0;
+    if (size == knobs.end() || !reads_view_cascades(knobs)) return 0;
     return passes::ShadowMaps::view_fingerprint(gpu_scene.scene(), view.camera, view.width, view.height,
                                                 static_cast<int>(size->second), static_cast<int>(cascades->second));
 }

@@ -438,6 +438,8 @@ double redone_ms(const PlanningInputs& inputs, const std::string& method, const 
         // one, scaled as the scene's frames of the method's other presets measured it, else plus
         // the margin for a heavier scene; without the scene's maps, or without the device's
         // figure, all from the bench's bound.
+        // Knobs that draw no maps (vct's ambient occlusion) have none to redraw.
+        maps_kept = maps_kept || renders_occlusion(methods::MethodRegistry::builtin().resolve(method, preset, knobs));
         const bool maps_drawn = change != FrameChange::light_power && !maps_kept;
         const auto maps_ms = maps_kept ? std::optional(0.0) : maps_redrawn_ms(inputs, method, preset, knobs, change);
         const auto calibrated = inputs.device.change_cost(method, preset);

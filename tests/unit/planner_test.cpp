@@ -683,6 +683,28 @@ TEST(FrameChange, AMovedCameraRedrawsTheViewCascadesOfAMethodThatReadsThem) {
     EXPECT_EQ(change_between(last, switched), FrameChange::knobs);
     switched.lights = 3;
     EXPECT_EQ(change_between(last, switched), FrameChange::knobs_and_scene);
+    // Another count of cascades alone selects no other structure and keeps the maps over the scene:
+    // the cascades drawn anew, as for a moved camera, or dropped.
+    MethodState recascaded = last;
+    recascaded.knobs["shadow_cascades"] = 2;
+    recascaded.view = 9;
+    EXPECT_TRUE(cascades_alone_differ(last.knobs, recascaded.knobs));
+    EXPECT_EQ(change_between(last, recascaded), FrameChange::view);
+    EXPECT_EQ(change_between(last, without), FrameChange::none);
+    recascaded.light_places = 6;
+    EXPECT_EQ(change_between(last, recascaded), FrameChange::lights);
+    recascaded = last;
+    recascaded.knobs["shadow_cascades"] = 2;
+    recascaded.knobs["bounces"] = 2;  // and another knob: a switch
+    EXPECT_FALSE(cascades_alone_differ(last.knobs, recascaded.knobs));
+    EXPECT_EQ(change_between(last, recascaded), FrameChange::knobs);
+    // Ambient occlusion lights nothing: a moved camera redraws no cascades.
+    MethodState occlusion = last, moved_occlusion = moved;
+    occlusion.knobs["ao"] = moved_occlusion.knobs["ao"] = 1;
+    moved_occlusion.lights = occlusion.lights;
+    moved_occlusion.light_places = occlusion.light_places;
+    moved_occlusion.geometry = occlusion.geometry;
+    EXPECT_EQ(change_between(occlusion, moved_occlusion), FrameChange::none);
 }
 
 // Frames that redid work are kept apart: a relit frame is not a slow warm frame, and a warm one does
@@ -828,6 +850,12 @@ TEST(Planner, ShadowMapsArePricedFromTheScenesOwnTimingsOfThem) {
     EXPECT_DOUBLE_EQ(predicted_ms(inputs, "vct", "medium", {}, &basis),
                      10.0 + change_cost_bound("vct", "medium", FrameChange::light_power) * 10.0);
     EXPECT_NE(basis.find("colour or intensity"), std::string::npos) << basis;
+    // Ambient occlusion draws no maps: a move of the lights is priced without them.
+    inputs.change = [](const std::string&, const std::string&, const methods::KnobValues&, int, int) {
+        return FrameChange::lights;
+    };
+    EXPECT_DOUBLE_EQ(predicted_ms(inputs, "vct", "medium", {{"ao", 1}}, &basis), 10.0 + besides * 10.0);
+    EXPECT_EQ(basis.find("of shadow maps"), std::string::npos) << basis;
 }
 
 // A moved camera redraws a sun's view cascades and nothing else: before the scene measured any such
