@@ -59,8 +59,9 @@ struct MethodState {
     bool lit = false;            // a frame lit them: a `bake` request builds structures and solves no light
 };
 
-// Whether a frame at these knobs (resolved) renders ambient occlusion (`ao`) instead of light: it
-// draws no shadow maps (vct), whatever its map knobs say.
+// Whether a frame at these knobs (resolved) renders ambient occlusion (`ao`) instead of light: vct
+// then draws no shadow maps (its light views and injected light are as ever), whatever its map
+// knobs say.
 inline bool renders_occlusion(const methods::KnobValues& knobs) {
     const auto ao = knobs.find("ao");
     return ao != knobs.end() && ao->second != 0.0;
@@ -74,14 +75,15 @@ inline bool reads_view_cascades(const methods::KnobValues& knobs) {
 }
 
 // Whether two frames' knobs draw the same shadow maps: maps of another size are all drawn anew, and
-// another count of cascades draws the cascades anew, whatever the camera did (a switch of knobs'
-// own work, `knobs`).
+// another count of cascades draws the cascades anew, whatever the camera did (with other knobs too,
+// a switch of knobs' own work, `knobs`; alone, cascades_alone_differ). Frames of ambient occlusion
+// draw none: after one, a frame of light draws every map.
 inline bool same_maps(const methods::KnobValues& a, const methods::KnobValues& b) {
     const auto knob = [](const methods::KnobValues& knobs, const char* name) {
         const auto it = knobs.find(name);
         return it == knobs.end() ? -1.0 : it->second;
     };
-    return knob(a, "shadow_map_size") == knob(b, "shadow_map_size") &&
+    return !renders_occlusion(a) && !renders_occlusion(b) && knob(a, "shadow_map_size") == knob(b, "shadow_map_size") &&
            knob(a, "shadow_cascades") == knob(b, "shadow_cascades");
 }
 

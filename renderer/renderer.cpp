@@ -341,8 +341,9 @@ FrameStats Renderer::prepare(SceneResources& resources, const RenderRequest& req
         // A bake draws no view cascades: a switch from a moved camera bakes what the knobs select.
         stats.change = !built ? FrameChange::none : change == FrameChange::knobs_and_view ? FrameChange::knobs : change;
         // Structures built for these knobs and this geometry, no light solved with them (unless a
-        // frame already did: nothing changed since).
-        if (built && change != FrameChange::none) {
+        // frame already did: nothing changed since, or only the view cascades, which a bake does
+        // not draw and no structure depends on).
+        if (built && change != FrameChange::none && change != FrameChange::view) {
             MethodState unlit = resources.state_now(knobs, view);
             unlit.lit = false;
             resources.record_state(request.method, std::move(unlit));

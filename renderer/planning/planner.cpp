@@ -373,8 +373,9 @@ std::optional<SceneScale> scene_scale_of_calibration(const PlanningInputs& input
 
 PlanningInputs::ChangeOf changes_on(const SceneResources& resources, const scene::Camera& camera) {
     const MethodState now = resources.state_now({}, {camera, 0, 0});  // the scene's lights and geometry, hashed once
-    // The fit, per map size, cascade count and frame size: the planner asks for hundreds of plans.
-    using FitKey = std::tuple<int, int, int, int>;
+    // The fit, per map size, cascade count, frame size and whether the knobs draw maps at all (vct's
+    // ambient occlusion does not): the planner asks for hundreds of plans.
+    using FitKey = std::tuple<int, int, int, int, bool>;
     auto fits = std::make_shared<std::map<FitKey, std::uint64_t>>();
     return [&resources, now, camera, fits](const std::string& method, const std::string& preset,
                                           const methods::KnobValues& knobs, int width, int height) {
@@ -382,7 +383,8 @@ PlanningInputs::ChangeOf changes_on(const SceneResources& resources, const scene
             MethodState next = now;
             next.knobs = methods::MethodRegistry::builtin().resolve(method, preset, knobs);  // as plan_frame does
             const FitKey key{static_cast<int>(methods::knob_or(next.knobs, "shadow_map_size", 0.0)),
-                             static_cast<int>(methods::knob_or(next.knobs, "shadow_cascades", 0.0)), width, height};
+                             static_cast<int>(methods::knob_or(next.knobs, "shadow_cascades", 0.0)), width, height,
+                             renders_occlusion(next.knobs)};
             auto fit = fits->find(key);
             if (fit == fits->end()) {
                 fit = fits->emplace(key, resources.view_cascades_now(next.knobs, {camera, width, height})).first;

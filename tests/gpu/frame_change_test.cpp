@@ -196,6 +196,11 @@ TEST_P(ViewChanges, AMovedCameraRedrawsTheViewCascadesAlone) {
     EXPECT_EQ(planning::changes_on(*resources, *without.camera)(method, "draft", {{"shadow_cascades", 0}}, kSize, kSize),
               FrameChange::none);
     EXPECT_EQ(planning::changes_on(*resources, *without.camera)(method, "draft", {}, kSize, kSize), FrameChange::view);
+    // A bake then builds nothing that the cascades change: the next frame redraws them alone, and
+    // solves no light.
+    request.camera = without.camera;
+    renderer.prepare(*resources, request, [](double, const std::string&) { return true; });
+    frame(request, FrameChange::view, FrameChange::view, "a frame after a bake with the cascades back");
     resources.reset();
 }
 
@@ -204,11 +209,9 @@ INSTANTIATE_TEST_SUITE_P(Methods, ViewChanges,
                                            ViewWork{"vct", "light_updates"}, ViewWork{"isr", "vpl_tree_builds"}),
                          [](const auto& info) { return std::string(info.param.method); });
 
-// A camera moved in the Cornell box redoes nothing: no light of it casts view cascades. With a sun
-// added, the same move (the camera inside the box, where the cascades near it are finer than the
-// sun's map over the box) redraws them.
-// Ambient occlusion lights nothing: vct in its `ao` mode draws no shadow maps, so a moved camera
-// redoes nothing, as predicted as it is said (it was predicted to redraw cascades it never draws).
+// vct in its ambient-occlusion mode (`ao`) draws no shadow maps, so a moved camera redoes nothing,
+// as predicted as it is said (it was predicted to redraw cascades it never draws); the frame of light
+// after it draws every map, a switch of knobs.
 TEST(ViewChanges, AmbientOcclusionRedrawsNoCascadesForAMovedCamera) {
     scene::Scene scene = sunlit_ground();
     Renderer& renderer = shared_renderer();
@@ -222,14 +225,20 @@ TEST(ViewChanges, AmbientOcclusionRedrawsNoCascadesForAMovedCamera) {
     const RenderResult moved = renderer.render(*resources, request);
     EXPECT_EQ(moved.stats.change, FrameChange::none);
     EXPECT_FALSE(moved.stats.ran("shadow_view_cascades"));
-    // With light, the same move redraws the cascades.
+    // Light again: every map drawn, as predicted; then the same move redraws the cascades.
     request.knobs["ao"] = 0;
-    renderer.render(*resources, request);
+    EXPECT_EQ(resources->change_for("vct", plan_frame(request).knobs, resources->view_of(request)), FrameChange::knobs);
+    const RenderResult lit = renderer.render(*resources, request);
+    EXPECT_EQ(lit.stats.change, FrameChange::knobs);
+    EXPECT_TRUE(lit.stats.ran("shadow_maps"));
     request.camera->position.x += 1.0f;
     EXPECT_EQ(resources->change_for("vct", plan_frame(request).knobs, resources->view_of(request)), FrameChange::view);
     resources.reset();
 }
 
+// A camera moved in the Cornell box redoes nothing: no light of it casts view cascades. With a sun
+// added, the same move (the camera inside the box, where the cascades near it are finer than the
+// sun's map over the box) redraws them.
 TEST(ViewChanges, OnlyASunsCascadesMakeAMovedCameraRedoAnything) {
     scene::Scene scene = scene::make_cornell_box();
     ASSERT_TRUE(std::none_of(scene.lights.begin(), scene.lights.end(),

@@ -690,7 +690,9 @@ TEST(FrameChange, AMovedCameraRedrawsTheViewCascadesOfAMethodThatReadsThem) {
     recascaded.view = 9;
     EXPECT_TRUE(cascades_alone_differ(last.knobs, recascaded.knobs));
     EXPECT_EQ(change_between(last, recascaded), FrameChange::view);
-    EXPECT_EQ(change_between(last, without), FrameChange::none);
+    MethodState dropped = without;
+    dropped.view = 0;  // no cascades, none fitted
+    EXPECT_EQ(change_between(last, dropped), FrameChange::none);
     recascaded.light_places = 6;
     EXPECT_EQ(change_between(last, recascaded), FrameChange::lights);
     recascaded = last;
@@ -698,13 +700,17 @@ TEST(FrameChange, AMovedCameraRedrawsTheViewCascadesOfAMethodThatReadsThem) {
     recascaded.knobs["bounces"] = 2;  // and another knob: a switch
     EXPECT_FALSE(cascades_alone_differ(last.knobs, recascaded.knobs));
     EXPECT_EQ(change_between(last, recascaded), FrameChange::knobs);
-    // Ambient occlusion lights nothing: a moved camera redraws no cascades.
+    // Ambient occlusion draws no shadow maps: a moved camera redraws no cascades, and a frame of light
+    // after it draws every map, a switch of knobs even where the camera stayed.
     MethodState occlusion = last, moved_occlusion = moved;
     occlusion.knobs["ao"] = moved_occlusion.knobs["ao"] = 1;
     moved_occlusion.lights = occlusion.lights;
     moved_occlusion.light_places = occlusion.light_places;
     moved_occlusion.geometry = occlusion.geometry;
     EXPECT_EQ(change_between(occlusion, moved_occlusion), FrameChange::none);
+    occlusion.view = 0;  // as fitted for it: none
+    EXPECT_FALSE(same_maps(occlusion.knobs, last.knobs));
+    EXPECT_EQ(change_between(occlusion, last), FrameChange::knobs);
 }
 
 // Frames that redid work are kept apart: a relit frame is not a slow warm frame, and a warm one does
