@@ -77,7 +77,8 @@ inline bool reads_view_cascades(const methods::KnobValues& knobs) {
 // Whether two frames' knobs draw the same shadow maps: maps of another size are all drawn anew, and
 // another count of cascades draws the cascades anew, whatever the camera did (with other knobs too,
 // a switch of knobs' own work, `knobs`; alone, cascades_alone_differ). Frames of ambient occlusion
-// draw none: after one, a frame of light draws every map.
+// draw none: after one, a frame of light draws every map it does not still hold, and is priced as
+// drawing them all.
 inline bool same_maps(const methods::KnobValues& a, const methods::KnobValues& b) {
     const auto knob = [](const methods::KnobValues& knobs, const char* name) {
         const auto it = knobs.find(name);

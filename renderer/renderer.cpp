@@ -338,8 +338,11 @@ FrameStats Renderer::prepare(SceneResources& resources, const RenderRequest& req
         timers_.begin_frame();
         const bool built = method.prepare(frame);
         fill_stats(stats, request, knobs, method, resources);
-        // A bake draws no view cascades: a switch from a moved camera bakes what the knobs select.
-        stats.change = !built ? FrameChange::none : change == FrameChange::knobs_and_view ? FrameChange::knobs : change;
+        // A bake draws no view cascades: a switch from a moved camera bakes what the knobs select,
+        // and a moved camera alone bakes nothing.
+        stats.change = !built || change == FrameChange::view ? FrameChange::none
+                       : change == FrameChange::knobs_and_view ? FrameChange::knobs
+                                                                : change;
         // Structures built for these knobs and this geometry, no light solved with them (unless a
         // frame already did: nothing changed since, or only the view cascades, which a bake does
         // not draw and no structure depends on).

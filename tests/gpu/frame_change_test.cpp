@@ -199,7 +199,8 @@ TEST_P(ViewChanges, AMovedCameraRedrawsTheViewCascadesAlone) {
     // A bake then builds nothing that the cascades change: the next frame redraws them alone, and
     // solves no light.
     request.camera = without.camera;
-    renderer.prepare(*resources, request, [](double, const std::string&) { return true; });
+    EXPECT_EQ(renderer.prepare(*resources, request, [](double, const std::string&) { return true; }).change,
+              FrameChange::none);
     frame(request, FrameChange::view, FrameChange::view, "a frame after a bake with the cascades back");
     resources.reset();
 }
