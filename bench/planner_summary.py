@@ -2,6 +2,12 @@
 """The figures a closing note quotes from one or more runs of bench/planner, read off planner.csv.
 
     bench/planner_summary.py [PLANNER_CSV ...]   (default bench/results/planner.csv)
+    bench/planner_summary.py --against OLD_CSV [NEW_CSV]
+
+With --against, the time-budget frames that were the reference in both runs (paired by pass, scene
+and budget): the new run's relMSE over the old's (median, and how many under 0.95 and over 1.05),
+and each run's median and slowest frame in multiples of T. `git show REV:bench/results/planner.csv
+> OLD_CSV` gives an earlier run.
 
 Per run: budgets that hold and target errors met, per pass; the slowest time-budget frame per pass
 in multiples of T and how many passed 1.2 T; reference plans' measured relMSE over predicted, per
@@ -56,7 +62,33 @@ def summarise(path):
               f"{percentile(again, 0.05):.2f} / {percentile(again, 0.5):.2f} / {percentile(again, 0.95):.2f}")
 
 
+def budget_ms(row):
+    budget = re.search(r"≤ (\d+) ms", row["budget"])
+    return float(budget.group(1)) if budget else None
+
+
+def compare(old_path, new_path):
+    key = lambda r: (r["pass"], r["scene"], r["budget"])
+    old = {key(r): r for r in csv.DictReader(open(old_path))}
+    pairs = [(old[key(r)], r) for r in csv.DictReader(open(new_path))
+             if budget_ms(r) and key(r) in old and r["plan"].startswith("reference")
+             and old[key(r)]["plan"].startswith("reference")]
+    if not pairs:
+        print("no time-budget frames were the reference in both runs")
+        return
+    errors = [float(n["measured_rel_mse"]) / float(o["measured_rel_mse"]) for o, n in pairs]
+    print(f"## {new_path} against {old_path}: {len(pairs)} time-budget frames the reference in both")
+    print(f"relMSE, new over old: median {percentile(errors, 0.5):.2f}; {sum(e < 0.95 for e in errors)} under 0.95, "
+          f"{sum(e > 1.05 for e in errors)} over 1.05")
+    for name, run in (("old", 0), ("new", 1)):
+        times = [float(p[run]["measured_ms"]) / budget_ms(p[run]) for p in pairs]
+        print(f"{name}: median {percentile(times, 0.5):.2f} T, slowest {max(times):.2f} T")
+
+
 def main():
+    if sys.argv[1:2] == ["--against"]:
+        compare(sys.argv[2], sys.argv[3] if len(sys.argv) > 3 else "bench/results/planner.csv")
+        return
     for path in sys.argv[1:] or ["bench/results/planner.csv"]:
         summarise(path)
 

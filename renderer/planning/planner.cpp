@@ -23,6 +23,10 @@ namespace {
 constexpr int kReferenceSpp[] = {1,  2,  3,  4,   6,   8,   12,  16,  24,  32,   48,   64,   96,  128,
                                  192, 256, 384, 512, 768, 1024, 1536, 2048, 3072, 4096};
 constexpr int kReferenceBounces[] = {0, 1, 2, 3, 4, 6, 8, 12};
+// A reference plan's knobs: through pixel centres, as the raster methods shade.
+methods::KnobValues reference_knobs(int spp, int bounces) {
+    return {{"spp", spp}, {"bounces", bounces}, {"pixel_jitter", 0}};
+}
 // cssm's bounce counts (its `bounces` knob).
 constexpr int kCssmBounces[] = {1, 2, 3, 4, 6, 8};
 // vct's: its second bounce gathers at the octree's leaves before the pixels gather from them.
@@ -563,14 +567,11 @@ std::vector<Candidate> candidates(const PlanningInputs& inputs, std::vector<std:
     for (const std::string& method : registry.names()) {
         if (inputs.method && *inputs.method != method) continue;
         if (method == "reference") {
-            const auto knobs_of = [](int spp, int bounces) {
-                return methods::KnobValues{{"spp", spp}, {"bounces", bounces}, {"pixel_jitter", 0}};
-            };
             for (const int bounces : kReferenceBounces) {
                 int within = 0, past = 0;  // the ladder's last step within fill_ms, and its first past it
                 for (const int spp : kReferenceSpp) {
                     const std::size_t offered = all.size();
-                    add(method, "medium", knobs_of(spp, bounces));
+                    add(method, "medium", reference_knobs(spp, bounces));
                     if (!fill_ms || past || all.size() == offered) continue;
                     (all.back().predicted_ms <= *fill_ms ? within : past) = spp;
                 }
@@ -578,9 +579,9 @@ std::vector<Candidate> candidates(const PlanningInputs& inputs, std::vector<std:
                 int below = within, above = past;
                 while (within && above - below > 1) {
                     const int spp = (below + above) / 2;
-                    (predicted_ms(inputs, method, "medium", knobs_of(spp, bounces)) <= *fill_ms ? below : above) = spp;
+                    (predicted_ms(inputs, method, "medium", reference_knobs(spp, bounces)) <= *fill_ms ? below : above) = spp;
                 }
-                if (below > within) add(method, "medium", knobs_of(below, bounces));
+                if (below > within) add(method, "medium", reference_knobs(below, bounces));
             }
             continue;
         }
@@ -655,7 +656,7 @@ std::optional<Checks> spot_checks(const std::vector<Candidate>& all, const Candi
     spot.width = check.pixels;
     spot.height = 1;
     check.predicted_ms = predicted_ms(spot, "reference", chosen.preset,
-                                      {{"spp", kSpotPricedSamples * check.spp}, {"bounces", check.bounces}, {"pixel_jitter", 0}});
+                                      reference_knobs(kSpotPricedSamples * check.spp, check.bounces));
     const double share_ms = kCheckShare * chosen.predicted_ms;
     if (!std::isfinite(check.predicted_ms) || check.predicted_ms >= share_ms) return std::nullopt;
     std::vector<const Candidate*> plausible;

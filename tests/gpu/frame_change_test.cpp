@@ -286,6 +286,22 @@ TEST(ViewChanges, AnExportedFilesMovedCameraRedrawsItsCascadesAsPredicted) {
         EXPECT_EQ(moved.stats.change, FrameChange::view);
         EXPECT_TRUE(moved.stats.ran("shadow_view_cascades"));
         EXPECT_EQ(shared_renderer().render(*resources, request).stats.change, FrameChange::none);
+        // Other counts of cascades alone. The engine is small beside the camera's depth range: every
+        // cascade reaches past it and is cut to the same window, so any count fits the same ones and
+        // redoes nothing, as predicted (a switch of knobs, with every map, before such switches were
+        // classed by what they draw). ViewChanges.AMovedCameraRedrawsTheViewCascadesAlone has a
+        // count that fits others.
+        const std::uint64_t fitted = resources->state_of(method)->view;
+        for (const int cascades : {4, 2, 1}) {
+            SCOPED_TRACE(cascades);
+            request.knobs["shadow_cascades"] = cascades;
+            EXPECT_EQ(resources->state_now(plan_frame(request).knobs, resources->view_of(request)).view, fitted);
+            EXPECT_EQ(resources->change_for(method, plan_frame(request).knobs, resources->view_of(request)), FrameChange::none);
+            const RenderResult recascaded = shared_renderer().render(*resources, request);
+            EXPECT_EQ(recascaded.stats.change, FrameChange::none);
+            EXPECT_FALSE(recascaded.stats.ran("shadow_maps"));
+            EXPECT_FALSE(recascaded.stats.ran("shadow_view_cascades"));
+        }
     }
     resources.reset();
 }

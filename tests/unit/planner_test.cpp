@@ -281,6 +281,10 @@ TEST(Planner, ATimeBudgetIsFilledWithTheReferencesSamples) {
     }
     // A target error alone keeps the ladder's steps, and their slack.
     EXPECT_EQ(plan(inputs, {std::nullopt, 0.05}).considered, static_cast<int>(ladder.size()));
+    // Budgets where no step fits, or every one does, have nothing to fill.
+    for (const double extreme : {1e-3, 1e12, std::numeric_limits<double>::infinity()}) {
+        EXPECT_EQ(candidates(inputs, nullptr, extreme).size(), ladder.size()) << extreme;
+    }
 }
 
 TEST(Costs, ALineThroughTwoFramesAndItsClamps) {
