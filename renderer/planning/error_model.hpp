@@ -49,11 +49,13 @@ int modelled_bounces(const std::string& method, const methods::KnobValues& knobs
 // its samples, times what this scene's reference frames measured of it in the view and the relMSE
 // that statistic makes on the scene (SceneMeasurements). Against every bounce (what a target error
 // is measured by: a frame of fewer bounces is darker than that, and its noise weighs less there) or
-// against its own frame (what a comparison with it takes out of a GPU frame's relMSE).
+// against its own frame (what a comparison with it takes out of a GPU frame's relMSE). Against
+// every bounce it never falls with more bounces.
 enum class NoiseAgainst { every_bounce, own_frame };
 struct ReferenceNoise {
     double rel_mse = 0.0;
     std::optional<double> measured_ratio, scale;  // what it was scaled by, where measured
+    std::optional<int> floor_bounces;  // against every bounce: fewer bounces whose noise was more, and taken
 };
 ReferenceNoise reference_noise(const SceneAnalysis& analysis, int bounces, double spp, const SceneMeasurements* measured,
                                NoiseAgainst against);

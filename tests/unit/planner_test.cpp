@@ -287,6 +287,46 @@ TEST(Planner, ATimeBudgetIsFilledWithTheReferencesSamples) {
     }
 }
 
+// The foliage's figures, near enough: little light past one bounce, paths that mostly end, and frames
+// that measured the noise at 2 bounces from 16 samples (high, as few samples read) and at 4 from 64.
+TEST(Planner, MoreBouncesAreNeverPredictedQuieterAgainstEveryBounce) {
+    SceneAnalysis analysis = made_up_analysis();
+    analysis.bounces.stopped_error = {0.0145, 0.00035, 0.00001, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
+    analysis.bounces.noise_against_whole = {0.0, 0.0088, 0.0105, 0.0111, 0.0114, 0.0115, 0.0115, 0.0115,
+                                            0.0115, 0.0115, 0.0115, 0.0115, 0.0115};
+    analysis.bounces.sample_ns = {1000, 2000, 2100, 2150, 2160, 2160, 2160, 2160, 2160, 2160, 2160, 2160, 2160};
+    SceneMeasurements measured;
+    measured.record_noise(2, 1.3, 16);
+    measured.record_noise(4, 1.0, 64);
+    const ReferenceNoise at_4 = reference_noise(analysis, 4, 64, &measured, NoiseAgainst::every_bounce);
+    // 1.3 x 0.0105 at 2 bounces is more than 1.0 x 0.0114 at 4: the floor.
+    EXPECT_DOUBLE_EQ(at_4.rel_mse, 1.3 * 0.0105 / 64.0);
+    EXPECT_EQ(at_4.floor_bounces, 2);
+    EXPECT_NE(predict_error(analysis, "reference", "medium", {{"spp", 64}, {"bounces", 4}}, &measured)
+                  .basis.find("the noise of 2 bounces"),
+              std::string::npos);
+    for (int bounces = 1; bounces <= 12; ++bounces) {
+        EXPECT_GE(reference_noise(analysis, bounces, 64, &measured, NoiseAgainst::every_bounce).rel_mse,
+                  reference_noise(analysis, bounces - 1, 64, &measured, NoiseAgainst::every_bounce).rel_mse)
+            << bounces;
+    }
+    // Where the statistics already rise, nothing is floored.
+    EXPECT_FALSE(reference_noise(analysis, 4, 64, nullptr, NoiseAgainst::every_bounce).floor_bounces);
+    EXPECT_DOUBLE_EQ(reference_noise(analysis, 4, 64, nullptr, NoiseAgainst::every_bounce).rel_mse, 0.0114 / 64.0);
+    // Against its own frame it may fall: a frame of fewer bounces is darker, its noise weighs more there.
+    SceneAnalysis darker = analysis;
+    darker.bounces.noise_per_sample = {0.0, 0.03, 0.02, 0.015, 0.0114, 0.0115, 0.0115, 0.0115,
+                                       0.0115, 0.0115, 0.0115, 0.0115, 0.0115};
+    EXPECT_DOUBLE_EQ(reference_noise(darker, 4, 64, nullptr, NoiseAgainst::own_frame).rel_mse, 0.0114 / 64.0);
+
+    // Within 200 ms the plan takes 2 bounces: 4 cost more per sample and are no quieter, 1 lacks light.
+    DeviceCosts device("test");
+    const PlanningInputs inputs{analysis, device, &measured, 64, 64, std::string("reference")};
+    const Plan within = plan(inputs, {200.0, std::nullopt});
+    ASSERT_EQ(within.chosen.method, "reference");
+    EXPECT_EQ(within.chosen.knobs.at("bounces"), 2.0) << within.chosen.error_basis;
+}
+
 TEST(Costs, ALineThroughTwoFramesAndItsClamps) {
     const CostLine line = CostLine::through(1e6, 12.0, 4e6, 30.0);
     EXPECT_DOUBLE_EQ(line.per_megapixel_ms, 6.0);
