@@ -25,6 +25,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <sstream>
 
 namespace {
@@ -48,6 +49,9 @@ struct Options {
     std::optional<fs::path> previews;  // each scene's reference as PNG, to see what is measured
     int detail = 1;
     int reference_bounces = 4;
+    // Also against the one-bounce reference that gathers without visibility, as isr does
+    // (--unoccluded): what of a one-bounce method's own error its missing visibility explains.
+    bool unoccluded = false;
     int repeats = 3;
     std::vector<std::string> methods;  // measure only these (the reference among them); all when empty
     fs::path out = "bench/results";
@@ -63,6 +67,8 @@ struct Row {
     std::string passes;
     std::size_t resident_bytes = 0;
     double rel_mse = 0, rmse = 0, rel_mse_same_bounces = 0, mean_ratio = 0;
+    // One-bounce GPU methods with --unoccluded: against the one-bounce reference without visibility.
+    std::optional<double> rel_mse_unoccluded, mean_ratio_unoccluded;
     double rays_per_second = 0;
     double cold_ms = 0;  // GPU methods: the first frame, which builds the scene's structures
     // GPU methods: a frame after every light changed (bench::change_every_light): what the lights
@@ -77,17 +83,27 @@ struct Row {
 };
 
 bench::ReferenceSpec reference_spec(const Options& options) {
-    return {options.size, options.reference_spp, options.pixel_centre, options.cache};
+    bench::ReferenceSpec spec;
+    spec.size = options.size;
+    spec.spp = options.reference_spp;
+    spec.pixel_centre = options.pixel_centre;
+    spec.cache = options.cache;
+    return spec;
 }
 
 void write_csv(const fs::path& path, const std::vector<Row>& rows) {
     std::ofstream out(path);
     out << "scene,method,preset,bounces,wall_ms,gpu_ms,passes_ms,resident_bytes,rel_mse,rmse,rel_mse_same_bounces,"
-           "mean_ratio,rays_per_second,cold_ms,relit_ms,cold_shadow_ms,relit_shadow_ms,dimmed_ms\n";
+           "mean_ratio,rays_per_second,cold_ms,relit_ms,cold_shadow_ms,relit_shadow_ms,dimmed_ms,rel_mse_unoccluded,"
+           "mean_ratio_unoccluded\n";
     for (const Row& r : rows) {
-        out << fmt::format("{},{},{},{},{:.3f},{:.3f},{},{},{:.6g},{:.6g},{:.6g},{:.5f},{:.4g},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f}\n", r.scene, r.method,
+        out << fmt::format("{},{},{},{},{:.3f},{:.3f},{},{},{:.6g},{:.6g},{:.6g},{:.5f},{:.4g},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f}", r.scene, r.method,
                            r.preset, r.bounces, r.wall_ms, r.gpu_ms, r.passes, r.resident_bytes, r.rel_mse, r.rmse,
                            r.rel_mse_same_bounces, r.mean_ratio, r.rays_per_second, r.cold_ms, r.relit_ms, r.cold_shadow_ms, r.relit_shadow_ms, r.dimmed_ms);
+        const auto optional = [](const std::optional<double>& value) {
+            return value ? fmt::format("{:.6g}", *value) : std::string();
+        };
+        out << "," << optional(r.rel_mse_unoccluded) << "," << optional(r.mean_ratio_unoccluded) << "\n";
     }
 }
 
@@ -184,6 +200,17 @@ void write_markdown(const fs::path& path, const std::vector<Row>& rows, const Op
     for (const Row& r : rows) {
         if (r.method == "reference") md << fmt::format("| {} | {} | {:.3g} |\n", r.scene, r.preset, r.rays_per_second);
     }
+    if (options.unoccluded) {
+        md << "\nOne-bounce GPU methods against the one-bounce reference and against the same reference gathering\n"
+              "without visibility, as isr does (`--unoccluded`; PathTracerSettings::indirect_visibility): where\n"
+              "the second is the smaller, missing visibility explains that much of the method's own error.\n\n"
+              "| scene | method | preset | relMSE one bounce | relMSE unoccluded | mean / unoccluded |\n|---|---|---|---|---|---|\n";
+        for (const Row& r : rows) {
+            if (!r.rel_mse_unoccluded) continue;
+            md << fmt::format("| {} | {} | {} | {:.5f} | {:.5f} | {:.3f} |\n", r.scene, r.method, r.preset,
+                              r.rel_mse_same_bounces, *r.rel_mse_unoccluded, r.mean_ratio_unoccluded.value_or(0.0));
+        }
+    }
     md << details << "\n" << end << "\n";
     // Only this bench's block changes: the other benches' sections and the hand-written ones stay.
     if (!fs::exists(path)) std::ofstream(path) << "# Benchmarks\n\n";
@@ -233,11 +260,12 @@ int main(int argc, char** argv) {
         else if (flag == "--detail") options.detail = std::max(1, arguments.number());
         else if (flag == "--method") options.methods.push_back(arguments.value());
         else if (flag == "--knob") arguments.knob(options.knobs);
+        else if (flag == "--unoccluded") options.unoccluded = true;
         else {
             std::fprintf(stderr,
                          "usage: quality [--size N] [--reference-spp N] [--reference-bounces N] [--repeats N]\n"
                          "               [--scene NAME ...] [--method NAME ...] [--knob NAME=VALUE ...]\n"
-                         "               [--corpus [--detail N]] [--pixel-centre]\n"
+                         "               [--corpus [--detail N]] [--pixel-centre] [--unoccluded]\n"
                          "               [--previews DIR]\n"
                          "               [--out DIR]\n"
                          "               [--cache DIR]\n"
@@ -283,6 +311,12 @@ int main(int argc, char** argv) {
                 }
                 return it->second;
             };
+            std::optional<image::Frame> unoccluded;  // the one-bounce reference without visibility
+            if (options.unoccluded) {
+                bench::ReferenceSpec spec = reference_spec(options);
+                spec.indirect_visibility = false;
+                unoccluded = bench::reference_image(bench_scene, tracer, spec, 1);
+            }
             if (options.corpus) analysis_rows += analysis_row(bench_scene);
             scene::Scene relit_scene = bench_scene.scene;  // its lights change to time a relit frame
             auto resources = renderer.upload(relit_scene);
@@ -341,6 +375,11 @@ int main(int argc, char** argv) {
                     row.rmse = full.rmse;
                     row.mean_ratio = full.mean_reference > 0 ? full.mean_test / full.mean_reference : 0.0;
                     row.rel_mse_same_bounces = image::compare(median.frame, truth_at(row.bounces)).rel_mse;
+                    if (unoccluded && row.bounces == 1) {
+                        const auto against = image::compare(median.frame, *unoccluded);
+                        row.rel_mse_unoccluded = against.rel_mse;
+                        row.mean_ratio_unoccluded = against.mean_reference > 0 ? against.mean_test / against.mean_reference : 0.0;
+                    }
                     std::string cold_passes;
                     for (const auto& pass : cold.stats.passes) {
                         if (pass.gpu_ms >= 1.0) cold_passes += fmt::format(" {}={:.0f}", pass.pass, pass.gpu_ms);

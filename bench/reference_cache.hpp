@@ -17,6 +17,9 @@ struct ReferenceSpec {
     // alone, not also the antialiasing that jittered pixels add.
     bool pixel_centre = false;
     std::filesystem::path cache = "build/bench-cache";
+    // false: the one indirect bounce gathers without visibility, as isr does (PathTracerSettings::
+    // indirect_visibility); needs bounces 1.
+    bool indirect_visibility = true;
 };
 
 // From the cache when the same scene, camera, size, bounces and code made it; else rendered (with
