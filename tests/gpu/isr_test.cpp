@@ -96,7 +96,8 @@ scene::Light light_of_type(scene::LightType type) {
 
 // Against the reference with the one bounce isr models, per preset (medium is the default).
 // Measured on llvmpipe (64x64), hierarchical mode: against the reference without indirect
-// visibility, relMSE draft 0.0142, low 0.0026, medium 0.0019, high 0.0014, ultra 0.0011; against
+// visibility, relMSE draft 0.0031, low 0.0025, medium 0.0018, high 0.0014, ultra 0.0011 (draft
+// 0.0142 while its eye-space patches spanned normals 0.5 apart, low's 0.4: 0.0026); against
 // the true reference 0.108-0.111 at every preset, means 3-4% high. The two references differ by
 // relMSE 0.107 (mean 3% apart): nearly all of isr's error is the visibility the paper ignores
 // (the blocks' inner faces and the floor between them receive light through the blocks).
@@ -127,7 +128,8 @@ TEST(Isr, CornellAgainstReferencePerPreset) {
         if (preset == "ultra") ultra = approximation.rel_mse;
         previous = approximation.rel_mse;
     }
-    EXPECT_LT(ultra, 0.25 * draft);
+    // The presets buy something: ultra's approximation at most half draft's.
+    EXPECT_LT(ultra, 0.5 * draft);
 }
 
 // With no clustering left, isr computes exactly the integral the unoccluded reference estimates:

@@ -44,6 +44,7 @@ Errors read_quality(const std::string& path, int bounces) {
         std::vector<std::string> fields;
         std::stringstream row(line);
         for (std::string field; std::getline(row, field, ',');) fields.push_back(field);
+        if (!line.empty() && line.back() == ',') fields.emplace_back();  // an empty last field
         if (fields.size() < header.size() || fields[method] == "reference") continue;
         if (bounces >= 0 && std::stoi(fields[bounce_count]) != bounces) continue;
         errors[{fields[method], fields[preset]}][fields[scene]] = std::stod(fields[error]);
