@@ -168,7 +168,8 @@ ErrorPrediction predict_error(const SceneAnalysis& analysis, const std::string& 
         prediction.rel_mse = stopped + noise;
         prediction.basis = fmt::format("{} bounces lack {:.3f}; noise {:.3f} at {:.0f} spp", bounces, stopped, noise, spp);
         if (expected.floor_bounces) {
-            prediction.basis += fmt::format(" (the noise of {} bounces, which more do not lessen", *expected.floor_bounces);
+            prediction.basis +=
+                fmt::format(" (the noise of {} bounces, which more do not lessen", *expected.floor_bounces);
         } else if (expected.measured_ratio) {
             prediction.basis += fmt::format(" ({:.2f}x the analysis' statistic, as this scene's reference frames measured it",
                                             *expected.measured_ratio);

@@ -50,7 +50,7 @@ int modelled_bounces(const std::string& method, const methods::KnobValues& knobs
 // that statistic makes on the scene (SceneMeasurements). Against every bounce (what a target error
 // is measured by: a frame of fewer bounces is darker than that, and its noise weighs less there) or
 // against its own frame (what a comparison with it takes out of a GPU frame's relMSE). Against
-// every bounce it never falls with more bounces.
+// every bounce, where the analysis has noise_against_whole, it never falls with more bounces.
 enum class NoiseAgainst { every_bounce, own_frame };
 struct ReferenceNoise {
     double rel_mse = 0.0;

@@ -319,7 +319,8 @@ TEST(Planner, MoreBouncesAreNeverPredictedQuieterAgainstEveryBounce) {
                                        0.0115, 0.0115, 0.0115, 0.0115, 0.0115};
     EXPECT_DOUBLE_EQ(reference_noise(darker, 4, 64, nullptr, NoiseAgainst::own_frame).rel_mse, 0.0114 / 64.0);
 
-    // Within 200 ms the plan takes 2 bounces: 4 cost more per sample and are no quieter, 1 lacks light.
+    // Within 200 ms the plan takes 2 bounces: 3 and 4 cost more per sample and are no quieter (without
+    // the floor 3 won, the nearest ratio to it being 4's), 1 lacks light.
     DeviceCosts device("test");
     const PlanningInputs inputs{analysis, device, &measured, 64, 64, std::string("reference")};
     const Plan within = plan(inputs, {200.0, std::nullopt});
