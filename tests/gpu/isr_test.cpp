@@ -119,11 +119,10 @@ TEST(Isr, CornellAgainstReferencePerPreset) {
         EXPECT_NEAR(error.mean_test, error.mean_reference, 0.06 * error.mean_reference) << preset;
         EXPECT_LE(error.rel_mse, 0.15) << preset;
         EXPECT_LE(approximation.rel_mse, 1.10 * previous) << preset;  // tighter thresholds, smaller error
-        if (preset == "high") {
-            EXPECT_LE(approximation.rel_mse, 0.004);
-            // Visibility's share: isr's own approximation is under a twentieth of the error.
-            EXPECT_LE(approximation.rel_mse, 0.05 * visibility);
-        }
+        // Visibility's share: at every preset isr's own approximation is under a twentieth of the
+        // error (draft's was 0.13 of it while its eye-space patches spanned normals 0.5 apart).
+        EXPECT_LE(approximation.rel_mse, 0.05 * visibility) << preset;
+        if (preset == "high") EXPECT_LE(approximation.rel_mse, 0.004);
         if (preset == "draft") draft = approximation.rel_mse;
         if (preset == "ultra") ultra = approximation.rel_mse;
         previous = approximation.rel_mse;
