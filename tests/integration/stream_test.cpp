@@ -139,12 +139,20 @@ TEST(Streams, UpdatesMergeIntoTheViewAndBadOnesChangeNothing) {
     EXPECT_EQ(unknown.body["code"], "not_found");
     EXPECT_EQ(unknown.body["field"], "stream");
 
-    // A merge patch: the camera's fov alone changes, its position and target stay.
-    const auto updated = request_beside(viewer, 10, MessageType::stream_update, {{"stream", 7}, {"camera", {{"fov_deg", 60}}}});
+    // A merge patch: the camera's fov alone changes, its position and target stay. The new view's
+    // frames may come before the reply (the protocol orders them by view_version, not by the reply),
+    // so those that do are kept.
+    std::vector<protocol::Message> early;
+    const auto updated = request_beside(viewer, 10, MessageType::stream_update,
+                                        {{"stream", 7}, {"camera", {{"fov_deg", 60}}}}, &early);
     ASSERT_EQ(updated.type, static_cast<std::uint16_t>(MessageType::ok)) << updated.body.dump();
     EXPECT_EQ(updated.body["view_version"], 1);
-    next_frame(viewer, 7);
-    const auto still = next_frame(viewer, 7);
+    std::vector<protocol::Message> of_new_view;
+    for (auto& frame : early) {
+        if (frame.request_id == 7 && frame.body["stream"]["view_version"] == 1) of_new_view.push_back(std::move(frame));
+    }
+    while (of_new_view.size() < 2) of_new_view.push_back(next_frame(viewer, 7));  // interactive, still
+    const auto& still = of_new_view[1];
     EXPECT_EQ(still.body["stream"]["view_version"], 1);
     EXPECT_EQ(still.body["stream"]["final"], true);
     Client other(daemon.endpoint());
