@@ -62,16 +62,12 @@ struct MethodState {
 // Whether a frame at these knobs (resolved) renders ambient occlusion (`ao`) instead of light: vct
 // then draws no shadow maps (its light views and injected light are as ever), whatever its map
 // knobs say.
-inline bool renders_occlusion(const methods::KnobValues& knobs) {
-    const auto ao = knobs.find("ao");
-    return ao != knobs.end() && ao->second != 0.0;
-}
+inline bool renders_occlusion(const methods::KnobValues& knobs) { return methods::knob_or(knobs, "ao", 0.0) != 0.0; }
 
 // Whether a method at these knobs (resolved) reads view cascades: its `shadow_cascades` knob, where
 // it renders light.
 inline bool reads_view_cascades(const methods::KnobValues& knobs) {
-    const auto cascades = knobs.find("shadow_cascades");
-    return cascades != knobs.end() && cascades->second > 0.0 && !renders_occlusion(knobs);
+    return methods::knob_or(knobs, "shadow_cascades", 0.0) > 0.0 && !renders_occlusion(knobs);
 }
 
 // Whether two frames' knobs draw the same shadow maps: maps of another size are all drawn anew, and
@@ -80,12 +76,8 @@ inline bool reads_view_cascades(const methods::KnobValues& knobs) {
 // draw none: after one, a frame of light draws every map it does not still hold, and is priced as
 // drawing them all.
 inline bool same_maps(const methods::KnobValues& a, const methods::KnobValues& b) {
-    const auto knob = [](const methods::KnobValues& knobs, const char* name) {
-        const auto it = knobs.find(name);
-        return it == knobs.end() ? -1.0 : it->second;
-    };
-    return !renders_occlusion(a) && !renders_occlusion(b) && knob(a, "shadow_map_size") == knob(b, "shadow_map_size") &&
-           knob(a, "shadow_cascades") == knob(b, "shadow_cascades");
+    const auto same = [&](const char* name) { return methods::knob_or(a, name, -1.0) == methods::knob_or(b, name, -1.0); };
+    return !renders_occlusion(a) && !renders_occlusion(b) && same("shadow_map_size") && same("shadow_cascades");
 }
 
 // Whether two frames' knobs differ in their count of view cascades alone. No method's structures

@@ -579,7 +579,8 @@ std::vector<Candidate> candidates(const PlanningInputs& inputs, std::vector<std:
                 int below = within, above = past;
                 while (within && above - below > 1) {
                     const int spp = (below + above) / 2;
-                    (predicted_ms(inputs, method, "medium", reference_knobs(spp, bounces)) <= *fill_ms ? below : above) = spp;
+                    const double ms = predicted_ms(inputs, method, "medium", reference_knobs(spp, bounces));
+                    (ms <= *fill_ms ? below : above) = spp;
                 }
                 if (below > within) add(method, "medium", reference_knobs(below, bounces));
             }

@@ -190,7 +190,8 @@ TEST_P(ViewChanges, AMovedCameraRedrawsTheViewCascadesAlone) {
     // Without cascades (dropped, a warm frame's work) a moved camera redoes nothing.
     RenderRequest without = request;
     without.knobs["shadow_cascades"] = 0;
-    EXPECT_FALSE(frame(without, FrameChange::none, FrameChange::none, "the cascades turned off").stats.ran("shadow_maps"));
+    const RenderResult turned_off = frame(without, FrameChange::none, FrameChange::none, "the cascades turned off");
+    EXPECT_FALSE(turned_off.stats.ran("shadow_maps"));
     without.camera->position.z += 1.0f;
     frame(without, FrameChange::none, FrameChange::none, "the camera moved, no cascades");
     EXPECT_EQ(planning::changes_on(*resources, *without.camera)(method, "draft", {{"shadow_cascades", 0}}, kSize, kSize),
@@ -281,7 +282,8 @@ TEST(ViewChanges, AnExportedFilesMovedCameraRedrawsItsCascadesAsPredicted) {
         shared_renderer().render(*resources, request);
         ASSERT_NE(resources->state_now(plan_frame(request).knobs, resources->view_of(request)).view, 0u);
         request.camera->position += 0.05f * glm::length(bounds.extent()) * (camera.orientation * glm::vec3(1, 0, 0));
-        EXPECT_EQ(resources->change_for(method, plan_frame(request).knobs, resources->view_of(request)), FrameChange::view);
+        EXPECT_EQ(resources->change_for(method, plan_frame(request).knobs, resources->view_of(request)),
+                  FrameChange::view);
         const RenderResult moved = shared_renderer().render(*resources, request);
         EXPECT_EQ(moved.stats.change, FrameChange::view);
         EXPECT_TRUE(moved.stats.ran("shadow_view_cascades"));
@@ -296,7 +298,8 @@ TEST(ViewChanges, AnExportedFilesMovedCameraRedrawsItsCascadesAsPredicted) {
             SCOPED_TRACE(cascades);
             request.knobs["shadow_cascades"] = cascades;
             EXPECT_EQ(resources->state_now(plan_frame(request).knobs, resources->view_of(request)).view, fitted);
-            EXPECT_EQ(resources->change_for(method, plan_frame(request).knobs, resources->view_of(request)), FrameChange::none);
+            EXPECT_EQ(resources->change_for(method, plan_frame(request).knobs, resources->view_of(request)),
+                      FrameChange::none);
             const RenderResult recascaded = shared_renderer().render(*resources, request);
             EXPECT_EQ(recascaded.stats.change, FrameChange::none);
             EXPECT_FALSE(recascaded.stats.ran("shadow_maps"));
