@@ -18,6 +18,7 @@
 // right after a frame from a camera moved aside (the suns' view cascades drawn again).
 #include "bench/common.hpp"
 #include "bench/corpus.hpp"
+#include "bench/corpus_priors.hpp"
 #include "bench/markdown_blocks.hpp"
 #include "bench/planner_rows.hpp"
 #include "bench/reference_cache.hpp"
@@ -78,6 +79,11 @@ struct Options {
     // planner did before FrameChange::view, at first sight (its frames are still kept out of the warm
     // lines, where before they raised them): what pricing the view cascades buys.
     bool camera_as_warm = false;
+    // With --held-out, each scene is planned with the GPU methods' own-error priors of the other
+    // corpus scenes (bench/corpus_priors.hpp, from `corpus_results`): whether the promises hold on a
+    // scene the priors never saw. Without, the committed priors, which every scene here made.
+    bool held_out = false;
+    fs::path corpus_results = "bench/results/corpus";
 };
 
 constexpr std::string_view kBegin = "<!-- planner: bench/planner writes it -->";
@@ -315,10 +321,13 @@ int main(int argc, char** argv) {
         else if (flag == "--no-relit") options.relit = false;
         else if (flag == "--no-moved") options.moved = false;
         else if (flag == "--camera-as-warm") options.camera_as_warm = true;
+        else if (flag == "--held-out") options.held_out = true;
+        else if (flag == "--corpus-results") options.corpus_results = arguments.value();
         else {
             std::fprintf(stderr,
                          "usage: bounce_bench_planner [--size N] [--reference-spp N] [--reference-bounces N] [--cache DIR] "
-                         "[--scene NAME]... [--errors E,E] [--budgets-ms T,T] [--passes N] [--no-relit] [--no-moved | --camera-as-warm] [--out DIR] [--markdown FILE] "
+                         "[--scene NAME]... [--errors E,E] [--budgets-ms T,T] [--passes N] [--no-relit] [--no-moved | --camera-as-warm] "
+                         "[--held-out [--corpus-results DIR]] [--out DIR] [--markdown FILE] "
                          "[--analysis-only [--analysis-spp N] [--analysis-size N] | --references-only]\n");
             return 2;
         }
@@ -355,6 +364,8 @@ int main(int argc, char** argv) {
         }
         Renderer renderer(gpu::DeviceChoice::resolve(std::nullopt));
         const planning::DeviceCosts device = planning::load_or_calibrate(renderer, options.cache);
+        const std::map<std::string, ThinWalls> corpus_walls =
+            options.held_out ? bench::corpus_thin_walls() : std::map<std::string, ThinWalls>{};
         std::vector<BudgetRow> rows;
         std::vector<std::pair<std::string, Measured>> fixed_rows;  // scene, fixed plan: the Pareto plot's points
         std::string analysis_md =
@@ -399,10 +410,14 @@ int main(int argc, char** argv) {
                 }
             }
             for (const Measured& m : fixed) fixed_rows.push_back({bench_scene.name, m});
-            const planning::PlanningInputs inputs{
+            planning::PlanningInputs inputs{
                 analysis, device, &costs, options.size, options.size, std::nullopt,
                 planning::measure_resample_errors(renderer, *resources, bench::linear_request("direct", "draft", {}, options.size),
                                                   {"direct", "vct", "isr", "cssm"}, &costs, &device)};
+            const planning::OwnErrorPriors held_out_priors =
+                options.held_out ? bench::corpus_priors(options.corpus_results, corpus_walls, {bench_scene.name})
+                                 : planning::OwnErrorPriors{};
+            if (options.held_out) inputs.priors = &held_out_priors;
             planning::FrameComparisons comparisons;
             int pass = 1;
             const auto run = [&](const planning::Budget& budget, const std::string& text) {
@@ -684,6 +699,9 @@ int main(int argc, char** argv) {
            << fmt::format("- Frames {0}x{0}, against the reference at {1} spp and {2} bounces through pixel centres; "
                           "device costs calibrated in {3:.0f} ms (or read from the cache).\n",
                           options.size, options.reference_spp, options.reference_bounces, device.calibration_ms)
+           << (options.held_out ? "- Held out: each scene planned with the GPU methods' own-error priors of the other four "
+                                  "corpus scenes (bench/corpus_priors.hpp), as if the bench had never seen it.\n"
+                                : "")
            << "- A target error holds when it is met at no more than 1.5x the time of the cheapest fixed plan "
               "(a method at a preset, or the reference at 4 to 256 spp) that meets it, that plan timed again right "
               "after the planned frame (the time shown; `fixed_ms` in planner.csv is its first); a time budget T holds when "

@@ -12,50 +12,6 @@
 namespace bounce::planning {
 namespace {
 
-// relMSE against the reference with as many bounces (`rel_mse_same_bounces`), at 128x128 through
-// pixel centres: the largest over the five corpus scenes (bench/results/corpus/quality.csv), leaving
-// out the cases the analysis rules out (vct where it leaks). The largest, not a typical value: a
-// target error is a promise, and a scene's own error is not known before its reference is. They
-// are the corpus tables' figures (tests/unit/planner_priors_test.cpp checks them against the
-// committed files): measure the corpus again when a method changes, and these with it. Since the
-// directional lights' view cascades (passes/shadow_maps.hpp) every method's direct light errs far
-// less in the sunlit scenes: cssm's largest fell from 0.058-0.074 to 0.028-0.029 (the street's, and
-// the foliage's now), direct draft's from 0.474 to 0.084. isr's eye-space patches split at a
-// normal span of 0.2 at every preset to high since 2026-11-29: its largest at draft to medium fell
-// from 0.143-0.297 (the furnished room's) to 0.029-0.035.
-// clang-format off
-const std::map<std::pair<std::string, std::string>, double> kOwnError = {
-    {{"direct", "draft"}, 0.0835},  {{"direct", "low"}, 0.0755},   {{"direct", "medium"}, 0.0481},
-    {{"direct", "high"}, 0.0363},   {{"direct", "ultra"}, 0.0265},
-    {{"vct", "draft"}, 0.0585},     {{"vct", "low"}, 0.0674},      {{"vct", "medium"}, 1.2554},
-    {{"vct", "high"}, 0.5349},      {{"vct", "ultra"}, 0.5043},
-    {{"isr", "draft"}, 0.0291},     {{"isr", "low"}, 0.0333},      {{"isr", "medium"}, 0.0346},
-    {{"isr", "high"}, 0.0346},      {{"isr", "ultra"}, 0.0351},
-    {{"cssm", "draft"}, 0.0287},    {{"cssm", "low"}, 0.0284},     {{"cssm", "medium"}, 0.0283},
-    {{"cssm", "high"}, 0.0281},     {{"cssm", "ultra"}, 0.0287},
-};
-// vct with its second bounce (`bounces` 2), against the two-bounce reference, the same way
-// (bench/quality --corpus --method vct --knob bounces=2: bench/results/corpus/vct_two_bounce_quality.csv,
-// leaving out the presets the analysis finds leaking): the leaves' gather adds its own error, so
-// the one-bounce table does not carry over.
-const std::map<std::string, double> kVctSecondBounceOwnError = {
-    {"draft", 0.0476}, {"low", 0.0775}, {"medium", 1.3368}, {"high", 0.5851}, {"ultra", 0.6446}};
-// The median over the same five scenes (the same tables): what a spot check (spot_check.hpp) expects
-// of a plan it tries, not a promise. vct's include the scenes where it leaks.
-const std::map<std::pair<std::string, std::string>, double> kTypicalOwnError = {
-    {{"direct", "draft"}, 0.0667},  {{"direct", "low"}, 0.0224},   {{"direct", "medium"}, 0.0102},
-    {{"direct", "high"}, 0.0071},   {{"direct", "ultra"}, 0.0024},
-    {{"vct", "draft"}, 0.0585},     {{"vct", "low"}, 0.0674},      {{"vct", "medium"}, 0.0707},
-    {{"vct", "high"}, 0.0601},      {{"vct", "ultra"}, 0.0402},
-    {{"isr", "draft"}, 0.0191},     {{"isr", "low"}, 0.0207},      {{"isr", "medium"}, 0.0196},
-    {{"isr", "high"}, 0.0191},      {{"isr", "ultra"}, 0.0182},
-    {{"cssm", "draft"}, 0.0174},    {{"cssm", "low"}, 0.0163},     {{"cssm", "medium"}, 0.0084},
-    {{"cssm", "high"}, 0.0077},     {{"cssm", "ultra"}, 0.0075},
-};
-const std::map<std::string, double> kVctSecondBounceTypicalOwnError = {
-    {"draft", 0.0476}, {"low", 0.0775}, {"medium", 0.1041}, {"high", 0.0836}, {"ultra", 0.0483}};
-// clang-format on
-
 // A GPU method's own error at a preset on this scene, and where it comes from:
 //   - measured here against the scene's reference frames;
 //   - else that of the nearest cheaper preset measured here: a costlier preset is not assumed to do
@@ -69,8 +25,8 @@ const std::map<std::string, double> kVctSecondBounceTypicalOwnError = {
 //     predicted: its coarser atlas misses the sun's patches);
 //   - else the prior.
 std::pair<double, std::string> own_error(const std::string& method, const std::string& preset, int bounces,
-                                         const SceneMeasurements* measured) {
-    const double prior = own_error_prior(method, preset, bounces).value_or(0.0);
+                                         const SceneMeasurements* measured, const OwnErrorPriors& priors) {
+    const double prior = priors.largest_of(method, preset, bounces).value_or(0.0);
     if (!measured) return {prior, "on the bench scenes"};
     if (const auto own = measured->own_error(method, preset, bounces)) {
         return {own->rel_mse, fmt::format("as {} comparison{} with this scene's reference frames measured{}", own->frames,
@@ -83,7 +39,7 @@ std::pair<double, std::string> own_error(const std::string& method, const std::s
     std::vector<double> ratios;
     for (const auto& entry : measured_presets) {
         if (rank(entry.first) < rank(preset) && (!cheaper || rank(entry.first) > rank(cheaper->first))) cheaper = &entry;
-        const double other_prior = own_error_prior(method, entry.first, bounces).value_or(0.0);
+        const double other_prior = priors.largest_of(method, entry.first, bounces).value_or(0.0);
         if (rank(entry.first) > rank(preset) && other_prior > 0.0) ratios.push_back(entry.second / other_prior);
     }
     if (cheaper) {
@@ -100,23 +56,11 @@ std::pair<double, std::string> own_error(const std::string& method, const std::s
 }  // namespace
 
 std::optional<double> typical_own_error(const std::string& method, const std::string& preset, int bounces) {
-    if (method == "vct" && bounces >= 2) {
-        const auto second = kVctSecondBounceTypicalOwnError.find(preset);
-        if (second != kVctSecondBounceTypicalOwnError.end()) return second->second;
-    }
-    const auto it = kTypicalOwnError.find({method, preset});
-    if (it == kTypicalOwnError.end()) return std::nullopt;
-    return it->second;
+    return OwnErrorPriors::bench().typical_of(method, preset, bounces);
 }
 
 std::optional<double> own_error_prior(const std::string& method, const std::string& preset, int bounces) {
-    if (method == "vct" && bounces >= 2) {
-        const auto second = kVctSecondBounceOwnError.find(preset);
-        if (second != kVctSecondBounceOwnError.end()) return second->second;
-    }
-    const auto it = kOwnError.find({method, preset});
-    if (it == kOwnError.end()) return std::nullopt;
-    return it->second;
+    return OwnErrorPriors::bench().largest_of(method, preset, bounces);
 }
 
 int modelled_bounces(const std::string& method, const methods::KnobValues& knobs) {
@@ -156,7 +100,8 @@ ReferenceNoise reference_noise(const SceneAnalysis& analysis, int bounces, doubl
 }
 
 ErrorPrediction predict_error(const SceneAnalysis& analysis, const std::string& method, const std::string& preset,
-                              const methods::KnobValues& knobs, const SceneMeasurements* measured) {
+                              const methods::KnobValues& knobs, const SceneMeasurements* measured,
+                              const OwnErrorPriors& priors) {
     const BounceEnergy& energy = analysis.bounces;
     const int bounces = modelled_bounces(method, knobs);
     const double stopped = BounceEnergy::at(energy.stopped_error, bounces);
@@ -182,7 +127,7 @@ ErrorPrediction predict_error(const SceneAnalysis& analysis, const std::string& 
                                            : ")";
         return prediction;
     }
-    const auto [own, own_basis] = own_error(method, preset, bounces, measured);
+    const auto [own, own_basis] = own_error(method, preset, bounces, measured, priors);
     prediction.rel_mse = stopped + own;
     prediction.basis = fmt::format("{} bounce{} lack {:.3f}; {} {} adds {:.3f} {}", bounces, bounces == 1 ? "" : "s",
                                    stopped, method, preset, own, own_basis);

@@ -19,6 +19,7 @@
 
 #include "renderer/methods/knobs.hpp"
 #include "renderer/planning/costs.hpp"
+#include "renderer/planning/priors.hpp"
 #include "renderer/scene_analysis.hpp"
 
 #include <optional>
@@ -32,13 +33,11 @@ struct ErrorPrediction {
     std::optional<std::string> ruled_out;  // why the plan cannot be trusted on this scene
 };
 
-// The bench's measured own error of a GPU method at a preset, at `bounces` where the bench measured
-// the method apart at that count (vct's second bounce), else at the preset's own; nullopt for
-// methods without one.
+// The bench's measured own error of a GPU method at a preset (OwnErrorPriors::bench().largest_of).
 std::optional<double> own_error_prior(const std::string& method, const std::string& preset, int bounces = 1);
 
-// The median of the same measurements over the bench's scenes: what to expect of a GPU plan on a
-// scene where nothing is measured (spot checks try such plans), never what to promise.
+// The median of the same over the bench's scenes (OwnErrorPriors::bench().typical_of): what to expect of
+// a GPU plan on a scene where nothing is measured (spot checks try such plans), never what to promise.
 std::optional<double> typical_own_error(const std::string& method, const std::string& preset, int bounces = 1);
 
 // The indirect bounces a plan models: 0 for direct, 1 for vct and isr, the `bounces` knob for cssm
@@ -61,6 +60,7 @@ ReferenceNoise reference_noise(const SceneAnalysis& analysis, int bounces, doubl
                                NoiseAgainst against);
 
 ErrorPrediction predict_error(const SceneAnalysis& analysis, const std::string& method, const std::string& preset,
-                              const methods::KnobValues& knobs, const SceneMeasurements* measured = nullptr);
+                              const methods::KnobValues& knobs, const SceneMeasurements* measured = nullptr,
+                              const OwnErrorPriors& priors = OwnErrorPriors::bench());
 
 }  // namespace bounce::planning

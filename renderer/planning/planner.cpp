@@ -528,7 +528,8 @@ std::vector<Candidate> candidates(const PlanningInputs& inputs, std::vector<std:
     const auto& registry = methods::MethodRegistry::builtin();
     std::vector<Candidate> all;
     const auto add = [&](const std::string& method, const std::string& preset, const methods::KnobValues& knobs) {
-        const ErrorPrediction error = predict_error(inputs.analysis, method, preset, knobs, inputs.scene);
+        const ErrorPrediction error = predict_error(inputs.analysis, method, preset, knobs, inputs.scene,
+                                                     inputs.own_error_priors());
         if (error.ruled_out) {
             const std::string reason = fmt::format("{} {}: {}", method, preset, *error.ruled_out);
             if (ruled_out && std::find(ruled_out->begin(), ruled_out->end(), reason) == ruled_out->end()) {
@@ -668,7 +669,7 @@ std::optional<Checks> spot_checks(const std::vector<Candidate>& all, const Candi
         // that stands, and where it is over E the frames tried before have ruled it out
         // (ruled_out_by_measurements); a check would be traced for nothing.
         if (inputs.scene && inputs.scene->own_error(c.method, c.preset, bounces)) continue;
-        const auto typical = typical_own_error(c.method, c.preset, bounces);
+        const auto typical = inputs.own_error_priors().typical_of(c.method, c.preset, bounces);
         if (!typical) continue;
         if (*typical + BounceEnergy::at(analysis.bounces.stopped_error, bounces) > target) continue;
         plausible.push_back(&c);

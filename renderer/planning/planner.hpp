@@ -16,6 +16,7 @@
 #include "renderer/methods/knobs.hpp"
 #include "renderer/planning/bench_bounds.hpp"
 #include "renderer/planning/costs.hpp"
+#include "renderer/planning/priors.hpp"
 #include "renderer/planning/spot_check.hpp"
 #include "renderer/renderer.hpp"
 #include "renderer/scene_analysis.hpp"
@@ -121,6 +122,10 @@ struct PlanningInputs {
     // (typical_bounce_cost, Candidate::expected_ms).
     enum class BouncePricing { bound, typical };
     BouncePricing bounce_pricing = BouncePricing::bound;
+    // The GPU methods' own errors where the scene has measured none; unset: the bench's
+    // (OwnErrorPriors::bench()). bench/planner --held-out sets each scene's to the other scenes'.
+    const OwnErrorPriors* priors = nullptr;
+    const OwnErrorPriors& own_error_priors() const { return priors ? *priors : OwnErrorPriors::bench(); }
 };
 
 // PlanningInputs::change for a scene's resources as the scene is now (its lights and geometry hashed

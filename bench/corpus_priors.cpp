@@ -1,0 +1,106 @@
+#include "bench/corpus_priors.hpp"
+
+#include "bench/corpus.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+#include <vector>
+
+namespace bounce::bench {
+namespace {
+
+std::vector<std::string> split(const std::string& line) {
+    std::vector<std::string> fields;
+    std::stringstream row(line);
+    for (std::string field; std::getline(row, field, ',');) fields.push_back(field);
+    if (!line.empty() && line.back() == ',') fields.emplace_back();  // an empty last field
+    return fields;
+}
+
+// The largest (of the scenes that do not leak) and the median (of all) of the errors of the scenes
+// not left out; nullopt where none is left.
+std::optional<std::pair<double, double>> largest_and_median(const std::map<std::string, double>& by_scene,
+                                                            const std::set<std::string>& left_out,
+                                                            const std::set<std::string>& leaking) {
+    std::vector<double> all, promised;
+    for (const auto& [scene, error] : by_scene) {
+        if (left_out.count(scene)) continue;
+        all.push_back(error);
+        if (!leaking.count(scene)) promised.push_back(error);
+    }
+    if (all.empty()) return std::nullopt;
+    std::sort(all.begin(), all.end());
+    const std::size_t middle = all.size() / 2;
+    const double median = all.size() % 2 ? all[middle] : 0.5 * (all[middle - 1] + all[middle]);
+    // Where every scene left leaks, the planner rules the preset out on such scenes and has no
+    // measure of it elsewhere: the largest of them all, not none.
+    const std::vector<double>& over = promised.empty() ? all : promised;
+    return std::pair{*std::max_element(over.begin(), over.end()), median};
+}
+
+}  // namespace
+
+CorpusErrors read_corpus_errors(const std::filesystem::path& csv, int bounces) {
+    std::ifstream in(csv);
+    if (!in) throw std::runtime_error(fmt::format("cannot read {}", csv.string()));
+    std::string line;
+    std::getline(in, line);
+    const std::vector<std::string> header = split(line);
+    const auto column = [&](const std::string& name) {
+        const auto it = std::find(header.begin(), header.end(), name);
+        if (it == header.end()) throw std::runtime_error(fmt::format("{} has no column '{}'", csv.string(), name));
+        return static_cast<std::size_t>(it - header.begin());
+    };
+    const std::size_t scene = column("scene"), method = column("method"), preset = column("preset"),
+                      bounce_count = column("bounces"), error = column("rel_mse_same_bounces");
+    CorpusErrors errors;
+    while (std::getline(in, line)) {
+        const std::vector<std::string> fields = split(line);
+        if (fields.size() < header.size() || fields[method] == "reference") continue;
+        if (bounces >= 0 && std::stoi(fields[bounce_count]) != bounces) continue;
+        errors[{fields[method], fields[preset]}][fields[scene]] = std::stod(fields[error]);
+    }
+    return errors;
+}
+
+std::map<std::string, ThinWalls> corpus_thin_walls() {
+    AnalysisSettings settings;
+    settings.bounce_image_size = 4;
+    settings.bounce_spp = 2;
+    settings.direct_timing_spp = 1;
+    std::map<std::string, ThinWalls> walls;
+    for (const BenchScene& scene : corpus_scenes()) walls[scene.name] = analyze_scene(scene.scene, settings).thin_walls;
+    return walls;
+}
+
+planning::OwnErrorPriors corpus_priors(const std::filesystem::path& directory,
+                                       const std::map<std::string, ThinWalls>& walls,
+                                       const std::set<std::string>& left_out) {
+    const auto leaking = [&](const std::string& method, const std::string& preset) {
+        std::set<std::string> scenes;
+        if (method != "vct") return scenes;
+        for (const auto& [scene, thin] : walls) {
+            if (thin.leaks(preset)) scenes.insert(scene);
+        }
+        return scenes;
+    };
+    planning::OwnErrorPriors priors;
+    for (const auto& [key, by_scene] : read_corpus_errors(directory / "quality.csv")) {
+        if (const auto figures = largest_and_median(by_scene, left_out, leaking(key.first, key.second))) {
+            std::tie(priors.largest[key], priors.typical[key]) = *figures;
+        }
+    }
+    for (const auto& [key, by_scene] : read_corpus_errors(directory / "vct_two_bounce_quality.csv", 2)) {
+        if (key.first != "vct") continue;
+        if (const auto figures = largest_and_median(by_scene, left_out, leaking(key.first, key.second))) {
+            std::tie(priors.vct_second_largest[key.second], priors.vct_second_typical[key.second]) = *figures;
+        }
+    }
+    return priors;
+}
+
+}  // namespace bounce::bench

@@ -1,0 +1,36 @@
+// The planner's own-error priors (renderer/planning/priors.hpp) as bench/quality's corpus tables give
+// them: per GPU method and preset, the largest and the median over the corpus scenes of the relMSE
+// against the reference with as many bounces, leaving out vct's presets where the analysis finds
+// them leaking (the planner rules them out there). With scenes left out, the priors a scene would
+// have had if the bench had never seen it (bench/planner --held-out).
+#pragma once
+
+#include "renderer/planning/priors.hpp"
+#include "renderer/scene_analysis.hpp"
+
+#include <filesystem>
+#include <map>
+#include <set>
+#include <string>
+#include <utility>
+
+namespace bounce::bench {
+
+// relMSE against the reference with as many bounces, by (method, preset), then by scene.
+using CorpusErrors = std::map<std::pair<std::string, std::string>, std::map<std::string, double>>;
+
+// The GPU rows of a bench/quality CSV (`rel_mse_same_bounces`) at `bounces`; -1: at every count (the
+// presets' own). Throws std::runtime_error, naming the file, where it cannot be read or lacks a column.
+CorpusErrors read_corpus_errors(const std::filesystem::path& csv, int bounces = -1);
+
+// Each corpus scene's thin walls, as the planner's analysis finds them (its bounce frames kept small:
+// only the walls are wanted).
+std::map<std::string, ThinWalls> corpus_thin_walls();
+
+// The priors from `directory`'s quality.csv (one bounce) and vct_two_bounce_quality.csv, over the
+// scenes not in `left_out`.
+planning::OwnErrorPriors corpus_priors(const std::filesystem::path& directory,
+                                       const std::map<std::string, ThinWalls>& walls,
+                                       const std::set<std::string>& left_out = {});
+
+}  // namespace bounce::bench

@@ -1,0 +1,33 @@
+// What the bench measured of each GPU method's own error, the planner's prior where a scene has
+// measured nothing of it (error_model.hpp): per method and preset, the relMSE against the reference
+// with as many bounces, at 128x128 through pixel centres, the largest (a promise) and the median (what
+// a spot check expects) over the bench corpus' scenes. The daemon plans with the committed tables
+// (bench()); bench/planner --held-out plans each scene with the tables of the others, which says
+// whether the promises hold on a scene the priors never saw.
+#pragma once
+
+#include <map>
+#include <optional>
+#include <string>
+#include <utility>
+
+namespace bounce::planning {
+
+struct OwnErrorPriors {
+    using Table = std::map<std::pair<std::string, std::string>, double>;  // by (method, preset)
+    Table largest, typical;
+    // vct with its second bounce (`bounces` 2), against the two-bounce reference, by preset: the
+    // leaves' gather adds its own error, so the one-bounce tables do not carry over.
+    std::map<std::string, double> vct_second_largest, vct_second_typical;
+
+    // The largest at `bounces` where measured apart at that count (vct's second bounce), else at the
+    // preset's own; nullopt for methods without one.
+    std::optional<double> largest_of(const std::string& method, const std::string& preset, int bounces = 1) const;
+    std::optional<double> typical_of(const std::string& method, const std::string& preset, int bounces = 1) const;
+
+    // The committed corpus tables (tests/unit/planner_priors_test.cpp checks them against
+    // bench/results/corpus).
+    static const OwnErrorPriors& bench();
+};
+
+}  // namespace bounce::planning
