@@ -8,7 +8,9 @@
 // - the whole frame's relMSE against the 1-bounce reference, and the share of it its worst pixels
 //   carry, with what those pixels read.
 // --knob NAME=VALUE sets a cssm knob over each preset's; --lights sun|lamps keeps the directional
-// lights or the others; --matte sets every specular and metallic factor to 0.
+// lights or the others; --matte sets every specular and metallic factor to 0. --method vct|isr
+// measures that method's indirect light instead; --method direct, its frame against the reference
+// at 0 bounces (where the direct light departs, which every method shares).
 #include "bench/common.hpp"
 #include "bench/corpus.hpp"
 #include "renderer/base/log.hpp"
@@ -31,10 +33,11 @@ using namespace bounce;
 constexpr const char* kUsage =
     "usage: bounce_bench_cssm_indirect --scene NAME [--preset P ...] [--size N] [--spp N] [--lights all|sun|lamps]\n"
     "                                  [--matte] [--region X0,Y0,X1,Y1] [--worst N]\n"
-    "                                  [--knob NAME=VALUE ...]";
+    "                                  [--knob NAME=VALUE ...] [--method cssm|vct|isr|direct]";
 
 struct Options {
     std::string scene;
+    std::string method = "cssm";
     std::vector<std::string> presets;
     int size = 48;
     int spp = 512;
@@ -81,8 +84,10 @@ void report(const std::string& preset, const Options& options, const image::Fram
             error[i] += (t - r) * (t - r) / (r * r + 0.01) / 3.0;  // image::compare's relMSE, per pixel
         }
     }
-    std::printf("%s: indirect over the reference's: sunlit %.3f (%.2f of %.2f), other pixels %.3f (%.2f of %.2f)\n",
-                preset.c_str(), sunlit / sunlit_truth, sunlit, sunlit_truth, rest / rest_truth, rest, rest_truth);
+    if (options.method != "direct") {
+        std::printf("%s: indirect over the reference's: sunlit %.3f (%.2f of %.2f), other pixels %.3f (%.2f of %.2f)\n",
+                    preset.c_str(), sunlit / sunlit_truth, sunlit, sunlit_truth, rest / rest_truth, rest, rest_truth);
+    }
     if (options.region.size() == 4) {
         std::printf("%s: region, %d pixels `direct` leaves dark: %.3f of %.3f, %.2f times\n", preset.c_str(), region_pixels,
                     region, region_truth, region / region_truth);
@@ -95,13 +100,14 @@ void report(const std::string& preset, const Options& options, const image::Fram
                       [&](std::size_t a, std::size_t b) { return error[a] > error[b]; });
     double share = 0.0;
     for (std::size_t k = 0; k < worst; ++k) share += error[order[k]];
-    std::printf("%s: relMSE against 1 bounce %.5f (image::compare %.5f); the worst %zu pixels carry %.0f%%\n", preset.c_str(),
+    std::printf("%s: relMSE against %d bounce%s %.5f (image::compare %.5f); the worst %zu pixels carry %.0f%%\n",
+                preset.c_str(), options.method == "direct" ? 0 : 1, options.method == "direct" ? "s" : "",
                 total / static_cast<double>(pixels), image::compare(cssm, truth).rel_mse, worst, 100.0 * share / total);
     for (std::size_t k = 0; k < worst; ++k) {
         const std::size_t i = order[k];
-        std::printf("  pixel (%zu, %zu): %.2f; cssm %.3f, direct %.3f, reference %.3f, its direct %.3f\n",
-                    i % options.size, i / options.size, error[i], luminance(cssm, i), luminance(direct, i), luminance(truth, i),
-                    luminance(truth_direct, i));
+        std::printf("  pixel (%zu, %zu): %.2f; %s %.3f, direct %.3f, reference %.3f, its direct %.3f\n",
+                    i % options.size, i / options.size, error[i], options.method.c_str(), luminance(cssm, i),
+                    luminance(direct, i), luminance(truth, i), luminance(truth_direct, i));
     }
 }
 
@@ -121,6 +127,7 @@ int main(int argc, char** argv) {
         else if (flag == "--region") options.region = bench::numbers(arguments.value());
         else if (flag == "--worst") options.worst = arguments.number();
         else if (flag == "--knob") arguments.knob(options.knobs);
+        else if (flag == "--method") options.method = arguments.value();
         else {
             std::fprintf(stderr, "%s\n", kUsage);
             return 2;
@@ -128,7 +135,8 @@ int main(int argc, char** argv) {
     }
     if (options.presets.empty()) options.presets = {"draft", "high"};
     if (options.size < 1 || options.spp < 1 || (!options.region.empty() && options.region.size() != 4) ||
-        (options.lights != "all" && options.lights != "sun" && options.lights != "lamps")) {
+        (options.lights != "all" && options.lights != "sun" && options.lights != "lamps") ||
+        (options.method != "cssm" && options.method != "vct" && options.method != "isr" && options.method != "direct")) {
         std::fprintf(stderr, "%s\n", kUsage);
         return 2;
     }
@@ -159,9 +167,9 @@ int main(int argc, char** argv) {
         auto resources = renderer.upload(scene);
         const image::Frame direct = renderer.render(*resources, bench::linear_request("direct", "high", {}, options.size)).frame;
         for (const std::string& preset : options.presets) {
-            const RenderRequest request = bench::linear_request("cssm", preset, options.knobs, options.size);
-            const image::Frame cssm = renderer.render(*resources, request).frame;
-            report(preset, options, truth, truth_direct, direct, cssm);
+            const RenderRequest request = bench::linear_request(options.method, preset, options.knobs, options.size);
+            const image::Frame frame = renderer.render(*resources, request).frame;
+            report(preset, options, options.method == "direct" ? truth_direct : truth, truth_direct, direct, frame);
         }
         return 0;
     } catch (const std::exception& error) {
