@@ -10,7 +10,8 @@
 // --knob NAME=VALUE sets a cssm knob over each preset's; --lights sun|lamps keeps the directional
 // lights or the others; --matte sets every specular and metallic factor to 0. --method vct|isr
 // measures that method's indirect light instead; --method direct, its frame against the reference
-// at 0 bounces (where the direct light departs, which every method shares).
+// at 0 bounces (where the direct light departs, which every method shares). --only OBJECT keeps the
+// objects whose name holds OBJECT (a building of the street alone: what it lights of itself).
 #include "bench/common.hpp"
 #include "bench/corpus.hpp"
 #include "renderer/base/log.hpp"
@@ -33,11 +34,12 @@ using namespace bounce;
 constexpr const char* kUsage =
     "usage: bounce_bench_cssm_indirect --scene NAME [--preset P ...] [--size N] [--spp N] [--lights all|sun|lamps]\n"
     "                                  [--matte] [--region X0,Y0,X1,Y1] [--worst N]\n"
-    "                                  [--knob NAME=VALUE ...] [--method cssm|vct|isr|direct]";
+    "                                  [--knob NAME=VALUE ...] [--method cssm|vct|isr|direct] [--only OBJECT]";
 
 struct Options {
     std::string scene;
     std::string method = "cssm";
+    std::string only;  // keep the objects whose name holds this
     std::vector<std::string> presets;
     int size = 48;
     int spp = 512;
@@ -128,6 +130,7 @@ int main(int argc, char** argv) {
         else if (flag == "--worst") options.worst = arguments.number();
         else if (flag == "--knob") arguments.knob(options.knobs);
         else if (flag == "--method") options.method = arguments.value();
+        else if (flag == "--only") options.only = arguments.value();
         else {
             std::fprintf(stderr, "%s\n", kUsage);
             return 2;
@@ -148,6 +151,11 @@ int main(int argc, char** argv) {
         if (scene.objects.empty()) {
             std::fprintf(stderr, "bounce_bench_cssm_indirect: no corpus scene '%s'\n", options.scene.c_str());
             return 2;
+        }
+        if (!options.only.empty()) {
+            std::erase_if(scene.objects, [&](const scene::Object& object) {
+                return object.name.find(options.only) == std::string::npos;
+            });
         }
         if (options.lights != "all") {
             const bool sun = options.lights == "sun";

@@ -11,6 +11,9 @@
 layout(local_size_x = 64) in;
 #include "common/compute.glsl"
 #include "vct/octree.glsl"
+#ifdef ONE_SIDED_LEAVES
+#include "vct/leaf_data.glsl"
+#endif
 
 layout(binding = VCT_IMAGE_POOL, rgba16f) coherent uniform image3D u_pool;
 layout(binding = VCT_IMAGE_DIRECTIONAL_POOL, rgba16f) coherent uniform image3D u_directional_pool;
@@ -59,6 +62,29 @@ vec4 fetch_voxel(uint level, ivec3 p, uint parent, ivec3 parent_base, uint direc
 #endif
 
 #ifdef ANISOTROPIC
+#ifdef ONE_SIDED_LEAVES
+// Per direction k (a cone travelling towards +axis for even k, -axis for odd): the share of a leaf's
+// light the cone meets, its surface's projection across the axis where the surface faces the cone,
+// max(0, -travel . m) / max |m| for the leaf's mean normal m (SparseVoxelOctree::Filtering). Where
+// the normals cancel (a thin closed object within the voxel: m's length falls towards 0) it tends
+// to every direction's 1, as without.
+void leaf_light_shares(ivec3 lattice, out float share[6]) {
+    for (int k = 0; k < 6; ++k) share[k] = 1.0;
+    if (any(lessThan(lattice, ivec3(0)))) return;
+    uint slot = lattice_slot(uvec3(lattice));
+    if (slot == VCT_NODE_NONE || !(leaf_sum(slot, 0u) > 0.0)) return;
+    vec3 mean_normal = vec3(leaf_sum(slot, 4u), leaf_sum(slot, 5u), leaf_sum(slot, 6u)) / leaf_sum(slot, 0u);
+    vec3 projected = abs(mean_normal);
+    float dominant = max(projected.x, max(projected.y, projected.z));
+    if (!(dominant > 0.0)) return;
+    float spread = clamp(length(mean_normal), 0.0, 1.0);
+    for (int k = 0; k < 6; ++k) {
+        float facing = (k % 2 == 0 ? -1.0 : 1.0) * mean_normal[k / 2];
+        share[k] = mix(1.0, max(facing, 0.0) / dominant, spread);
+    }
+}
+#endif
+
 // Composites the rows of `values` (the 27 child voxels around the parent's, x fastest) along
 // direction `direction` and averages them with their weights.
 vec4 directional_average(vec4 values[27], uint direction) {
@@ -139,9 +165,25 @@ void main() {
 #endif
     }
 #ifdef ANISOTROPIC
+#ifdef ONE_SIDED_LEAVES
+    float shares[27][6];
+    for (int i = 0; i < 27; ++i) {
+        if (from_leaves) {
+            leaf_light_shares(center + ivec3(i % 3, (i / 3) % 3, i / 9) - 1, shares[i]);
+        } else {
+            for (int k = 0; k < 6; ++k) shares[i][k] = 1.0;
+        }
+    }
+#endif
     for (uint k = 0u; k < 6u; ++k) {
         if (!from_leaves && k != direction) continue;
+#ifdef ONE_SIDED_LEAVES
+        vec4 seen[27];
+        for (int i = 0; i < 27; ++i) seen[i] = vec4(values[i].rgb * shares[i][k], values[i].a);
+        vec4 value = directional_average(seen, k);
+#else
         vec4 value = directional_average(values, k);
+#endif
 #ifdef DENSE
         imageStore(u_pool, target + ivec3(0, 0, u_dense_z[u_level * 6u + k]), value);
 #else

@@ -182,12 +182,13 @@ std::size_t SparseVoxelOctree::slot_count() const {
 std::vector<std::string> SparseVoxelOctree::program_defines() const {
     std::vector<std::string> defines;
     if (dense_) defines.push_back("DENSE");
-    if (anisotropic_) defines.push_back("ANISOTROPIC");
+    if (filtering_.anisotropic) defines.push_back("ANISOTROPIC");
+    if (filtering_.anisotropic && filtering_.one_sided) defines.push_back("ONE_SIDED_LEAVES");
     return defines;
 }
 
 void SparseVoxelOctree::allocate_dense_pool() {
-    if (pool_ && dense_pool_anisotropic_ == anisotropic_) return;
+    if (pool_ && dense_pool_anisotropic_ == filtering_.anisotropic) return;
     // Level D once, then every inner level once or (anisotropic) six times, stacked along z.
     const int side = grid_.lattice_max() + 1;
     int z = 0;
@@ -195,7 +196,7 @@ void SparseVoxelOctree::allocate_dense_pool() {
     dense_z_[static_cast<std::size_t>(grid_.leaf_level * 6)] = z;
     z += side;
     for (int level = grid_.leaf_level - 1; level >= 0; --level) {
-        for (int k = 0; k < (anisotropic_ ? 6 : 1); ++k) {
+        for (int k = 0; k < (filtering_.anisotropic ? 6 : 1); ++k) {
             dense_z_[static_cast<std::size_t>(level * 6 + k)] = z;
             z += (2 << level) + 1;
         }
@@ -209,7 +210,7 @@ void SparseVoxelOctree::allocate_dense_pool() {
     pool_ = gpu::Texture({GL_TEXTURE_3D, GL_RGBA16F, side, side, z});
     pool_.set_filter(GL_LINEAR, GL_LINEAR);
     pool_.set_wrap(GL_CLAMP_TO_EDGE);
-    dense_pool_anisotropic_ = anisotropic_;
+    dense_pool_anisotropic_ = filtering_.anisotropic;
 }
 
 void SparseVoxelOctree::allocate_pools() {
@@ -332,9 +333,9 @@ void SparseVoxelOctree::accumulate_leaves(const passes::PassContext& context, st
 }
 
 void SparseVoxelOctree::inject(const passes::PassContext& context, const passes::LightViewMaps& maps,
-                               bool anisotropic, const ConeSettings* second_bounce) {
+                               Filtering filtering, const ConeSettings* second_bounce) {
     BOUNCE_CHECK(built(), "vct: light injected before the octree was built");
-    anisotropic_ = anisotropic;
+    filtering_ = filtering;
     const std::size_t slots = slot_count();
     {
         gpu::GpuTimers::Scope timing(context.timers, "vct_inject");
@@ -395,7 +396,7 @@ bool SparseVoxelOctree::scale_light(float factor) {
 }
 
 void SparseVoxelOctree::resolve_and_mipmap(const passes::PassContext& context) {
-    const bool anisotropic = anisotropic_;
+    const bool anisotropic = filtering_.anisotropic;
     const gpu::CounterValues counters = counters_.read();
     counts_.max_radiance = std::bit_cast<float>(counters[VCT_COUNTER_MAX_RADIANCE]);
     // Half floats hold up to 65504: the pool stores radiance relative to the brightest voxel.

@@ -79,10 +79,24 @@ public:
     // objects `include` accepts are voxelized and their nodes appended after the static ones, so the
     // static part is never rebuilt. The light must be injected again afterwards.
     void update_dynamic(const passes::PassContext& context, const ObjectFilter& include);
-    // `anisotropic`: inner levels get six directional voxels (paper §9) instead of one.
+    // How the inner levels filter the leaves:
+    //   anisotropic: six directional voxels per inner voxel (paper §9) instead of one;
+    //   one_sided:   with anisotropic, a leaf's light goes into the directional voxels of the
+    //                directions that look at its surface's front, by the surface's projection across
+    //                each (mipmap.comp). A leaf is otherwise lit from every side: a sunlit face's
+    //                light reaches the face itself and the box's back, and a convex box's sunlit face
+    //                gathered a tenth of its direct light from itself. Leaves stay opaque from every
+    //                side, so a surface seen obliquely reads darker (the cones blend the directions by
+    //                their squared components): better on scenes of solid walls, worse on the
+    //                Cornell box's single sheets (docs/methods.md, "vct").
+    struct Filtering {
+        bool anisotropic = true;
+        bool one_sided = false;
+        bool operator==(const Filtering&) const = default;
+    };
     // `second_bounce`: the leaves then gather the first bounce with these cones and the bricks and
     // mipmaps are rebuilt, so a gather from the octree sees two bounces.
-    void inject(const passes::PassContext& context, const passes::LightViewMaps& maps, bool anisotropic,
+    void inject(const passes::PassContext& context, const passes::LightViewMaps& maps, Filtering filtering,
                 const ConeSettings* second_bounce);
     // Every light's power scaled by `factor` (> 0) since the last injection, and nothing else changed
     // (no surface emits: emission does not scale with the lights): light transport is linear in the
@@ -94,7 +108,8 @@ public:
     // light must then be injected.
     bool scale_light(float factor);
     int bounces() const { return bounces_; }
-    bool anisotropic() const { return anisotropic_; }
+    bool anisotropic() const { return filtering_.anisotropic; }
+    const Filtering& filtering() const { return filtering_; }
     bool built() const { return built_; }
 
     // Binds the node buffers and the brick pool, and sets the octree uniforms of vct/octree.glsl
@@ -149,7 +164,7 @@ private:
     std::size_t fragment_capacity_ = 1 << 16;
     int bricks_per_axis_ = 0;
     int inner_bricks_per_axis_ = 0;
-    bool anisotropic_ = false;
+    Filtering filtering_{false, false};
     bool dense_ = false;
     bool built_ = false;
     std::array<int, 60> dense_z_{};  // VCT_MAX_DENSE_LAYERS: first z of each level's layer

@@ -78,21 +78,22 @@ public:
 
         if (update_octree(frame)) lit_ = false;
         const bool maps_drawn = light_views_.render(frame, frame.knob_int("light_view_size"));
-        const bool anisotropic = frame.knob_int("anisotropic") != 0;
+        const SparseVoxelOctree::Filtering filtering{frame.knob_int("anisotropic") != 0,
+                                                     frame.knob_int("one_sided_leaves") != 0};
         const int bounces = frame.knob_int("bounces");
         // 1 where every light is as it was injected, its power included (the light-view maps are not
         // drawn again for a change of power alone: they hold none); nullopt where one moved.
         const std::optional<float> power_scale = passes::common_power_scale(injected_lights_, frame.scene.lights);
-        if (!lit_ || maps_drawn || power_scale != 1.0f || anisotropic != octree_.anisotropic() ||
+        if (!lit_ || maps_drawn || power_scale != 1.0f || filtering != octree_.filtering() ||
             bounces != octree_.bounces()) {
             // A factor of 1 here: the lights' power did not change, so something else did (the views' size).
-            const bool scalable = lit_ && !maps_drawn && anisotropic == octree_.anisotropic() &&
+            const bool scalable = lit_ && !maps_drawn && filtering == octree_.filtering() &&
                                   bounces == octree_.bounces() && !passes::emits_light(frame.scene);
             if (scalable && power_scale && *power_scale != 1.0f && octree_.scale_light(*power_scale)) {
                 ++light_rescales_;
             } else {
                 const ConeSettings cones = cone_settings(frame);
-                octree_.inject(frame, light_views_, anisotropic, bounces >= 2 ? &cones : nullptr);
+                octree_.inject(frame, light_views_, filtering, bounces >= 2 ? &cones : nullptr);
                 ++injections_;
             }
             injected_lights_ = frame.scene.lights;
@@ -276,6 +277,8 @@ MethodInfo method_info() {
         {"bounces", 1, 2, true, "indirect bounces: 1, or 2 (the leaves gather the first bounce before the pixels do)"},
         {"dense", 0, 1, true, "1: the same pipeline over a dense 3D texture of every level instead of the sparse octree"},
         {"anisotropic", 0, 1, true, "1: six directional voxels per inner voxel (paper §9); 0: one isotropic"},
+        {"one_sided_leaves", 0, 1, true,
+         "1 (with anisotropic): a leaf's light seen only from the side its surface faces, by its projection"},
         {"light_view_size", 16, 4096, true, "texels per side of each light-view map (photons per light view)"},
         {"shadow_map_size", 16, 8192, true, "texels per side of each shadow map (direct light)"},
         shadow_cascades_knob(),
@@ -283,7 +286,9 @@ MethodInfo method_info() {
         {"ao_lambda", 0, 1e6, false, "ambient occlusion falloff 1 / (1 + lambda r), per metre"}};
     auto preset = [](double resolution, double cones, double step, double light_view, double shadow) {
         return KnobValues{{"resolution", resolution}, {"diffuse_cones", cones}, {"aperture", 0},
-                          {"step", step}, {"specular", 1}, {"bounces", 1}, {"dense", 0}, {"anisotropic", 1}, {"light_view_size", light_view}, {"shadow_map_size", shadow}, {"shadow_cascades", kPresetShadowCascades},
+                          {"step", step}, {"specular", 1}, {"bounces", 1}, {"dense", 0}, {"anisotropic", 1},
+                          {"one_sided_leaves", 0}, {"light_view_size", light_view}, {"shadow_map_size", shadow},
+                          {"shadow_cascades", kPresetShadowCascades},
                           {"ao", 0}, {"ao_lambda", 1}};
     };
     info.presets = {{"draft", preset(24, 6, 1.0, 128, 512)},
