@@ -90,7 +90,7 @@ void report(const std::string& preset, const Options& options, const image::Fram
         std::printf("%s: indirect over the reference's: sunlit %.3f (%.2f of %.2f), other pixels %.3f (%.2f of %.2f)\n",
                     preset.c_str(), sunlit / sunlit_truth, sunlit, sunlit_truth, rest / rest_truth, rest, rest_truth);
     }
-    if (options.region.size() == 4) {
+    if (options.region.size() == 4 && options.method != "direct") {
         std::printf("%s: region, %d pixels `direct` leaves dark: %.3f of %.3f, %.2f times\n", preset.c_str(), region_pixels,
                     region, region_truth, region / region_truth);
     }
@@ -139,7 +139,8 @@ int main(int argc, char** argv) {
     if (options.presets.empty()) options.presets = {"draft", "high"};
     if (options.size < 1 || options.spp < 1 || (!options.region.empty() && options.region.size() != 4) ||
         (options.lights != "all" && options.lights != "sun" && options.lights != "lamps") ||
-        (options.method != "cssm" && options.method != "vct" && options.method != "isr" && options.method != "direct")) {
+        (options.method != "cssm" && options.method != "vct" && options.method != "isr" &&
+         options.method != "direct")) {
         std::fprintf(stderr, "%s\n", kUsage);
         return 2;
     }
@@ -156,6 +157,11 @@ int main(int argc, char** argv) {
             std::erase_if(scene.objects, [&](const scene::Object& object) {
                 return object.name.find(options.only) == std::string::npos;
             });
+            if (scene.objects.empty()) {
+                std::fprintf(stderr, "bounce_bench_cssm_indirect: no object of '%s' is named '%s'\n",
+                             options.scene.c_str(), options.only.c_str());
+                return 2;
+            }
         }
         if (options.lights != "all") {
             const bool sun = options.lights == "sun";

@@ -326,11 +326,17 @@ int main(int argc, char** argv) {
         else {
             std::fprintf(stderr,
                          "usage: bounce_bench_planner [--size N] [--reference-spp N] [--reference-bounces N] [--cache DIR] "
-                         "[--scene NAME]... [--errors E,E] [--budgets-ms T,T] [--passes N] [--no-relit] [--no-moved | --camera-as-warm] "
+                         "[--scene NAME]... [--errors E,E] [--budgets-ms T,T] [--passes N] [--no-relit] "
+                         "[--no-moved | --camera-as-warm] "
                          "[--held-out [--corpus-results DIR]] [--out DIR] [--markdown FILE] "
                          "[--analysis-only [--analysis-spp N] [--analysis-size N] | --references-only]\n");
             return 2;
         }
+    }
+    if (options.held_out && (options.out == Options{}.out || options.markdown == Options{}.markdown)) {
+        // Its results are not the committed run's: it must not write over bench/results/planner.csv.
+        std::fprintf(stderr, "bounce_bench_planner: --held-out needs an --out and a --markdown of its own\n");
+        return 2;
     }
     try {
         if (options.analysis_only) {
@@ -699,8 +705,8 @@ int main(int argc, char** argv) {
            << fmt::format("- Frames {0}x{0}, against the reference at {1} spp and {2} bounces through pixel centres; "
                           "device costs calibrated in {3:.0f} ms (or read from the cache).\n",
                           options.size, options.reference_spp, options.reference_bounces, device.calibration_ms)
-           << (options.held_out ? "- Held out: each scene planned with the GPU methods' own-error priors of the other four "
-                                  "corpus scenes (bench/corpus_priors.hpp), as if the bench had never seen it.\n"
+           << (options.held_out ? "- Held out: each scene planned with the GPU methods' own-error priors of the other "
+                                  "four corpus scenes (bench/corpus_priors.hpp), as if the bench had never seen it.\n"
                                 : "")
            << "- A target error holds when it is met at no more than 1.5x the time of the cheapest fixed plan "
               "(a method at a preset, or the reference at 4 to 256 spp) that meets it, that plan timed again right "

@@ -149,7 +149,7 @@ std::vector<Candidate> candidates(const PlanningInputs& inputs, std::vector<std:
 
 // For a target error E whose chosen plan is the reference (nothing on the scene promises a GPU plan
 // within E): GPU plans at full size whose own error is not measured here, which the bench's typical
-// own error (typical_own_error) and the light of the bounces they lack (the analysis') put within E,
+// own error (the inputs' priors, OwnErrorPriors::typical_of) and the light of the bounces they lack (the analysis') put within E,
 // cheapest first, while the spot check's price and their predicted times add to at most kCheckShare
 // of the reference plan's: where every one fails, the request costs at most 1 + kCheckShare times
 // the plan it stood in for, and the frames rendered are then compared with its reference as probes

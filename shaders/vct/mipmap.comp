@@ -166,23 +166,24 @@ void main() {
     }
 #ifdef ANISOTROPIC
 #ifdef ONE_SIDED_LEAVES
-    float shares[27][6];
-    for (int i = 0; i < 27; ++i) {
-        if (from_leaves) {
-            leaf_light_shares(center + ivec3(i % 3, (i / 3) % 3, i / 9) - 1, shares[i]);
-        } else {
-            for (int k = 0; k < 6; ++k) shares[i][k] = 1.0;
-        }
+    float shares[27][6];  // read above the leaves only
+    if (from_leaves) {
+        for (int i = 0; i < 27; ++i) leaf_light_shares(center + ivec3(i % 3, (i / 3) % 3, i / 9) - 1, shares[i]);
     }
 #endif
     for (uint k = 0u; k < 6u; ++k) {
         if (!from_leaves && k != direction) continue;
+        vec4 value;
 #ifdef ONE_SIDED_LEAVES
-        vec4 seen[27];
-        for (int i = 0; i < 27; ++i) seen[i] = vec4(values[i].rgb * shares[i][k], values[i].a);
-        vec4 value = directional_average(seen, k);
+        if (from_leaves) {
+            vec4 seen[27];
+            for (int i = 0; i < 27; ++i) seen[i] = vec4(values[i].rgb * shares[i][k], values[i].a);
+            value = directional_average(seen, k);
+        } else {
+            value = directional_average(values, k);
+        }
 #else
-        vec4 value = directional_average(values, k);
+        value = directional_average(values, k);
 #endif
 #ifdef DENSE
         imageStore(u_pool, target + ivec3(0, 0, u_dense_z[u_level * 6u + k]), value);

@@ -177,8 +177,9 @@ TEST(Vct, OneSidedLeavesKeepASunlitBoxFromLightingItself) {
     scene.lights.push_back(directional_light(glm::normalize(glm::vec3(-0.5f, -0.6f, -0.4f)), 3.0f));
     scene.cameras.push_back(scene::Camera::look_at({3.5f, 3.0f, 3.0f}, {0.0f, 1.0f, 0.0f}, {0.0f, 1.0f, 0.0f}, 0.9f));
     const image::Frame direct = render_scene(scene, method_request("direct", "high", kSize)).frame;
-    const auto self_lit = [&](int one_sided) {
-        const image::Frame frame = render_vct(scene, "high", {{"one_sided_leaves", one_sided}}).frame;
+    const auto self_lit = [&](int one_sided, int dense) {
+        const image::Frame frame =
+            render_vct(scene, "high", {{"one_sided_leaves", one_sided}, {"dense", dense}}).frame;
         double indirect = 0.0, lit = 0.0;
         for (std::size_t i = 0; i < frame.rgba.size(); i += 4) {
             for (int c = 0; c < 3; ++c) {
@@ -189,11 +190,12 @@ TEST(Vct, OneSidedLeavesKeepASunlitBoxFromLightingItself) {
         EXPECT_GT(lit, 0.0) << "the camera must see the sunlit faces";
         return indirect / lit;
     };
-    const double both_sides = self_lit(0), one_side = self_lit(1);
+    const double both_sides = self_lit(0, 0), one_side = self_lit(1, 0), dense_one_side = self_lit(1, 1);
     std::printf("vct high, a sunlit box alone: indirect over direct %.4f with leaves lit from every side, "
-                "%.4f one-sided\n",
-                both_sides, one_side);
+                "%.4f one-sided (%.4f dense)\n",
+                both_sides, one_side, dense_one_side);
     EXPECT_LT(std::abs(one_side), 0.01);
+    EXPECT_LT(std::abs(dense_one_side), 0.01);  // the dense variant mipmaps the same leaves
     EXPECT_GT(both_sides, 0.05);
 }
 

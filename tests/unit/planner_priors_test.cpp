@@ -28,8 +28,8 @@ const std::map<std::string, ThinWalls>& walls() {
 // Half the last of the four decimal places the tables hold.
 constexpr double kRounding = 5e-5;
 
-void expect_tables_equal(const planning::OwnErrorPriors::Table& committed, const planning::OwnErrorPriors::Table& corpus,
-                         const char* which) {
+void expect_tables_equal(const planning::OwnErrorPriors::Table& committed,
+                         const planning::OwnErrorPriors::Table& corpus, const char* which) {
     EXPECT_EQ(committed.size(), corpus.size()) << which;
     for (const auto& [key, figure] : corpus) {
         SCOPED_TRACE(fmt::format("{} {} {}", which, key.first, key.second));
@@ -54,8 +54,10 @@ TEST(PlannerPriors, VctsSecondBounceIsItsTwoBounceCorpusTable) {
     const planning::OwnErrorPriors corpus = bench::corpus_priors(kCorpus, walls());
     const planning::OwnErrorPriors& committed = planning::OwnErrorPriors::bench();
     ASSERT_EQ(corpus.vct_second_largest.size(), 5u);
+    EXPECT_EQ(committed.vct_second_largest.size(), 5u);
     for (const auto& [preset, figure] : corpus.vct_second_largest) {
         SCOPED_TRACE(preset);
+        EXPECT_EQ(committed.vct_second_largest.count(preset), 1u);
         EXPECT_NEAR(*committed.largest_of("vct", preset, 2), figure, kRounding);
         EXPECT_NEAR(*committed.typical_of("vct", preset, 2), corpus.vct_second_typical.at(preset), kRounding);
         EXPECT_NEAR(*planning::own_error_prior("vct", preset, 2), figure, kRounding);
