@@ -18,8 +18,11 @@ uniform int u_shadow_view_cascades;
 uniform mat4 u_shadow_view_proj[BOUNCE_SHADOW_VIEW_CASCADES];
 uniform float u_shadow_view_texel[BOUNCE_SHADOW_VIEW_CASCADES];
 
-// Surfaces are pushed towards their normal by about one texel before the lookup: a slope-free
-// bias that removes acne without detaching contact shadows.
+// Surfaces are pushed towards their normal by one texel before the lookup: a slope-free bias that
+// removes acne without detaching contact shadows. At 1.5 texels a shadow's edge on a wall moved
+// into the shade by a pixel or more, and the pixels between, lit on the GPU and in shade in the
+// reference, carried half of cssm medium's error on the street; at 0.5 the atrium's sunlit floor
+// shows acne (`direct` high 0.0017 -> 0.0058; docs/benchmarks.md, "What the corpus shows").
 float shadow_visibility(int type, vec3 p, vec3 n, vec3 light_position, float distance) {
     if (!u_shadows_enabled) return 1.0;
     if (type == BOUNCE_LIGHT_DIRECTIONAL && u_shadow_view_cascades > 0) {
@@ -27,14 +30,14 @@ float shadow_visibility(int type, vec3 p, vec3 n, vec3 light_position, float dis
         // light, so inside its window it answers as the scene's map would, with smaller texels.
         float margin = 1.0 / float(textureSize(u_shadow_view, 0).x);
         for (int k = 0; k < u_shadow_view_cascades; ++k) {
-            vec3 uvz = (u_shadow_view_proj[k] * vec4(p + n * (1.5 * u_shadow_view_texel[k]), 1.0)).xyz * 0.5 + 0.5;
+            vec3 uvz = (u_shadow_view_proj[k] * vec4(p + n * u_shadow_view_texel[k], 1.0)).xyz * 0.5 + 0.5;
             if (all(greaterThanEqual(uvz.xy, vec2(margin))) && all(lessThanEqual(uvz.xy, vec2(1.0 - margin)))) {
                 return texture(u_shadow_view, vec4(uvz.xy, float(k), min(uvz.z, 1.0)));
             }
         }
     }
     float texel = type == BOUNCE_LIGHT_DIRECTIONAL ? u_shadow_texel_world : u_shadow_texel_angle * distance;
-    vec3 offset_p = p + n * (1.5 * texel);
+    vec3 offset_p = p + n * texel;
     if (type == BOUNCE_LIGHT_POINT) {
         vec3 from_light = offset_p - light_position;
         float stored_ref = (length(from_light) - texel) / u_shadow_far;
