@@ -1,6 +1,7 @@
 #include "bench/corpus_priors.hpp"
 
 #include "bench/corpus.hpp"
+#include "renderer/planning/costs.hpp"
 
 #include <fmt/format.h>
 
@@ -33,9 +34,7 @@ std::optional<std::pair<double, double>> largest_and_median(const std::map<std::
         if (!leaking.count(scene)) promised.push_back(error);
     }
     if (all.empty()) return std::nullopt;
-    std::sort(all.begin(), all.end());
-    const std::size_t middle = all.size() / 2;
-    const double median = all.size() % 2 ? all[middle] : 0.5 * (all[middle - 1] + all[middle]);
+    const double median = planning::median(all);
     // Where every scene left leaks, the planner rules the preset out on such scenes and has no
     // measure of it elsewhere: the largest of them all, not none.
     const std::vector<double>& over = promised.empty() ? all : promised;

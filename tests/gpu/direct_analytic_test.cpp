@@ -190,31 +190,47 @@ TEST(DirectAnalytic, BlockerCastsTheShadowGeometryPredicts) {
     EXPECT_GT(lit, 200);
 }
 
+// How far shaders/common/shadows.glsl moves a looked-up point along its normal, in texels of the map
+// it reads.
+constexpr float kShadowNormalOffsetTexels = 1.0f;
+
 // A sun over a ground 400 m wide: its map over the whole scene has texels of 0.28 m at 2048, and a
-// blocker 1 m wide 1 m above the ground casts a shadow whose edges that map misplaces by more than
-// the view cascades allow. In the finest cascade that holds the view (texel t) an edge lies within
-// 3 t of where the geometry puts it: the normal offset of 1.5 t lifts the looked-up point, which
-// moves its shadow along the ground by 1.5 t tan(theta) < 1.5 t (the sun is 20 degrees off the
-// vertical), the bilinear filter crosses half its value within half a texel of the stored edge, and
-// the stored edge lies within a texel of the true one. One pixel's footprint is added for where the
-// pixel centre falls. The same holds with the whole scene scaled by 1e-3 and 1e4 (a ground of 40 cm
-// and of 4 km): the fit, the offsets and the depths are all relative to the scene.
+// blocker 1 m wide above the ground casts a shadow whose edges that map misplaces by more than the
+// view cascades allow. In the finest cascade that holds the view (texel t) an edge lies within
+// (1.5 + o tan(theta)) t of where the geometry puts it: the normal offset of o = 1 t lifts the
+// looked-up point, which moves its shadow along the ground by o t tan(theta) (theta the sun's angle
+// off the vertical), the bilinear filter crosses half its value within half a texel of the stored
+// edge, and the stored edge lies within a texel of the true one. One pixel's footprint is added for
+// where the pixel centre falls. Two suns: 20 degrees off the vertical, and a low one at 70, where
+// the offset's share is the largest (an offset of 1.5 t moved it 4.1 t, past the bound, and on the
+// bench street such shadow edges on facades carried half of cssm medium's error). The same holds
+// with the whole scene scaled by 1e-3 and 1e4 (a ground of 40 cm and of 4 km): the fit, the offsets
+// and the depths are all relative to the scene.
 TEST(DirectAnalytic, ASunsShadowEdgeInAWideSceneLiesWithinTheViewCascadesTexels) {
     constexpr int kMapSize = 2048;
-    const scene::Light sun = directional_light(glm::normalize(glm::vec3(0.3f, -1.0f, 0.2f)), 3.0f);
     const scene::Material material = matte({0.6f, 0.6f, 0.6f});
+    struct Sun {
+        glm::vec3 direction;
+        float blocker_height;  // keeps the shadow in view
+    };
+    const float tan_70 = std::tan(glm::radians(70.0f));
+    for (const Sun& sun_case : {Sun{{0.3f, -1.0f, 0.2f}, 1.0f}, Sun{{tan_70, -1.0f, 0.0f}, 0.3f}}) {
+    const scene::Light sun = directional_light(glm::normalize(sun_case.direction), 3.0f);
+    const float tan_theta = glm::length(glm::vec2(sun.direction.x, sun.direction.z)) / -sun.direction.y;
     for (const float scale : {1.0f, 1e-3f, 1e4f}) {
-        SCOPED_TRACE("scale " + std::to_string(scale));
+        SCOPED_TRACE("scale " + std::to_string(scale) + ", sun tan " + std::to_string(tan_theta));
         auto setup = plane_under(material, sun);
         setup.scene.objects.clear();
         setup.scene.meshes.clear();
         add_square(setup.scene, "ground", glm::vec3(0.0f), 200.0f * scale, {0, 1, 0}, 0);
         // Culled from above, it still casts.
-        add_square(setup.scene, "blocker", {0.0f, scale, 0.0f}, 0.5f * scale, {0, -1, 0}, 0);
+        add_square(setup.scene, "blocker", {0.0f, sun_case.blocker_height * scale, 0.0f}, 0.5f * scale, {0, -1, 0},
+                   0);
         setup.request.camera = top_down_camera(3.0f * scale, 1.0f);
         const scene::Camera& camera = *setup.request.camera;
         // The shadow: the blocker moved along the light onto the ground.
-        const glm::vec2 shadow_centre = scale * glm::vec2(sun.direction.x, sun.direction.z) / -sun.direction.y;
+        const glm::vec2 shadow_centre =
+            sun_case.blocker_height * scale * glm::vec2(sun.direction.x, sun.direction.z) / -sun.direction.y;
         const float shadow_half = 0.5f * scale;
 
         const auto cascades = passes::ShadowMaps::fit_view_cascades(setup.scene.world_bounds(), sun.direction, camera,
@@ -223,9 +239,9 @@ TEST(DirectAnalytic, ASunsShadowEdgeInAWideSceneLiesWithinTheViewCascadesTexels)
         const float texel = cascades.front().texel;
         const float footprint =
             glm::distance(pixel_on_ground(camera, kSize, kSize, 0, 0), pixel_on_ground(camera, kSize, kSize, 1, 1));
-        const float tolerance = 3.0f * texel + footprint;
+        const float tolerance = (1.5f + kShadowNormalOffsetTexels * tan_theta) * texel + footprint;
         const float scene_texel = glm::length(setup.scene.world_bounds().extent()) / kMapSize;
-        if (scale == 1.0f) {
+        if (scale == 1.0f && tan_theta < 1.0f) {
             RecordProperty("finest_cascade_texel_mm", static_cast<int>(std::lround(1000.0f * texel)));
             RecordProperty("scene_map_texel_mm", static_cast<int>(std::lround(1000.0f * scene_texel)));
         }
@@ -255,8 +271,11 @@ TEST(DirectAnalytic, ASunsShadowEdgeInAWideSceneLiesWithinTheViewCascadesTexels)
         EXPECT_EQ(misplaced(3), 0) << "cascade texel " << texel << ", tolerance " << tolerance;
         // The scene's map alone, whose texels are larger, fails the same bound: the test tells them apart.
         const int by_the_scene_map = misplaced(0);
-        if (scale == 1.0f) RecordProperty("pixels_misplaced_by_the_scene_map", by_the_scene_map);
+        if (scale == 1.0f && tan_theta < 1.0f) {
+            RecordProperty("pixels_misplaced_by_the_scene_map", by_the_scene_map);
+        }
         EXPECT_GT(by_the_scene_map, 0) << "scene map texel " << scene_texel;
+    }
     }
 }
 
@@ -270,6 +289,7 @@ TEST(DirectAnalytic, ASunsShadowEdgeInAWideSceneLiesWithinTheViewCascadesTexels)
 TEST(DirectAnalytic, ShadowEdgesAlongAWideGroundLieWithinTheTexelsOfTheirCascades) {
     constexpr int kMapSize = 2048, kCascades = 3;
     scene::Light sun = directional_light(glm::normalize(glm::vec3(0.3f, -1.0f, 0.2f)), 3.0f);
+    const float tan_theta = glm::length(glm::vec2(sun.direction.x, sun.direction.z)) / -sun.direction.y;
     const scene::Material material = matte({0.6f, 0.6f, 0.6f});
     auto setup = plane_under(material, sun);
     setup.scene.objects.clear();
@@ -295,7 +315,8 @@ TEST(DirectAnalytic, ShadowEdgesAlongAWideGroundLieWithinTheTexelsOfTheirCascade
         for (int k = 0; k < kCascades; ++k) {
             const auto& cascade = cascades[static_cast<std::size_t>(k)];
             const float texel = cascade.texel;
-            const glm::vec4 clip = cascade.view_projection * glm::vec4(p + glm::vec3(0, 1.5f * texel, 0), 1.0f);
+            const glm::vec3 looked_up = p + glm::vec3(0, kShadowNormalOffsetTexels * texel, 0);
+            const glm::vec4 clip = cascade.view_projection * glm::vec4(looked_up, 1.0f);
             const glm::vec2 uv = glm::vec2(clip) * 0.5f + 0.5f;
             const float margin = 1.0f / kMapSize;
             if (glm::all(glm::greaterThanEqual(uv, glm::vec2(margin))) &&
@@ -337,7 +358,7 @@ TEST(DirectAnalytic, ShadowEdgesAlongAWideGroundLieWithinTheTexelsOfTheirCascade
                 }
                 const auto [in_shadow, edge] = shadows_at(p);
                 const auto [cascade, texel] = read_at(p);
-                const float tolerance = 3.0f * texel + footprint;
+                const float tolerance = (1.5f + kShadowNormalOffsetTexels * tan_theta) * texel + footprint;
                 if (edge < 4.0f * tolerance) ++edge_pixels_read[static_cast<std::size_t>(cascade)];
                 const float lit = expected_radiance(material, sun, camera, p).r;
                 const bool dark = result.frame.at(x, y).r < 0.5f * lit;
