@@ -1,0 +1,21 @@
+#pragma once
+// How plans are ordered and named: choose() and the planner's probes and checks share these.
+
+#include "renderer/planning/planner.hpp"
+
+#include <string>
+
+namespace bounce::planning {
+
+// "cssm medium bounces=2", "reference spp=12 bounces=1", with " at 1/2 size, upsampled" when scaled.
+std::string describe(const Candidate& candidate);
+// By predicted time, then predicted error.
+bool faster(const Candidate& a, const Candidate& b);
+// Its typical price where its bound is not (Candidate::expected_ms), else the bound.
+double expected_ms(const Candidate& candidate);
+// By expected price, then as faster().
+bool faster_expected(const Candidate& a, const Candidate& b);
+// By predicted error, then predicted time.
+bool more_accurate(const Candidate& a, const Candidate& b);
+
+}  // namespace bounce::planning
