@@ -1,5 +1,5 @@
 // bench/cssm_indirect: where cssm's one-bounce indirect light departs from the reference's, on a
-// scene of the bench corpus. The indirect part alone (cssm less `direct high`, against the
+// scene of the bench corpus or a Cornell variant of bench/quality. The indirect part alone (cssm less `direct high`, against the
 // pixel-centre reference at 1 bounce less at 0), since whole frames hide it behind the shared direct
 // light. Prints, per preset:
 // - the indirect light over the reference's, on the pixels whose direct light (the reference's at 0
@@ -14,6 +14,7 @@
 // objects whose name holds OBJECT (a building of the street alone: what it lights of itself).
 #include "bench/common.hpp"
 #include "bench/corpus.hpp"
+#include "bench/scenes.hpp"
 #include "renderer/base/log.hpp"
 #include "renderer/image/metrics.hpp"
 #include "renderer/methods/reference/path_tracer.hpp"
@@ -146,11 +147,13 @@ int main(int argc, char** argv) {
     }
     try {
         scene::Scene scene;
-        for (bench::BenchScene& candidate : bench::corpus_scenes()) {
-            if (candidate.name == options.scene) scene = std::move(candidate.scene);
+        for (std::vector<bench::BenchScene> scenes : {bench::corpus_scenes(), bench::quality_scenes()}) {
+            for (bench::BenchScene& candidate : scenes) {
+                if (candidate.name == options.scene) scene = std::move(candidate.scene);
+            }
         }
         if (scene.objects.empty()) {
-            std::fprintf(stderr, "bounce_bench_cssm_indirect: no corpus scene '%s'\n", options.scene.c_str());
+            std::fprintf(stderr, "bounce_bench_cssm_indirect: no corpus or Cornell scene '%s'\n", options.scene.c_str());
             return 2;
         }
         if (!options.only.empty()) {

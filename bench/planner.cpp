@@ -424,6 +424,13 @@ int main(int argc, char** argv) {
                 options.held_out ? bench::corpus_priors(options.corpus_results, corpus_walls, {bench_scene.name})
                                  : planning::OwnErrorPriors{};
             if (options.held_out) inputs.priors = &held_out_priors;
+            // As the daemon plans: a plan the memory budget would refuse is ruled out.
+            inputs.memory = [&](const std::string& method, const std::string& preset, const methods::KnobValues& knobs,
+                                int width, int height) {
+                RenderRequest request = bench::linear_request(method, preset, knobs, width);
+                request.height = height;
+                return renderer.memory_refusal(*resources, request);
+            };
             planning::FrameComparisons comparisons;
             int pass = 1;
             const auto run = [&](const planning::Budget& budget, const std::string& text) {

@@ -269,6 +269,30 @@ void Renderer::fill_stats(FrameStats& stats, const RenderRequest& request, const
     for (const auto& structure : stats.resident) stats.resident_bytes += structure.bytes;
 }
 
+void Renderer::check_frame_memory(const SceneResources& resources, const RenderRequest& request,
+                                  const methods::MethodInfo& info, const methods::KnobValues& knobs) const {
+    // What this frame replaces (the method's structures and the output target) is not held elsewhere.
+    std::uint64_t replaced = output_.bytes() + tonemap_.bytes();
+    if (const auto existing = resources.methods.find(request.method); existing != resources.methods.end()) {
+        for (const auto& structure : existing->second->resident()) replaced += structure.bytes;
+    }
+    check_memory_budget({info, resources.gpu_scene.scene(), knobs, request.width, request.height,
+                         resident_bytes() - replaced, budget_.bytes, budget_.source});
+}
+
+std::optional<std::string> Renderer::memory_refusal(SceneResources& resources, const RenderRequest& request) const {
+    FramePlan plan = plan_frame(request);
+    if (plan.site != FrameSite::gpu) return std::nullopt;
+    const auto& info = methods::MethodRegistry::builtin().find(request.method);
+    resolve_scene_knobs(resources, request, info, plan.knobs);
+    try {
+        check_frame_memory(resources, request, info, plan.knobs);
+    } catch (const ResourceExhausted& refused) {
+        return std::string(refused.what());
+    }
+    return std::nullopt;
+}
+
 template <typename Run>
 void Renderer::with_frame(SceneResources& resources, const RenderRequest& request, const methods::Precompute& precompute,
                           Run&& run, const std::atomic<bool>* cancelled) {
@@ -279,15 +303,7 @@ void Renderer::with_frame(SceneResources& resources, const RenderRequest& reques
     const auto& info = methods::MethodRegistry::builtin().find(request.method);
     resolve_scene_knobs(resources, request, info, plan.knobs);
     const methods::KnobValues& knobs = plan.knobs;
-    {
-        // What this frame replaces (the method's structures and the output target) is not held elsewhere.
-        std::uint64_t replaced = output_.bytes() + tonemap_.bytes();
-        if (const auto existing = resources.methods.find(request.method); existing != resources.methods.end()) {
-            for (const auto& structure : existing->second->resident()) replaced += structure.bytes;
-        }
-        check_memory_budget({info, scene, knobs, request.width, request.height, resident_bytes() - replaced, budget_.bytes,
-                             budget_.source});
-    }
+    check_frame_memory(resources, request, info, knobs);
     auto& method = resources.methods[request.method];
     if (!method) method = info.create();
     gpu::check_out_of_memory("earlier GL work");  // so what follows is this frame's alone

@@ -207,6 +207,9 @@ public:
     const gpu::MemoryBudget& memory_budget() const { return budget_; }
     // What every uploaded scene holds now, with the output target.
     std::uint64_t resident_bytes() const;
+    // Why a frame of `request` would now be refused for memory (the check render() makes first), or
+    // nullopt where it fits or is not a GPU frame: the planner rules such plans out.
+    std::optional<std::string> memory_refusal(SceneResources& resources, const RenderRequest& request) const;
 
     static constexpr int kMaxDimension = 16384;
 
@@ -223,6 +226,9 @@ private:
     void ensure_output(int width, int height);
     void fill_stats(FrameStats& stats, const RenderRequest& request, const methods::KnobValues& knobs,
                     const methods::Method& method, const SceneResources& resources);
+    // Throws ResourceExhausted where a frame of the method at these (resolved) knobs would pass the budget.
+    void check_frame_memory(const SceneResources& resources, const RenderRequest& request,
+                            const methods::MethodInfo& info, const methods::KnobValues& knobs) const;
     // Resolves the request's knobs, creates its method if needed, and calls run(method, frame, knobs).
     template <typename Run>
     void with_frame(SceneResources& resources, const RenderRequest& request, const methods::Precompute& precompute,

@@ -393,10 +393,21 @@ void RequestHandlers::plan_budgeted(RenderOrder& order, Renderer& renderer, Scen
     RenderRequest seen = frame;
     if (auto camera = view_camera(*entry.scene, order)) seen.camera = std::move(camera);
     const scene::Camera camera = entry.resources->view_of(seen).camera;
-    const planning::Plan plan = planning::plan({entry.resources->analysis(), device, entry.resources->measurements.get(),
-                                                frame.width, frame.height, method, resample_errors(order, renderer, entry),
-                                                planning::changes_on(*entry.resources, camera)},
-                                               *order.budget);
+    planning::PlanningInputs inputs{entry.resources->analysis(), device, entry.resources->measurements.get(),
+                                    frame.width, frame.height, method, resample_errors(order, renderer, entry),
+                                    planning::changes_on(*entry.resources, camera)};
+    // A plan whose frame the memory budget would refuse is ruled out, not sent to fail.
+    inputs.memory = [&](const std::string& name, const std::string& preset, const methods::KnobValues& knobs, int width,
+                        int height) {
+        RenderRequest candidate = frame;
+        candidate.method = name;
+        candidate.preset = preset;
+        candidate.knobs = knobs;
+        candidate.width = width;
+        candidate.height = height;
+        return renderer.memory_refusal(*entry.resources, candidate);
+    };
+    const planning::Plan plan = planning::plan(inputs, *order.budget);
     frame.method = plan.chosen.method;
     frame.preset = plan.chosen.preset;
     frame.knobs = plan.chosen.knobs;

@@ -59,7 +59,8 @@ public:
     // rebuilt over them). 8: cssm scales its atlas solution where every light dimmed alike. 9: cssm
     // samples each texel's direct light at 16 points, and double-sided surfaces have texels on both sides.
     // 10: cssm's nodes send light by their lobes, so nodes that face away in the mean gather too.
-    static constexpr int kVersion = 10;
+    // 11: isr low to ultra make imperfect shadow maps.
+    static constexpr int kVersion = 11;
 
     DeviceCosts() = default;
     explicit DeviceCosts(std::string renderer) : renderer_(std::move(renderer)) {}

@@ -136,10 +136,12 @@ ErrorPrediction predict_error(const SceneAnalysis& analysis, const std::string& 
                                            100.0 * analysis.thin_walls.presets.at(preset).leaking_area, preset,
                                            analysis.thin_walls.presets.at(preset).voxel_size);
     }
-    if (method == "isr" && analysis.visibility.isr_unsuitable()) {
-        prediction.ruled_out = fmt::format("{:.0f}% of the indirect light is occluded, which isr's presets do not model "
-                                           "(its ism_size knob adds imperfect shadow maps, not planned)",
-                                           100.0 * analysis.visibility.occluded_fraction);
+    // isr with imperfect shadow maps (its presets from low up) models the occlusion; draft does not.
+    if (method == "isr" && analysis.visibility.isr_unsuitable() &&
+        methods::knob_or(methods::MethodRegistry::builtin().resolve(method, preset, knobs), "ism_size", 0.0) == 0.0) {
+        prediction.ruled_out = fmt::format("{:.0f}% of the indirect light is occluded, which isr {} does not model "
+                                           "(no imperfect shadow maps: ism_size 0)",
+                                           100.0 * analysis.visibility.occluded_fraction, preset);
     }
     return prediction;
 }

@@ -469,6 +469,16 @@ std::vector<Candidate> candidates(const PlanningInputs& inputs, std::vector<std:
             Candidate candidate{method, preset, knobs, 0.0, error.rel_mse + resample_error, {}, error.basis, scale};
             PlanningInputs scaled = inputs;
             std::tie(scaled.width, scaled.height) = scaled_size(inputs.width, inputs.height, scale);
+            if (inputs.memory && method != "reference") {
+                if (const auto refused = inputs.memory(method, preset, knobs, scaled.width, scaled.height)) {
+                    const std::string reason = fmt::format("{} {} at {}x{}: {}", method, preset, scaled.width,
+                                                           scaled.height, *refused);
+                    if (ruled_out && std::find(ruled_out->begin(), ruled_out->end(), reason) == ruled_out->end()) {
+                        ruled_out->push_back(reason);
+                    }
+                    continue;
+                }
+            }
             if (scale != 1.0) {
                 candidate.error_basis +=
                     fmt::format("; upsampling adds {:.3f} (this scene's {} draft frames)", resample_error, method);

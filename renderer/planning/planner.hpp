@@ -127,6 +127,11 @@ struct PlanningInputs {
     using ChangeOf = std::function<FrameChange(const std::string& method, const std::string& preset,
                                                const methods::KnobValues& knobs, int width, int height)>;
     ChangeOf change = {};
+    // Why a GPU plan's frame, rendered at `width` x `height`, would be refused for memory now
+    // (Renderer::memory_refusal); unset, or nullopt: it fits. A refused plan is ruled out, with the reason.
+    using MemoryRefusal = std::function<std::optional<std::string>(
+        const std::string& method, const std::string& preset, const methods::KnobValues& knobs, int width, int height)>;
+    MemoryRefusal memory = {};
     // How bounce counts the scene has not measured are priced: by the most the bench measured them
     // cost (bounce_cost_bound, the planner's predicted_ms), or by what they typically cost
     // (typical_bounce_cost, Candidate::expected_ms).

@@ -159,6 +159,25 @@ TEST(MemoryBudget, ImperfectShadowMapsPastTheBudgetAreRefusedWithASizeThatFits) 
     EXPECT_LE(renderer.resident_bytes(), 256ull << 20);
 }
 
+// What the planner asks before it offers a plan (Renderer::memory_refusal) is what render() would
+// say. Under a budget of 1.25 times what isr draft holds, isr low's imperfect shadow maps (64^2 texels
+// on each of a point light's six views' 32^2 patches: 229 MiB) do not fit, and draft does.
+TEST(MemoryBudget, TheRefusalThePlannerReadsIsTheOneRenderWouldThrow) {
+    Renderer& renderer = shared_renderer();
+    const scene::Scene scene = cornell_with_point_lights(1);
+    auto resources = renderer.upload(scene);
+    const RenderRequest draft = method_request("isr", "draft", 32), low = method_request("isr", "low", 32);
+    renderer.render(*resources, draft);
+    const BudgetScope budget(renderer, renderer.resident_bytes() / 4 * 5);
+    EXPECT_FALSE(renderer.memory_refusal(*resources, draft).has_value());
+    EXPECT_FALSE(renderer.memory_refusal(*resources, method_request("reference", "draft", 32)).has_value());
+    const std::optional<std::string> refused = renderer.memory_refusal(*resources, low);
+    ASSERT_TRUE(refused.has_value());
+    std::printf("isr low under %.0f MB: %s\n", static_cast<double>(renderer.memory_budget().bytes) / 1e6, refused->c_str());
+    EXPECT_NE(refused->find("'imperfect_shadow_maps'"), std::string::npos) << *refused;
+    EXPECT_EQ(refusal(renderer, *resources, low), *refused);
+}
+
 TEST(MemoryBudget, WhatOtherScenesHoldCountsAndAFrameSizeIsAdvised) {
     Renderer& renderer = shared_renderer();
     const scene::Scene first_scene = scene::make_cornell_box(), second_scene = scene::make_cornell_box();

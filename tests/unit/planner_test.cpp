@@ -149,7 +149,9 @@ TEST(Planner, ATargetErrorRacesExpectedPricesAmongBoundsWithinTheSlack) {
         EXPECT_LE(expected(chosen.chosen), kPriceTie * least_expected);
         for (const Candidate& c : priced) {
             if (c.predicted_error > target || c.predicted_ms > kTargetTimeSlack * least_bound) continue;
-            if (expected(c) <= kPriceTie * least_expected) EXPECT_GE(c.predicted_error, chosen.chosen.predicted_error) << c.method;
+            if (expected(c) <= kPriceTie * least_expected) {
+                EXPECT_GE(c.predicted_error, chosen.chosen.predicted_error) << c.method;
+            }
         }
         if (chosen.chosen.predicted_ms > least_bound) ++raced;
     }
@@ -247,7 +249,10 @@ TEST(ErrorModel, LeakingVctAndOccludedIsrAreRuledOutWithTheirReason) {
     analysis.visibility.occluded_fraction = 0.8;
     EXPECT_TRUE(predict_error(analysis, "vct", "draft", {}).ruled_out.has_value());
     EXPECT_FALSE(predict_error(analysis, "vct", "low", {}).ruled_out.has_value());
-    EXPECT_TRUE(predict_error(analysis, "isr", "medium", {}).ruled_out.has_value());
+    // isr draft gathers without visibility; from low up its presets make imperfect shadow maps.
+    EXPECT_TRUE(predict_error(analysis, "isr", "draft", {}).ruled_out.has_value());
+    EXPECT_FALSE(predict_error(analysis, "isr", "medium", {}).ruled_out.has_value());
+    EXPECT_TRUE(predict_error(analysis, "isr", "medium", {{"ism_size", 0}}).ruled_out.has_value());
 
     DeviceCosts device("test");
     for (const char* method : {"direct", "vct", "isr", "cssm"}) {
@@ -256,10 +261,41 @@ TEST(ErrorModel, LeakingVctAndOccludedIsrAreRuledOutWithTheirReason) {
     std::vector<std::string> ruled_out;
     const auto all = candidates({analysis, device, nullptr, 64, 64, std::nullopt}, &ruled_out);
     for (const Candidate& c : all) {
-        EXPECT_FALSE(c.method == "isr" || (c.method == "vct" && c.preset == "draft")) << c.method << " " << c.preset;
+        EXPECT_FALSE((c.method == "isr" || c.method == "vct") && c.preset == "draft") << c.method << " " << c.preset;
     }
-    EXPECT_EQ(ruled_out.size(), 6u);  // vct draft and isr's five presets
+    EXPECT_EQ(ruled_out.size(), 2u);  // vct draft and isr draft
     EXPECT_NE(ruled_out.front().find("thinner than vct draft"), std::string::npos) << ruled_out.front();
+}
+
+// A plan the memory budget would refuse (PlanningInputs::memory, Renderer::memory_refusal in the
+// daemon) is ruled out with the refusal, at the sizes refused alone: a smaller frame that fits stays.
+TEST(Planner, PlansTheMemoryBudgetWouldRefuseAreRuledOut) {
+    const SceneAnalysis analysis = made_up_analysis();
+    DeviceCosts device("test");
+    for (const char* method : {"direct", "vct", "isr", "cssm"}) {
+        for (const char* preset : {"draft", "low", "medium", "high", "ultra"}) device.set(method, preset, {1.0, 0.0});
+    }
+    PlanningInputs inputs{analysis, device, nullptr, 64, 64, std::nullopt};
+    inputs.resample_errors = {{"isr", {{0.5, 0.01}}}};
+    inputs.memory = [](const std::string& method, const std::string& preset, const methods::KnobValues&, int width,
+                       int) -> std::optional<std::string> {
+        if (method == "isr" && preset != "draft" && width > 32) return "imperfect_shadow_maps past the budget";
+        return std::nullopt;
+    };
+    std::vector<std::string> ruled_out;
+    const auto all = candidates(inputs, &ruled_out);
+    int isr_full = 0, isr_half = 0;
+    for (const Candidate& c : all) {
+        if (c.method != "isr") continue;
+        EXPECT_TRUE(c.preset == "draft" || c.scale != 1.0) << c.preset;
+        ++(c.scale == 1.0 ? isr_full : isr_half);
+    }
+    EXPECT_EQ(isr_full, 1);  // draft
+    EXPECT_EQ(isr_half, 5);  // every preset at half size
+    EXPECT_EQ(ruled_out.size(), 4u);  // low to ultra at 64x64, once each
+    for (const std::string& reason : ruled_out) {
+        EXPECT_NE(reason.find("at 64x64: imperfect_shadow_maps past the budget"), std::string::npos) << reason;
+    }
 }
 
 // Where a scene needs more than one bounce, vct is offered with its second (the leaves gather the

@@ -237,11 +237,11 @@ MethodInfo method_info() {
         {"ism_levels_below_top", 0, 3, true,
          "indirect visibility: maps on the VPL patches this many levels below the 16^2 top patches per view (each "
          "level 4x the maps)"}};
-    auto preset = [](double rsm, double levels, double depth, double normal, double tau, double max_depth) {
+    auto preset = [](double rsm, double levels, double depth, double normal, double tau, double max_depth, double ism) {
         return KnobValues{{"rsm_size", rsm},     {"levels", levels}, {"depth_threshold", depth},
                           {"normal_threshold", normal}, {"mode", ISR_MODE_HIERARCHICAL}, {"tau", tau},
                           {"max_depth", max_depth}, {"shadow_map_size", 2048}, {"shadow_cascades", kPresetShadowCascades},
-                          {"ism_size", 0}, {"ism_points", 1024}, {"ism_levels_below_top", 1}};
+                          {"ism_size", ism}, {"ism_points", ism > 0 ? 4096 : 1024}, {"ism_levels_below_top", 1}};
     };
     // A normal span of 0.2 at every preset to high: where a patch that gathers once spans normals
     // more apart (0.3 to 0.5 before), the furnished room's draft to medium erred 0.14 to 0.30 against
@@ -249,11 +249,19 @@ MethodInfo method_info() {
     // computes; at 0.2 they err 0.029 to 0.035 and 0.008 to 0.009, at the same time there and at
     // 1.0 to 1.25 times it elsewhere (bench/quality --corpus --method isr --unoccluded). The VPL
     // tree's use of the threshold changes none of that: the eye-space patches carry it.
-    info.presets = {{"draft", preset(64, 5, 0.1, 0.2, 0.05, 2)},
-                    {"low", preset(128, 5, 0.05, 0.2, 0.02, 3)},
-                    {"medium", preset(128, 4, 0.03, 0.2, 0.01, 3)},
-                    {"high", preset(256, 4, 0.02, 0.2, 0.005, 4)},
-                    {"ultra", preset(256, 3, 0.01, 0.1, 0.002, 4)}};
+    // Draft is the paper's method, without indirect visibility; from low up, imperfect shadow maps
+    // of 64^2 texels and 4096 points. Nearly all of isr's error is the visibility it leaves out
+    // (its presets erred alike, draft to ultra): with the maps, low's one-bounce relMSE fell 1.04
+    // to 1.6 times on the corpus (the street 0.0166 to 0.0103, the furnished room 0.033 to 0.023;
+    // the glossy gallery's rose 4%) and 2.4 to 25 times on the Cornell variants (the doorway 0.78
+    // to 0.031, the box 0.117 to 0.023), at 1.75 to 2.1 times the time; 32^2 maps of 1024 points
+    // did better on the two plain boxes (0.018) and worse everywhere else (docs/benchmarks.md,
+    // "isr's presets with visibility").
+    info.presets = {{"draft", preset(64, 5, 0.1, 0.2, 0.05, 2, 0)},
+                    {"low", preset(128, 5, 0.05, 0.2, 0.02, 3, 64)},
+                    {"medium", preset(128, 4, 0.03, 0.2, 0.01, 3, 64)},
+                    {"high", preset(256, 4, 0.02, 0.2, 0.005, 4, 64)},
+                    {"ultra", preset(256, 3, 0.01, 0.1, 0.002, 4, 64)}};
     info.create = [] { return std::make_unique<IsrMethod>(); };
     info.estimate = [](const EstimateInput& input) {
         MemoryEstimate estimate = direct_light_estimate(input);
