@@ -96,6 +96,12 @@ RenderRequest direct_request(int size, int shadow_map_size = 2048) {
     return linear_request("direct", "medium", {{"shadow_map_size", static_cast<double>(shadow_map_size)}}, size);
 }
 
+// isr medium as the paper has it, without indirect visibility (the preset makes imperfect shadow maps).
+RenderRequest paper_request(methods::KnobValues knobs, int size) {
+    knobs.try_emplace("ism_size", 0.0);
+    return linear_request("isr", "medium", std::move(knobs), size);
+}
+
 struct IsrMode {
     std::string label, csv_name;
     methods::KnobValues knobs;  // over preset medium
@@ -134,7 +140,7 @@ std::string isr_stages_markdown(Renderer& renderer, const scene::Scene& scene, c
     };
     std::vector<Column> columns;
     for (const IsrMode& mode : isr_modes()) {
-        const RenderRequest request = linear_request("isr", "medium", mode.knobs, isr.stage_size);
+        const RenderRequest request = paper_request(mode.knobs, isr.stage_size);
         {
             auto warmup = renderer.upload(scene);  // compiles the shaders: the cold frames exclude that
             renderer.render(*warmup, request);
@@ -253,7 +259,7 @@ std::string isr_fig9_markdown(Renderer& renderer, const scene::Scene& scene, con
         return k;
     };
     const RenderResult baseline =
-        renderer.render(*resources, linear_request("isr", "medium", knobs({{"levels", 1}, {"normal_threshold", 0.3}}), size));
+        renderer.render(*resources, paper_request(knobs({{"levels", 1}, {"normal_threshold", 0.3}}), size));
     const image::Frame direct = renderer.render(*resources, direct_request(size)).frame;
     const double indirect_mean = mean_rgb(difference(baseline.frame, direct));
     const double pixels = static_cast<double>(size) * size;
@@ -307,7 +313,7 @@ std::string isr_fig13_markdown(Renderer& renderer, const scene::Scene& scene, co
         k["max_depth"] = max_depth;
         return k;
     };
-    const RenderResult baseline = renderer.render(*resources, linear_request("isr", "medium", knobs(0, 11), size));
+    const RenderResult baseline = renderer.render(*resources, paper_request(knobs(0, 11), size));
     const image::Frame direct = renderer.render(*resources, direct_request(size)).frame;
     // The 16^2 top patches sit top_level levels above the texels: max_depth top_level reaches the texels.
     int top_level = 0;
@@ -330,7 +336,7 @@ std::string isr_fig13_markdown(Renderer& renderer, const scene::Scene& scene, co
     for (int max_depth = 1; max_depth <= std::max(1, top_level); ++max_depth) {
         for (const double tau : taus) {
             // tau 0 down to the texels is the baseline's very request: not rendered again.
-            const RenderRequest request = linear_request("isr", "medium", knobs(tau, max_depth), size);
+            const RenderRequest request = paper_request(knobs(tau, max_depth), size);
             const RenderResult test = tau == 0 && max_depth >= top_level ? baseline : renderer.render(*resources, request);
             const Comparison c = compare_to(test.frame, baseline.frame, indirect_mean);
             const double finest = statistic(test, "vpl_finest_patch_texels");
@@ -410,7 +416,7 @@ std::string isr_temporal_markdown(Renderer& renderer, const scene::Scene& origin
     for (const IsrMode& mode : isr_modes()) series.push_back({mode.label, mode.csv_name, mode.knobs, {}});
     for (Series& s : series) {
         s.knobs["shadow_map_size"] = isr.temporal_shadow_map_size;
-        const auto frames = render_series(linear_request("isr", "medium", s.knobs, size));
+        const auto frames = render_series(paper_request(s.knobs, size));
         for (std::size_t f = 0; f < frames.size(); ++f) s.indirect.push_back(difference(frames[f].frame, direct[f]));
         s.vpls_per_fragment = statistic(frames.back(), "vpls_per_fragment_mean");
         s.fragments = statistic(frames.back(), "multires_fragments");
@@ -485,7 +491,7 @@ std::string isr_markdown(Renderer& renderer, const Options& options, const std::
     const scene::Scene scene = scene::make_cornell_box();
     fs::create_directories(options.out);
     const auto start = Clock::now();
-    const methods::KnobValues medium = methods::MethodRegistry::builtin().resolve("isr", "medium", {});
+    const methods::KnobValues medium = methods::MethodRegistry::builtin().resolve("isr", "medium", {{"ism_size", 0.0}});
     std::string md = std::string(bench::kIsrBegin) + "\n\n## isr in detail (bench/isr)\n\n";
     md += fmt::format(
         "Hierarchical image-space radiosity (isr-nichols-2009) on the built-in Cornell box (one point light, so six "
@@ -512,7 +518,8 @@ std::string isr_markdown(Renderer& renderer, const Options& options, const std::
     };
 
     section("isr per stage (paper Table 1 shape)", fmt::format(
-        "{0}x{0} frames, preset `medium` (RSM {1:.0f}² per light view, {2:.0f} eye-space levels, depth threshold {3}, "
+        "{0}x{0} frames, preset `medium` without its imperfect shadow maps, as the paper has it (`ism_size` 0; "
+        "RSM {1:.0f}² per light view, {2:.0f} eye-space levels, depth threshold {3}, "
         "normal threshold {4}, tau {5}, max_depth {6:.0f}, shadow maps {7:.0f}²) in three modes; naive takes "
         "max_depth 0, i.e. one point sample from each of the 16² = 256 top patches of each light view — the paper's "
         "256 VPLs, but per light view (its cache holds the samples that carry flux). GPU ms of a **cold** frame: "
