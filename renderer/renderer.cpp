@@ -280,11 +280,12 @@ void Renderer::check_frame_memory(const SceneResources& resources, const RenderR
                          resident_bytes() - replaced, budget_.bytes, budget_.source});
 }
 
-std::optional<std::string> Renderer::memory_refusal(SceneResources& resources, const RenderRequest& request) const {
-    FramePlan plan = plan_frame(request);
+std::optional<std::string> Renderer::memory_refusal(const SceneResources& resources, const RenderRequest& request) const {
+    const FramePlan plan = plan_frame(request);
     if (plan.site != FrameSite::gpu) return std::nullopt;
     const auto& info = methods::MethodRegistry::builtin().find(request.method);
-    resolve_scene_knobs(resources, request, info, plan.knobs);
+    // The knobs unresolved by the scene's analysis: that resolves `bounces` alone, which sizes no
+    // structure, and asking for the analysis here could make it in the middle of a plan.
     try {
         check_frame_memory(resources, request, info, plan.knobs);
     } catch (const ResourceExhausted& refused) {

@@ -209,7 +209,7 @@ public:
     std::uint64_t resident_bytes() const;
     // Why a frame of `request` would now be refused for memory (the check render() makes first), or
     // nullopt where it fits or is not a GPU frame: the planner rules such plans out.
-    std::optional<std::string> memory_refusal(SceneResources& resources, const RenderRequest& request) const;
+    std::optional<std::string> memory_refusal(const SceneResources& resources, const RenderRequest& request) const;
 
     static constexpr int kMaxDimension = 16384;
 

@@ -539,6 +539,9 @@ void RequestHandlers::try_checked_plans(const std::shared_ptr<Request>& request,
         for (RenderRequest frame : order.checks) {
             FrameClock clock{request->received, Clock::now(), {}, {}};
             if (auto camera = view_camera(*entry.scene, order)) frame.camera = std::move(camera);
+            // Planned within the memory budget, but other scenes may have grown since: such a check is
+            // skipped, as one whose structures are not built, and the reference stands.
+            if (renderer.memory_refusal(*entry.resources, frame)) continue;
             if (renderer.pending_work(*entry.resources, frame)) continue;
             if (analysis && planning::ruled_out_by_measurements(*entry.resources->measurements, *analysis, frame.method,
                                                                 frame.preset, frame.knobs, order.checks_target)) {

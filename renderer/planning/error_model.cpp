@@ -24,10 +24,22 @@ namespace {
 //     medium measured 0.18 of its prior, and low, promised as much, measures 0.062 where 0.011 was
 //     predicted: its coarser atlas misses the sun's patches);
 //   - else the prior.
+// `occluded`: the analysis finds most of the scene's indirect light occluded, where isr's priors are
+// those of the Cornell variants (OwnErrorPriors::isr_occluded_largest).
 std::pair<double, std::string> own_error(const std::string& method, const std::string& preset, int bounces,
-                                         const SceneMeasurements* measured, const OwnErrorPriors& priors) {
-    const double prior = priors.largest_of(method, preset, bounces).value_or(0.0);
-    if (!measured) return {prior, "on the bench scenes"};
+                                         const SceneMeasurements* measured, const OwnErrorPriors& priors, bool occluded) {
+    const bool occluded_isr = occluded && method == "isr";
+    const auto prior_of = [&](const std::string& name) {
+        if (occluded_isr) {
+            if (const auto it = priors.isr_occluded_largest.find(name); it != priors.isr_occluded_largest.end()) {
+                return it->second;
+            }
+        }
+        return priors.largest_of(method, name, bounces).value_or(0.0);
+    };
+    const std::string bench = occluded_isr ? "on the bench's occluded Cornell variants" : "on the bench scenes";
+    const double prior = prior_of(preset);
+    if (!measured) return {prior, bench};
     if (const auto own = measured->own_error(method, preset, bounces)) {
         return {own->rel_mse, fmt::format("as {} comparison{} with this scene's reference frames measured{}", own->frames,
                                           own->frames == 1 ? "" : "s", own->exact ? "" : " at other bounce counts")};
@@ -39,18 +51,18 @@ std::pair<double, std::string> own_error(const std::string& method, const std::s
     std::vector<double> ratios;
     for (const auto& entry : measured_presets) {
         if (rank(entry.first) < rank(preset) && (!cheaper || rank(entry.first) > rank(cheaper->first))) cheaper = &entry;
-        const double other_prior = priors.largest_of(method, entry.first, bounces).value_or(0.0);
+        const double other_prior = prior_of(entry.first);
         if (rank(entry.first) > rank(preset) && other_prior > 0.0) ratios.push_back(entry.second / other_prior);
     }
     if (cheaper) {
         return {cheaper->second, fmt::format("as this scene's {} {} measured (a costlier preset is not assumed better)",
                                              method, cheaper->first)};
     }
-    if (ratios.empty() || prior <= 0.0) return {prior, "on the bench scenes"};
+    if (ratios.empty() || prior <= 0.0) return {prior, bench};
     const double ratio = median(std::move(ratios));
-    if (ratio <= 1.0) return {prior, "on the bench scenes"};
-    return {prior * ratio, fmt::format("({:.3f} on the bench scenes x {:.2f}, as this scene's costlier {} presets measured)",
-                                       prior, ratio, method)};
+    if (ratio <= 1.0) return {prior, bench};
+    return {prior * ratio, fmt::format("({:.3f} {} x {:.2f}, as this scene's costlier {} presets measured)", prior, bench,
+                                       ratio, method)};
 }
 
 }  // namespace
@@ -127,7 +139,8 @@ ErrorPrediction predict_error(const SceneAnalysis& analysis, const std::string& 
                                            : ")";
         return prediction;
     }
-    const auto [own, own_basis] = own_error(method, preset, bounces, measured, priors);
+    const auto [own, own_basis] =
+        own_error(method, preset, bounces, measured, priors, analysis.visibility.isr_unsuitable());
     prediction.rel_mse = stopped + own;
     prediction.basis = fmt::format("{} bounce{} lack {:.3f}; {} {} adds {:.3f} {}", bounces, bounces == 1 ? "" : "s",
                                    stopped, method, preset, own, own_basis);

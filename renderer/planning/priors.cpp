@@ -75,6 +75,9 @@ const OwnErrorPriors& OwnErrorPriors::bench() {
         };
         priors.vct_second_typical = {
             {"draft", 0.0384}, {"low", 0.0729}, {"medium", 0.1017}, {"high", 0.0811}, {"ultra", 0.0457}};
+        // isr where most indirect light is occluded: the Cornell variants' largest (the thin wall's), from
+        // low up (draft, without maps, is ruled out there).
+        priors.isr_occluded_largest = {{"low", 0.1055}, {"medium", 0.1076}, {"high", 0.1081}, {"ultra", 0.1149}};
         // clang-format on
         return priors;
     }();

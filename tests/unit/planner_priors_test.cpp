@@ -64,6 +64,23 @@ TEST(PlannerPriors, VctsSecondBounceIsItsTwoBounceCorpusTable) {
     }
 }
 
+// Where most of a scene's indirect light is occluded, isr's presets with maps are promised the largest
+// error the Cornell variants measured of them (no corpus scene is that occluded), and the error model
+// says so.
+TEST(PlannerPriors, IsrWhereMostLightIsOccludedIsPromisedTheCornellVariantsLargest) {
+    const bench::CorpusErrors cornell = bench::read_corpus_errors(BOUNCE_SOURCE_DIR "/bench/results/quality.csv");
+    const planning::OwnErrorPriors& committed = planning::OwnErrorPriors::bench();
+    EXPECT_EQ(committed.isr_occluded_largest.size(), 4u);
+    for (const std::string preset : {"low", "medium", "high", "ultra"}) {
+        SCOPED_TRACE(preset);
+        const auto& by_scene = cornell.at({"isr", preset});
+        EXPECT_EQ(by_scene.size(), 5u);
+        double largest = 0.0;
+        for (const auto& [scene, error] : by_scene) largest = std::max(largest, error);
+        EXPECT_NEAR(committed.isr_occluded_largest.at(preset), largest, kRounding);
+    }
+}
+
 // Held out, a scene's own figure counts neither in the largest nor in the median: each prior is the
 // other four scenes' (their largest where one does not leak, the mean of their middle two).
 TEST(PlannerPriors, AHeldOutScenesPriorsAreTheOtherScenes) {

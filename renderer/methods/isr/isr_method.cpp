@@ -255,8 +255,8 @@ MethodInfo method_info() {
     // to 1.6 times on the corpus (the street 0.0166 to 0.0103, the furnished room 0.033 to 0.023;
     // the glossy gallery's rose 4%) and 2.4 to 25 times on the Cornell variants (the doorway 0.78
     // to 0.031, the box 0.117 to 0.023), at 1.75 to 2.1 times the time; 32^2 maps of 1024 points
-    // did better on the two plain boxes (0.018) and worse everywhere else (docs/benchmarks.md,
-    // "isr's presets with visibility").
+    // did better on the three boxes with no wall inside (0.018 on the plain one) and worse on the
+    // other seven scenes (docs/benchmarks.md, "isr's presets with visibility").
     info.presets = {{"draft", preset(64, 5, 0.1, 0.2, 0.05, 2, 0)},
                     {"low", preset(128, 5, 0.05, 0.2, 0.02, 3, 64)},
                     {"medium", preset(128, 4, 0.03, 0.2, 0.01, 3, 64)},
