@@ -1,7 +1,7 @@
 // bench/cssm_indirect: where cssm's one-bounce indirect light departs from the reference's, on a
-// scene of the bench corpus or a Cornell variant of bench/quality. The indirect part alone (cssm less `direct high`, against the
-// pixel-centre reference at 1 bounce less at 0), since whole frames hide it behind the shared direct
-// light. Prints, per preset:
+// scene of the bench corpus or a Cornell variant of bench/quality. The indirect part alone (cssm
+// less `direct high`, against the pixel-centre reference at 1 bounce less at 0), since whole frames
+// hide it behind the shared direct light. Prints, per preset:
 // - the indirect light over the reference's, on the pixels whose direct light (the reference's at 0
 //   bounces) has a luminance over 0.5 ("sunlit") and on the rest;
 // - with --region, the same over a rectangle of pixels that `direct` leaves dark;
@@ -153,7 +153,8 @@ int main(int argc, char** argv) {
             }
         }
         if (scene.objects.empty()) {
-            std::fprintf(stderr, "bounce_bench_cssm_indirect: no corpus or Cornell scene '%s'\n", options.scene.c_str());
+            std::fprintf(stderr, "bounce_bench_cssm_indirect: no corpus or Cornell scene '%s'\n",
+                         options.scene.c_str());
             return 2;
         }
         if (!options.only.empty()) {

@@ -22,12 +22,18 @@ bool faster(const Candidate& a, const Candidate& b) {
     return a.predicted_ms != b.predicted_ms ? a.predicted_ms < b.predicted_ms : a.predicted_error < b.predicted_error;
 }
 double expected_ms(const Candidate& candidate) { return candidate.expected_ms.value_or(candidate.predicted_ms); }
-bool faster_expected(const Candidate& a, const Candidate& b) {
-    return expected_ms(a) != expected_ms(b) ? expected_ms(a) < expected_ms(b) : faster(a, b);
-}
 bool more_accurate(const Candidate& a, const Candidate& b) {
     return a.predicted_error != b.predicted_error ? a.predicted_error < b.predicted_error : a.predicted_ms < b.predicted_ms;
 }
+
+namespace {
+
+// By expected price, then as faster(): the race of a target error alone.
+bool faster_expected(const Candidate& a, const Candidate& b) {
+    return expected_ms(a) != expected_ms(b) ? expected_ms(a) < expected_ms(b) : faster(a, b);
+}
+
+}  // namespace
 
 Plan choose(const std::vector<Candidate>& candidates, const Budget& budget) {
     if (candidates.empty()) throw InputError("no plan to choose from");

@@ -13,8 +13,6 @@ std::string describe(const Candidate& candidate);
 bool faster(const Candidate& a, const Candidate& b);
 // Its typical price where its bound is not (Candidate::expected_ms), else the bound.
 double expected_ms(const Candidate& candidate);
-// By expected price, then as faster().
-bool faster_expected(const Candidate& a, const Candidate& b);
 // By predicted error, then predicted time.
 bool more_accurate(const Candidate& a, const Candidate& b);
 
