@@ -239,7 +239,7 @@ std::string analysis_row(const bench::BenchScene& bench_scene) {
     return fmt::format("| {} | {} | {} / {} / {} | {} | {:.2f} | {} |\n", bench_scene.name, bench_scene.scene.triangle_count(),
                        bounces.bounces_for(0.1), bounces.bounces_for(0.05), bounces.bounces_for(0.02),
                        leaks.empty() ? "none" : leaks, analysis.visibility.occluded_fraction,
-                       analysis.visibility.isr_unsuitable() ? "no" : "yes");
+                       analysis.visibility.mostly_occluded() ? "no" : "yes");
 }
 
 }  // namespace

@@ -93,9 +93,10 @@ struct IndirectVisibility {
     // Of those, the share with a surface between them, each pair weighted by the light it could
     // exchange (the form factor's cos cos / d^2).
     double occluded_fraction = 0.0;
-    // isr gathers VPL light without occlusion: where most of it is occluded, its answer is wrong.
+    // Where most of it is occluded, a method that gathers indirect light without occlusion (isr
+    // without its imperfect shadow maps) is wrong (MethodInfo::unmodelled_indirect_visibility).
     static constexpr double kMostlyOccluded = 0.5;
-    bool isr_unsuitable() const { return pairs > 0 && occluded_fraction > kMostlyOccluded; }
+    bool mostly_occluded() const { return pairs > 0 && occluded_fraction > kMostlyOccluded; }
 };
 
 struct SceneAnalysis {

@@ -25,7 +25,7 @@ json analysis_json(const SceneAnalysis& analysis) {
             {"thin_walls", {{"thinnest_separator_m", thinnest < 0.0 ? json() : json(thinnest)}, {"presets", presets}}},
             {"indirect_visibility", {{"pairs", analysis.visibility.pairs},
                                      {"occluded_fraction", analysis.visibility.occluded_fraction},
-                                     {"isr_unsuitable", analysis.visibility.isr_unsuitable()}}},
+                                     {"isr_unsuitable", analysis.visibility.mostly_occluded()}}},
             {"analysis_ms", analysis.analysis_ms}};
 }
 

@@ -140,7 +140,7 @@ ErrorPrediction predict_error(const SceneAnalysis& analysis, const std::string& 
         return prediction;
     }
     const auto [own, own_basis] =
-        own_error(method, preset, bounces, measured, priors, analysis.visibility.isr_unsuitable());
+        own_error(method, preset, bounces, measured, priors, analysis.visibility.mostly_occluded());
     prediction.rel_mse = stopped + own;
     prediction.basis = fmt::format("{} bounce{} lack {:.3f}; {} {} adds {:.3f} {}", bounces, bounces == 1 ? "" : "s",
                                    stopped, method, preset, own, own_basis);
@@ -149,12 +149,16 @@ ErrorPrediction predict_error(const SceneAnalysis& analysis, const std::string& 
                                            100.0 * analysis.thin_walls.presets.at(preset).leaking_area, preset,
                                            analysis.thin_walls.presets.at(preset).voxel_size);
     }
-    // isr with imperfect shadow maps (its presets from low up) models the occlusion; draft does not.
-    if (method == "isr" && analysis.visibility.isr_unsuitable() &&
-        methods::knob_or(methods::MethodRegistry::builtin().resolve(method, preset, knobs), "ism_size", 0.0) == 0.0) {
-        prediction.ruled_out = fmt::format("{:.0f}% of the indirect light is occluded, which isr {} does not model "
-                                           "(no imperfect shadow maps: ism_size 0)",
-                                           100.0 * analysis.visibility.occluded_fraction, preset);
+    // A method that lets indirect light through what occludes it (isr without imperfect shadow maps)
+    // is ruled out where most of that light is occluded.
+    const methods::MethodInfo& info = methods::MethodRegistry::builtin().find(method);
+    if (analysis.visibility.mostly_occluded() && info.unmodelled_indirect_visibility) {
+        const std::string unmodelled =
+            info.unmodelled_indirect_visibility(methods::MethodRegistry::builtin().resolve(method, preset, knobs));
+        if (!unmodelled.empty()) {
+            prediction.ruled_out = fmt::format("{:.0f}% of the indirect light is occluded, which {} {} does not model ({})",
+                                               100.0 * analysis.visibility.occluded_fraction, method, preset, unmodelled);
+        }
     }
     return prediction;
 }

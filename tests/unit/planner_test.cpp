@@ -255,6 +255,15 @@ TEST(ErrorModel, LeakingVctAndOccludedIsrAreRuledOutWithTheirReason) {
     EXPECT_TRUE(predict_error(analysis, "isr", "draft", {}).ruled_out.has_value());
     EXPECT_FALSE(predict_error(analysis, "isr", "medium", {}).ruled_out.has_value());
     EXPECT_TRUE(predict_error(analysis, "isr", "medium", {{"ism_size", 0}}).ruled_out.has_value());
+    // The maps are made in hierarchical mode alone: medium's maps in basic mode model nothing.
+    const ErrorPrediction basic = predict_error(analysis, "isr", "medium", {{"mode", 1}});
+    ASSERT_TRUE(basic.ruled_out.has_value());
+    EXPECT_NE(basic.ruled_out->find("hierarchical mode only"), std::string::npos) << *basic.ruled_out;
+    EXPECT_NE(predict_error(analysis, "isr", "draft", {}).ruled_out->find("ism_size 0"), std::string::npos);
+    // Where little is occluded, nothing is ruled out for it.
+    analysis.visibility.occluded_fraction = 0.3;
+    EXPECT_FALSE(predict_error(analysis, "isr", "draft", {}).ruled_out.has_value());
+    analysis.visibility.occluded_fraction = 0.8;
     // Promised what the bench's occluded Cornell variants measured of it, not the open corpus' figure.
     const ErrorPrediction occluded_low = predict_error(analysis, "isr", "low", {});
     EXPECT_GE(occluded_low.rel_mse, planning::OwnErrorPriors::bench().isr_occluded_largest.at("low"));

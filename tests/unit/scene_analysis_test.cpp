@@ -149,8 +149,8 @@ TEST(SceneAnalysis, AShadedLampRulesOutUnoccludedGathering) {
     EXPECT_GT(shaded.pairs, 500);
     RecordProperty("open_occluded", std::to_string(open.occluded_fraction));
     RecordProperty("shaded_occluded", std::to_string(shaded.occluded_fraction));
-    EXPECT_FALSE(open.isr_unsuitable()) << open.occluded_fraction;
-    EXPECT_TRUE(shaded.isr_unsuitable()) << shaded.occluded_fraction;
+    EXPECT_FALSE(open.mostly_occluded()) << open.occluded_fraction;
+    EXPECT_TRUE(shaded.mostly_occluded()) << shaded.occluded_fraction;
 }
 
 TEST(SceneAnalysis, ASceneWithoutLightsOrSurfacesIsAnsweredNotCrashed) {

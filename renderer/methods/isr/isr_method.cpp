@@ -278,6 +278,14 @@ MethodInfo method_info() {
         }
         return estimate;
     };
+    info.unmodelled_indirect_visibility = [](const KnobValues& knobs) -> std::string {
+        if (knobs.at("ism_size") == 0.0) return "no imperfect shadow maps: ism_size 0";
+        if (knobs.at("mode") != ISR_MODE_HIERARCHICAL) {
+            return fmt::format("imperfect shadow maps are made in hierarchical mode only (mode {}), not mode {}",
+                               ISR_MODE_HIERARCHICAL, knobs.at("mode"));
+        }
+        return {};
+    };
     return info;
 }
 
