@@ -8,8 +8,12 @@
 // minute on llvmpipe), and the made-up lines decide what is cheapest.
 #include "daemon_support.hpp"
 #include "renderer/image/metrics.hpp"
+#include "renderer/memory_admission.hpp"
+#include "renderer/methods/registry.hpp"
 #include "renderer/planning/costs.hpp"
+#include "renderer/scene/builtin.hpp"
 
+#include <fmt/format.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -22,13 +26,14 @@ namespace {
 
 struct BudgetDaemon {
     std::filesystem::path cache = std::filesystem::temp_directory_path() / ("bounce-budget-" + std::to_string(::getpid()));
-    DaemonProcess daemon{{"--cache-dir", cache.string()}};
-    Client client{daemon.endpoint()};
+    DaemonProcess daemon;
+    Client client;
 
     // `per_pixel`: frames cost in proportion to their pixels (direct 23 ms at 48x48), so that a
     // smaller frame is cheaper; else every frame of a method costs the same. `cssm_high_ms`: cssm
-    // high's.
-    explicit BudgetDaemon(bool per_pixel = false, double cssm_high_ms = 100.0) {
+    // high's. `flags`: the daemon's others.
+    explicit BudgetDaemon(bool per_pixel = false, double cssm_high_ms = 100.0, std::vector<std::string> flags = {})
+        : daemon(with_cache_dir(std::move(flags))), client(daemon.endpoint()) {
         planning::DeviceCosts costs(client.hello()["renderer"].get<std::string>());
         const auto line = [&](double ms) {
             return per_pixel ? planning::CostLine{0.0, ms * 1e4} : planning::CostLine{ms, 0.0};
@@ -45,6 +50,11 @@ struct BudgetDaemon {
         costs.save(planning::DeviceCosts::cache_path(cache, costs.renderer()));
     }
     ~BudgetDaemon() { std::filesystem::remove_all(cache); }
+
+    std::vector<std::string> with_cache_dir(std::vector<std::string> flags) const {
+        flags.insert(flags.begin(), {"--cache-dir", cache.string()});
+        return flags;
+    }
 
     protocol::Message render(json body) {
         body["scene"] = "cornell";
@@ -426,6 +436,61 @@ TEST(Budget, AFrameFromAMovedCameraRedoesTheSunsViewCascades) {
     EXPECT_EQ(back.body["redid"], "view");
     const std::string back_why = back.body["plan"]["why"].get<std::string>();
     EXPECT_NE(back_why.find("as 1 such frame"), std::string::npos) << back_why;
+}
+
+// The daemon plans within its memory budget. Under one that holds isr draft's frame and half of
+// isr low's imperfect shadow maps, a budget for isr plans draft: every preset with maps is ruled
+// out at full and half size (the maps grow with the light's views, not the frame), with the
+// refusal a render of it gets, and the frame the plan sends renders.
+TEST(Budget, PlansTheMemoryBudgetWouldRefuseAreRuledOutWithTheRendersOwnRefusal) {
+    const scene::Scene cornell = scene::make_cornell_box();
+    const methods::MethodRegistry& registry = methods::MethodRegistry::builtin();
+    const auto estimate = [&](const std::string& preset) {
+        const methods::KnobValues knobs = registry.resolve("isr", preset, {});
+        return frame_estimate(registry.find("isr"), {cornell, knobs, 48, 48});
+    };
+    std::uint64_t draft_bytes = 0, maps_bytes = 0;
+    for (const auto& structure : estimate("draft")) draft_bytes += structure.bytes;
+    for (const auto& structure : estimate("low")) {
+        if (structure.name == "imperfect_shadow_maps") maps_bytes = structure.bytes;
+    }
+    // What else the daemon holds (the scene's buffers, the BRDF tables) must fit in the other half.
+    ASSERT_GT(maps_bytes, 2 * draft_bytes) << "the maps are not what decides this test";
+    const std::uint64_t budget = draft_bytes + maps_bytes / 2;
+    BudgetDaemon d(false, 100.0, {"--gpu-memory-budget", std::to_string(budget)});
+
+    const auto reply = d.render({{"method", "isr"}, {"budget", {{"max_error", 0.001}}}});
+    const json& plan = reply.body["plan"];
+    EXPECT_EQ(plan["method"], "isr");
+    EXPECT_EQ(plan["preset"], "draft") << plan.dump();
+    std::map<std::string, std::string> refused;  // "isr low at 48x48" -> the refusal
+    for (const auto& entry : plan["ruled_out"]) {
+        const std::string text = entry.get<std::string>();
+        const auto colon = text.find(": ");
+        ASSERT_NE(colon, std::string::npos) << text;
+        refused[text.substr(0, colon)] = text.substr(colon + 2);
+    }
+    for (const char* preset : {"low", "medium", "high", "ultra"}) {
+        const std::string key = fmt::format("isr {} at 48x48", preset);
+        ASSERT_EQ(refused.count(key), 1u) << key << " not ruled out: " << plan["ruled_out"].dump();
+        // Upsampled plans too: the maps do not shrink with the frame.
+        EXPECT_EQ(refused.count(fmt::format("isr {} at 24x24", preset)), 1u) << plan["ruled_out"].dump();
+    }
+    for (const auto& [what, refusal] : refused) {
+        EXPECT_EQ(what.rfind("isr draft", 0), std::string::npos) << what << ": " << refusal;
+        EXPECT_NE(refusal.find("'imperfect_shadow_maps'"), std::string::npos) << refusal;
+    }
+
+    // What the plan said of isr low is what rendering it says.
+    try {
+        d.render({{"method", "isr"}, {"preset", "low"}});
+        ADD_FAILURE() << "isr low rendered under a budget the plan said refuses it";
+    } catch (const ServerError& error) {
+        EXPECT_EQ(error.code(), ErrorCode::resource_exhausted) << error.what();
+        EXPECT_EQ(std::string(error.what()), refused["isr low at 48x48"]);
+    }
+    // And draft, the plan, still renders beside it.
+    EXPECT_EQ(d.render({{"method", "isr"}, {"preset", "draft"}}).body["method"], "isr");
 }
 
 TEST(Budget, MalformedBudgetsAreRefusedNamingTheField) {
