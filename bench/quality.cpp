@@ -442,8 +442,9 @@ int main(int argc, char** argv) {
             details += "\n## What each scene needs (scene analysis)\n\n`bounce describe --analyze` on each scene "
                        "(renderer/scene_analysis.hpp): the indirect bounces whose frame lacks at most 10%, 5% and 2% "
                        "of the light, the vct presets with walls thinner than a voxel between two spaces, and the "
-                       "share of light-to-receiver pairs that are occluded (isr ignores it).\n\n"
-                       "| scene | triangles | bounces for 10% / 5% / 2% | vct leaks at | occluded | isr suitable |\n"
+                       "share of light-to-receiver pairs that are occluded (isr without imperfect shadow maps "
+                       "ignores it).\n\n"
+                       "| scene | triangles | bounces for 10% / 5% / 2% | vct leaks at | occluded | isr draft suitable |\n"
                        "|---|---|---|---|---|---|\n" +
                        analysis_rows;
         }

@@ -1,6 +1,6 @@
 // What a scene needs of a method, measured on the scene itself: how much of its light arrives after
 // each bounce, where a wall is thinner than vct's voxels, and how often indirect light is occluded
-// on its way (which isr does not model). The planner reads these to model only what the scene
+// on its way (which isr without its imperfect shadow maps does not model). The planner reads these to model only what the scene
 // requires; `scene.describe` shows them.
 #pragma once
 

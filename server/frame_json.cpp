@@ -23,6 +23,8 @@ json analysis_json(const SceneAnalysis& analysis) {
                          {"noise_against_whole", energy.noise_against_whole},
                          {"sample_ns", energy.sample_ns}, {"tracer_build_ms", energy.tracer_build_ms}}},
             {"thin_walls", {{"thinnest_separator_m", thinnest < 0.0 ? json() : json(thinnest)}, {"presets", presets}}},
+            // `isr_unsuitable`: most of it occluded, where isr without its maps is not planned (the
+            // protocol's name, which clients read).
             {"indirect_visibility", {{"pairs", analysis.visibility.pairs},
                                      {"occluded_fraction", analysis.visibility.occluded_fraction},
                                      {"isr_unsuitable", analysis.visibility.mostly_occluded()}}},

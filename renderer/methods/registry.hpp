@@ -49,9 +49,10 @@ struct MethodInfo {
     // renderer refuses frames past its memory budget with it).
     std::function<MemoryEstimate(const EstimateInput&)> estimate;
     // Why a frame with these (resolved) knobs lets indirect light through what occludes it, or empty
-    // where the knobs model that visibility. The planner rules such frames out where most of a
-    // scene's indirect light is occluded. Null: every frame of the method models it, or the method
-    // computes no indirect light.
+    // where the knobs model that visibility: a short reason, which a plan's `ruled_out` gives in
+    // parentheses where most of a scene's indirect light is occluded
+    // (IndirectVisibility::mostly_occluded). Null: every frame of the method models it, or the
+    // method computes no indirect light.
     std::function<std::string(const KnobValues&)> unmodelled_indirect_visibility;
 };
 

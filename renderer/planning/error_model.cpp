@@ -151,13 +151,16 @@ ErrorPrediction predict_error(const SceneAnalysis& analysis, const std::string& 
     }
     // A method that lets indirect light through what occludes it (isr without imperfect shadow maps)
     // is ruled out where most of that light is occluded.
-    const methods::MethodInfo& info = methods::MethodRegistry::builtin().find(method);
-    if (analysis.visibility.mostly_occluded() && info.unmodelled_indirect_visibility) {
-        const std::string unmodelled =
-            info.unmodelled_indirect_visibility(methods::MethodRegistry::builtin().resolve(method, preset, knobs));
+    if (analysis.visibility.mostly_occluded()) {
+        const methods::MethodRegistry& registry = methods::MethodRegistry::builtin();
+        const methods::MethodInfo& info = registry.find(method);
+        const std::string unmodelled = info.unmodelled_indirect_visibility
+                                           ? info.unmodelled_indirect_visibility(registry.resolve(method, preset, knobs))
+                                           : std::string();
         if (!unmodelled.empty()) {
-            prediction.ruled_out = fmt::format("{:.0f}% of the indirect light is occluded, which {} {} does not model ({})",
-                                               100.0 * analysis.visibility.occluded_fraction, method, preset, unmodelled);
+            prediction.ruled_out =
+                fmt::format("{:.0f}% of the indirect light is occluded, which {} {} does not model ({})",
+                            100.0 * analysis.visibility.occluded_fraction, method, preset, unmodelled);
         }
     }
     return prediction;

@@ -11,8 +11,9 @@
 //     with their priors;
 //   - the reference's noise: the per-sample variance over the samples, the larger of the analysis'
 //     and what the scene's reference frames measured (SceneMeasurements::noise);
-//   - ruled out: vct where walls are thinner than its voxels (light leaks through them), isr where
-//     most indirect light is occluded (it gathers without visibility).
+//   - ruled out: vct where walls are thinner than its voxels (light leaks through them), and where
+//     most indirect light is occluded, a frame whose method gives a reason it lets that light through
+//     (MethodInfo::unmodelled_indirect_visibility: isr without imperfect shadow maps).
 //
 // The parts add: they are errors of different origin.
 #pragma once

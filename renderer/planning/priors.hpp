@@ -20,8 +20,9 @@ struct OwnErrorPriors {
     // leaves' gather adds its own error, so the one-bounce tables do not carry over.
     std::map<std::string, double> vct_second_largest, vct_second_typical;
     // isr's presets that make imperfect shadow maps, where most of a scene's indirect light is
-    // occluded (IndirectVisibility::mostly_occluded): no corpus scene is, and the largest over the Cornell
-    // variants (bench/results/quality.csv), with walls between light and receivers, is promised there.
+    // occluded (IndirectVisibility::mostly_occluded): no corpus scene is, and the largest over the
+    // Cornell variants (bench/results/quality.csv), with walls between light and receivers, is
+    // promised there.
     std::map<std::string, double> isr_occluded_largest;
 
     // The largest at `bounces` where measured apart at that count (vct's second bounce), else at the

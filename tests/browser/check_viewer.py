@@ -2,12 +2,16 @@
 """The viewer page in headless Chromium against a real daemon: the page opens the Cornell box's
 stream, and its screenshot shows the frame the daemon renders for the page's view.
 
+With --budget, the page's controls then plan the stream: method "auto" takes a budget (a frame
+time of 100 ms), the frames carry their plan and the panel shows it, and removing the budget keeps
+the plan's method and preset: the screenshot is then the daemon's frame of that method and preset.
+
 Drives Chromium over the DevTools protocol (a WebSocket; the few lines of client it needs are
 here, standard library only). The screenshot's image area is compared with a one-off render of the
 page's own camera over TCP: PNG frames, drawn 1:1, so the bound is exactness up to the browser's
 8-bit compositing (we allow 1 level in a channel, none in the mean beyond 0.05 levels).
 
-usage: check_viewer.py BOUNCED CHROMIUM
+usage: check_viewer.py BOUNCED CHROMIUM [--budget]
 """
 
 from __future__ import annotations
@@ -158,16 +162,108 @@ def decode_png(data: bytes) -> tuple[int, int, int, bytes]:
     return width, height, channels, bytes(out)
 
 
+def page_state(tools: DevTools) -> dict:
+    return json.loads(tools.evaluate("JSON.stringify(document.body.dataset)") or "{}")
+
+
+def wait_for_final(tools: DevTools, after_frames: int, seconds: float, what: str, plan: bool | None = None) -> dict:
+    """The page's state once it shows a final frame, past `after_frames` frames, with a plan (True),
+    without one (False) or either (None)."""
+    deadline = time.time() + seconds
+    state = {}
+    while time.time() < deadline:
+        state = page_state(tools)
+        if state.get("error"):
+            fail(f"{what}: the page shows an error: {state}")
+        has_plan = bool(state.get("planMethod"))
+        if (state.get("final") == "true" and int(state.get("frames", "0")) > after_frames
+                and (plan is None or has_plan == plan)):
+            return state
+        time.sleep(0.2)
+    fail(f"{what}: no final frame within {seconds} s: {state}")
+    return state
+
+
+def compare_with_daemon(tools: DevTools, tcp_port: int, work: str, name: str, **request) -> None:
+    """The screenshot of the page's image against the daemon's frame of the page's camera (PNG, 1:1)."""
+    camera = json.loads(tools.evaluate(
+        "JSON.stringify({position: cameraPosition(orbit), look_at: orbit.target, fov_deg: orbit.fov})"))
+    box = json.loads(tools.evaluate("JSON.stringify(document.getElementById('view').getBoundingClientRect())"))
+    if (box["x"], box["y"], box["width"], box["height"]) != (0, 0, SIZE, SIZE):
+        fail(f"the image is not at the page's corner at {SIZE}x{SIZE}: {box}")
+    shot = base64.b64decode(tools.call("Page.captureScreenshot", format="png",
+                                       clip={"x": 0, "y": 0, "width": SIZE, "height": SIZE, "scale": 1})["data"])
+    open(os.path.join(os.environ.get("BOUNCE_ARTIFACTS", work), name), "wb").write(shot)
+    width, height, channels, pixels = decode_png(shot)
+    if (width, height) != (SIZE, SIZE):
+        fail(f"screenshot is {width}x{height}")
+
+    with Client(f"127.0.0.1:{tcp_port}") as client:
+        frame, _ = client.render("cornell", width=SIZE, height=SIZE, format="png", camera=camera, **request)
+    fw, fh, fc, expected = decode_png(frame)
+    total, worst, off = 0, 0, 0
+    for i in range(SIZE * SIZE):
+        for c in range(3):
+            d = abs(pixels[i * channels + c] - expected[i * fc + c])
+            total += d
+            worst = max(worst, d)
+            off += d > 1
+    mean = total / (SIZE * SIZE * 3)
+    print(json.dumps({"camera": camera, "request": request, "mean_abs_diff": mean, "max_abs_diff": worst,
+                      "values_off_by_more_than_1": off}))
+    if mean > 0.05 or off > 0:
+        fail(f"the screenshot is not the daemon's frame {request}: mean |diff| {mean:.3f}, "
+             f"{off} values off by more than 1")
+
+
+def check_budget(tools: DevTools, tcp_port: int, work: str, methods: list[str]) -> None:
+    """Method auto through the page's controls, then the budget removed."""
+    frames = int(page_state(tools)["frames"])
+    tools.evaluate("(() => { const m = document.getElementById('method'); m.value = 'auto';"
+                   " m.dispatchEvent(new Event('change')); })()")
+    # The first budget calibrates the device's cost model (the daemon's smallest calibration).
+    state = wait_for_final(tools, frames, 240, "method auto", plan=True)
+    plan = json.loads(tools.evaluate("JSON.stringify(lastPlan)"))
+    controls = json.loads(tools.evaluate(
+        "JSON.stringify({kind: $('budget-kind').value, value: $('budget-value').value,"
+        " preset_disabled: $('preset').disabled, shown: $('st-plan').textContent, why: $('st-plan').title})"))
+    print(json.dumps({"plan": plan, "controls": controls}))
+    if controls["kind"] != "max_ms" or float(controls["value"]) != 100.0 or not controls["preset_disabled"]:
+        fail(f"method auto did not take a frame time of 100 ms with the preset left to the plan: {controls}")
+    if plan["method"] not in methods or state["planMethod"] != plan["method"]:
+        fail(f"the plan's method is not one the daemon offers: {plan}")
+    if plan["meets_budget"] and plan["predicted_ms"] > 100.0:
+        fail(f"a plan said to meet 100 ms predicts {plan['predicted_ms']} ms")
+    if not controls["shown"].startswith(f"{plan['method']} {plan['preset']}") or controls["why"] != plan["why"]:
+        fail(f"the panel does not show the plan: {controls}")
+
+    # Without the budget the stream keeps the plan's method and preset (its planned knobs go).
+    frames = int(state["frames"])
+    tools.evaluate("(() => { const k = document.getElementById('budget-kind'); k.value = '';"
+                   " k.dispatchEvent(new Event('change')); })()")
+    wait_for_final(tools, frames, 240, "budget removed", plan=False)
+    kept = json.loads(tools.evaluate("JSON.stringify({method: $('method').value, preset: $('preset').value,"
+                                     " preset_disabled: $('preset').disabled})"))
+    if kept != {"method": plan["method"], "preset": plan["preset"], "preset_disabled": False}:
+        fail(f"removing the budget did not keep the plan's method and preset: {kept}, plan {plan}")
+    compare_with_daemon(tools, tcp_port, work, "viewer-after-budget.png", method=plan["method"], preset=plan["preset"])
+
+
 def main() -> None:
-    if len(sys.argv) != 3:
+    if len(sys.argv) not in (3, 4) or (len(sys.argv) == 4 and sys.argv[3] != "--budget"):
         fail(__doc__)
     bounced, chromium = sys.argv[1], sys.argv[2]
+    budget = len(sys.argv) == 4
     if shutil.which(chromium) is None:
         fail(f"no {chromium}: scripts/install-deps installs Debian's chromium")
     work = tempfile.mkdtemp(prefix="bounce-viewer-")
     port_file = os.path.join(work, "ports")
-    daemon = subprocess.Popen([bounced, "--listen", "127.0.0.1:0", "--http-listen", "127.0.0.1:0", "--port-file", port_file,
-                               "--log-level", "warn"])
+    flags = ["--listen", "127.0.0.1:0", "--http-listen", "127.0.0.1:0", "--port-file", port_file, "--log-level", "warn"]
+    if budget:
+        # The cost model a budget needs, calibrated at its smallest and kept in this run's folder.
+        flags += ["--cache-dir", os.path.join(work, "cache"), "--calibration-size", "16",
+                  "--calibration-change-frames", "1"]
+    daemon = subprocess.Popen([bounced, *flags])
     browser = None
     try:
         tcp_port, http_port = (int(p) for p in wait_for_file(port_file, 2, 60))
@@ -181,43 +277,14 @@ def main() -> None:
         page = next(t for t in targets if t["type"] == "page")
         tools = DevTools(page["webSocketDebuggerUrl"])
 
-        deadline = time.time() + 120
-        state = {}
-        while time.time() < deadline:
-            state = tools.evaluate("JSON.stringify(document.body.dataset)") or "{}"
-            state = json.loads(state)
-            if state.get("final") == "true" or state.get("error"):
-                break
-            time.sleep(0.2)
-        if state.get("final") != "true":
-            fail(f"the page showed no final frame: {state}")
-        camera = json.loads(tools.evaluate(
-            "JSON.stringify({position: cameraPosition(orbit), look_at: orbit.target, fov_deg: orbit.fov})"))
-        box = tools.evaluate("JSON.stringify(document.getElementById('view').getBoundingClientRect())")
-        box = json.loads(box)
-        if (box["x"], box["y"], box["width"], box["height"]) != (0, 0, SIZE, SIZE):
-            fail(f"the image is not at the page's corner at {SIZE}x{SIZE}: {box}")
-        shot = base64.b64decode(tools.call("Page.captureScreenshot", format="png",
-                                           clip={"x": 0, "y": 0, "width": SIZE, "height": SIZE, "scale": 1})["data"])
-        open(os.path.join(os.environ.get("BOUNCE_ARTIFACTS", work), "viewer-screenshot.png"), "wb").write(shot)
-        width, height, channels, pixels = decode_png(shot)
-        if (width, height) != (SIZE, SIZE):
-            fail(f"screenshot is {width}x{height}")
-
-        with Client(f"127.0.0.1:{tcp_port}") as client:
-            frame, _ = client.render("cornell", width=SIZE, height=SIZE, format="png", camera=camera)
-        fw, fh, fc, expected = decode_png(frame)
-        total, worst, off = 0, 0, 0
-        for i in range(SIZE * SIZE):
-            for c in range(3):
-                d = abs(pixels[i * channels + c] - expected[i * fc + c])
-                total += d
-                worst = max(worst, d)
-                off += d > 1
-        mean = total / (SIZE * SIZE * 3)
-        print(json.dumps({"camera": camera, "mean_abs_diff": mean, "max_abs_diff": worst, "values_off_by_more_than_1": off}))
-        if mean > 0.05 or off > 0:
-            fail(f"the screenshot is not the daemon's frame: mean |diff| {mean:.3f}, {off} values off by more than 1")
+        wait_for_final(tools, 0, 120, "the page's first stream")
+        compare_with_daemon(tools, tcp_port, work, "viewer-screenshot.png")
+        if budget:
+            with Client(f"127.0.0.1:{tcp_port}") as client:
+                methods = list(client.hello()["methods"])
+            check_budget(tools, tcp_port, work, methods)
+            print("PASS: the viewer plans its stream for a budget and keeps the plan when the budget goes")
+            return
         print("PASS: the viewer shows the Cornell box as the daemon renders it")
     finally:
         if browser:

@@ -18,7 +18,9 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <map>
 #include <thread>
 
 namespace bounce::test {
@@ -27,7 +29,7 @@ namespace {
 struct BudgetDaemon {
     std::filesystem::path cache = std::filesystem::temp_directory_path() / ("bounce-budget-" + std::to_string(::getpid()));
     DaemonProcess daemon;
-    Client client;
+    Client client;  // after `cache`, which the daemon's flags read
 
     // `per_pixel`: frames cost in proportion to their pixels (direct 23 ms at 48x48), so that a
     // smaller frame is cheaper; else every frame of a method costs the same. `cssm_high_ms`: cssm
@@ -454,7 +456,10 @@ TEST(Budget, PlansTheMemoryBudgetWouldRefuseAreRuledOutWithTheRendersOwnRefusal)
     for (const auto& structure : estimate("low")) {
         if (structure.name == "imperfect_shadow_maps") maps_bytes = structure.bytes;
     }
-    // What else the daemon holds (the scene's buffers, the BRDF tables) must fit in the other half.
+    // What else the daemon holds must fit in the other half of the maps: the scene's buffers, the
+    // BRDF tables, and the draft frames of direct and vct that measure what upsampling loses before
+    // the first plan (under 30 MiB here, against maps of about 229 MiB for the light's six views).
+    // Were one of those refused, isr's half-size plans would go unoffered and the checks below fail.
     ASSERT_GT(maps_bytes, 2 * draft_bytes) << "the maps are not what decides this test";
     const std::uint64_t budget = draft_bytes + maps_bytes / 2;
     BudgetDaemon d(false, 100.0, {"--gpu-memory-budget", std::to_string(budget)});
@@ -473,7 +478,8 @@ TEST(Budget, PlansTheMemoryBudgetWouldRefuseAreRuledOutWithTheRendersOwnRefusal)
     for (const char* preset : {"low", "medium", "high", "ultra"}) {
         const std::string key = fmt::format("isr {} at 48x48", preset);
         ASSERT_EQ(refused.count(key), 1u) << key << " not ruled out: " << plan["ruled_out"].dump();
-        // Upsampled plans too: the maps do not shrink with the frame.
+        // Upsampled plans too: the maps do not shrink with the frame (12x12 is not offered: a side
+        // of at least 16 pixels).
         EXPECT_EQ(refused.count(fmt::format("isr {} at 24x24", preset)), 1u) << plan["ruled_out"].dump();
     }
     for (const auto& [what, refusal] : refused) {
@@ -481,7 +487,8 @@ TEST(Budget, PlansTheMemoryBudgetWouldRefuseAreRuledOutWithTheRendersOwnRefusal)
         EXPECT_NE(refusal.find("'imperfect_shadow_maps'"), std::string::npos) << refusal;
     }
 
-    // What the plan said of isr low is what rendering it says.
+    // What the plan said of isr low is what rendering it says (what else is held has not changed
+    // since: isr's own structures are those the frame would replace).
     try {
         d.render({{"method", "isr"}, {"preset", "low"}});
         ADD_FAILURE() << "isr low rendered under a budget the plan said refuses it";

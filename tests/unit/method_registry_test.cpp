@@ -1,5 +1,7 @@
 #include "renderer/base/error.hpp"
+#include "renderer/memory_admission.hpp"
 #include "renderer/methods/registry.hpp"
+#include "renderer/scene/builtin.hpp"
 
 #include <gtest/gtest.h>
 
@@ -48,6 +50,37 @@ TEST(MethodRegistry, ReferenceIsACpuMethodWithValidatedKnobs) {
     EXPECT_THROW(registry.create("reference"), Error);  // not a GL method
     EXPECT_EQ(registry.create_cpu("reference")->name(), "reference");
     EXPECT_THROW(registry.create_cpu("direct"), Error);  // not a CPU method
+}
+
+// What isr tells the planner of its indirect visibility is what its frames hold: a frame is said to
+// model it exactly where its memory estimate has the imperfect shadow maps, at every preset, mode
+// and map size. Every other method models it in every frame (or has no indirect light).
+TEST(MethodRegistry, IsrSaysItModelsIndirectVisibilityWhereItsFramesMakeTheMaps) {
+    const auto& registry = MethodRegistry::builtin();
+    const scene::Scene scene = scene::make_cornell_box();
+    const MethodInfo& isr = registry.find("isr");
+    ASSERT_TRUE(isr.unmodelled_indirect_visibility);
+    int modelled = 0, unmodelled = 0;
+    for (const auto& preset : preset_names()) {
+        for (const double mode : {0.0, 1.0, 2.0}) {
+            for (const double ism_size : {0.0, 16.0, 64.0}) {
+                const KnobValues knobs = registry.resolve("isr", preset, {{"mode", mode}, {"ism_size", ism_size}});
+                bool maps = false;
+                for (const auto& structure : frame_estimate(isr, {scene, knobs, 32, 32})) {
+                    maps = maps || structure.name == "imperfect_shadow_maps";
+                }
+                const std::string reason = isr.unmodelled_indirect_visibility(knobs);
+                EXPECT_EQ(reason.empty(), maps) << preset << " mode " << mode << " ism_size " << ism_size << ": "
+                                                << reason;
+                ++(maps ? modelled : unmodelled);
+            }
+        }
+    }
+    EXPECT_EQ(modelled, 5 * 2);  // mode 2 with maps of 16 or 64 texels
+    EXPECT_EQ(unmodelled, 5 * 7);
+    for (const char* method : {"direct", "vct", "cssm", "reference"}) {
+        EXPECT_FALSE(registry.find(method).unmodelled_indirect_visibility) << method;
+    }
 }
 
 TEST(MethodRegistry, IncompleteMethodsAreRejected) {

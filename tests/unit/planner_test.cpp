@@ -258,12 +258,12 @@ TEST(ErrorModel, LeakingVctAndOccludedIsrAreRuledOutWithTheirReason) {
     // The maps are made in hierarchical mode alone: medium's maps in basic mode model nothing.
     const ErrorPrediction basic = predict_error(analysis, "isr", "medium", {{"mode", 1}});
     ASSERT_TRUE(basic.ruled_out.has_value());
-    EXPECT_NE(basic.ruled_out->find("hierarchical mode only"), std::string::npos) << *basic.ruled_out;
-    EXPECT_NE(predict_error(analysis, "isr", "draft", {}).ruled_out->find("ism_size 0"), std::string::npos);
+    EXPECT_NE(basic.ruled_out->find("mode 1"), std::string::npos) << *basic.ruled_out;
+    EXPECT_NE(predict_error(analysis, "isr", "draft", {}).ruled_out.value_or("").find("ism_size 0"), std::string::npos);
     // Where little is occluded, nothing is ruled out for it.
-    analysis.visibility.occluded_fraction = 0.3;
-    EXPECT_FALSE(predict_error(analysis, "isr", "draft", {}).ruled_out.has_value());
-    analysis.visibility.occluded_fraction = 0.8;
+    SceneAnalysis open = analysis;
+    open.visibility.occluded_fraction = 0.3;
+    EXPECT_FALSE(predict_error(open, "isr", "draft", {}).ruled_out.has_value());
     // Promised what the bench's occluded Cornell variants measured of it, not the open corpus' figure.
     const ErrorPrediction occluded_low = predict_error(analysis, "isr", "low", {});
     EXPECT_GE(occluded_low.rel_mse, planning::OwnErrorPriors::bench().isr_occluded_largest.at("low"));

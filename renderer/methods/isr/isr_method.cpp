@@ -19,6 +19,10 @@
 namespace bounce::methods::isr {
 namespace {
 
+// Imperfect shadow maps are made on the VPL tree's patches: in hierarchical mode, and where they
+// have texels.
+bool makes_visibility_maps(int ism_size, int mode) { return ism_size > 0 && mode == ISR_MODE_HIERARCHICAL; }
+
 const char* mode_name(int mode) {
     switch (mode) {
         case ISR_MODE_NAIVE: return "naive RSM sampling";
@@ -57,7 +61,7 @@ public:
         tree_lights_ = lights;
         finest_level_ = std::max(0, tree_.top_level() - frame.knob_int("max_depth"));
         const IsmSettings ism{frame.knob_int("ism_size"), frame.knob_int("ism_points"), frame.knob_int("ism_levels_below_top")};
-        visibility_ = ism.size > 0 && mode_ == ISR_MODE_HIERARCHICAL;
+        visibility_ = makes_visibility_maps(ism.size, mode_);
         if (visibility_) ism_.build(frame, tree_, ism, [&frame] { frame.interruption_point(); });
         else if (ism_.bytes() > 0) ism_.release();
         if (mode_ != ISR_MODE_HIERARCHICAL && (tree_built || mode_ != cache_mode_ || finest_level_ != cache_level_)) {
@@ -270,7 +274,7 @@ MethodInfo method_info() {
         estimate.push_back({"vpl_tree", VplTree::bytes_for(passes::light_views_with_power(input.scene), rsm_size), "rsm_size"});
         estimate.push_back({"multires_atlas", MultiresolutionBuffer::bytes_for(input.width, input.height), "frame size"});
         const IsmSettings ism{input.knob_int("ism_size"), input.knob_int("ism_points"), input.knob_int("ism_levels_below_top")};
-        if (ism.size > 0 && input.knob_int("mode") == ISR_MODE_HIERARCHICAL) {
+        if (makes_visibility_maps(ism.size, input.knob_int("mode"))) {
             estimate.push_back({"imperfect_shadow_maps",
                                 ImperfectShadowMaps::bytes_for(passes::light_views_with_power(input.scene), rsm_size, ism,
                                                                input.scene.objects.size()),
@@ -279,12 +283,11 @@ MethodInfo method_info() {
         return estimate;
     };
     info.unmodelled_indirect_visibility = [](const KnobValues& knobs) -> std::string {
-        if (knobs.at("ism_size") == 0.0) return "no imperfect shadow maps: ism_size 0";
-        if (knobs.at("mode") != ISR_MODE_HIERARCHICAL) {
-            return fmt::format("imperfect shadow maps are made in hierarchical mode only (mode {}), not mode {}",
-                               ISR_MODE_HIERARCHICAL, knobs.at("mode"));
-        }
-        return {};
+        const int ism_size = static_cast<int>(knobs.at("ism_size")), mode = static_cast<int>(knobs.at("mode"));
+        if (makes_visibility_maps(ism_size, mode)) return {};
+        if (ism_size == 0) return "no imperfect shadow maps: ism_size 0";
+        return fmt::format("no imperfect shadow maps: mode {}, and they are made in mode {} alone", mode,
+                           ISR_MODE_HIERARCHICAL);
     };
     return info;
 }
