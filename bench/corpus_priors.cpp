@@ -66,15 +66,17 @@ CorpusErrors read_corpus_errors(const std::filesystem::path& csv, int bounces) {
     return errors;
 }
 
-std::map<std::string, ThinWalls> corpus_thin_walls() {
+std::map<std::string, ThinWalls> thin_walls_of(const std::vector<BenchScene>& scenes) {
     AnalysisSettings settings;
     settings.bounce_image_size = 4;
     settings.bounce_spp = 2;
     settings.direct_timing_spp = 1;
     std::map<std::string, ThinWalls> walls;
-    for (const BenchScene& scene : corpus_scenes()) walls[scene.name] = analyze_scene(scene.scene, settings).thin_walls;
+    for (const BenchScene& scene : scenes) walls[scene.name] = analyze_scene(scene.scene, settings).thin_walls;
     return walls;
 }
+
+std::map<std::string, ThinWalls> corpus_thin_walls() { return thin_walls_of(corpus_scenes()); }
 
 planning::OwnErrorPriors corpus_priors(const std::filesystem::path& directory,
                                        const std::map<std::string, ThinWalls>& walls,
@@ -93,6 +95,7 @@ planning::OwnErrorPriors corpus_priors(const std::filesystem::path& directory,
             std::tie(priors.largest[key], priors.typical[key]) = *figures;
         }
     }
+    if (!std::filesystem::exists(directory / "vct_two_bounce_quality.csv")) return priors;
     for (const auto& [key, by_scene] : read_corpus_errors(directory / "vct_two_bounce_quality.csv", 2)) {
         if (key.first != "vct") continue;
         if (const auto figures = largest_and_median(by_scene, left_out, leaking(key.first, key.second))) {

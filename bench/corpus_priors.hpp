@@ -6,6 +6,7 @@
 #pragma once
 
 #include "renderer/planning/priors.hpp"
+#include "bench/scenes.hpp"
 #include "renderer/scene_analysis.hpp"
 
 #include <filesystem>
@@ -13,6 +14,7 @@
 #include <set>
 #include <string>
 #include <utility>
+#include <vector>
 
 namespace bounce::bench {
 
@@ -23,12 +25,13 @@ using CorpusErrors = std::map<std::pair<std::string, std::string>, std::map<std:
 // presets' own). Throws std::runtime_error, naming the file, where it cannot be read or lacks a column.
 CorpusErrors read_corpus_errors(const std::filesystem::path& csv, int bounces = -1);
 
-// Each corpus scene's thin walls, as the planner's analysis finds them (its bounce frames kept small:
-// only the walls are wanted).
+// Each scene's thin walls, as the planner's analysis finds them (its bounce frames kept small: only
+// the walls are wanted); the corpus scenes'.
+std::map<std::string, ThinWalls> thin_walls_of(const std::vector<BenchScene>& scenes);
 std::map<std::string, ThinWalls> corpus_thin_walls();
 
-// The priors from `directory`'s quality.csv (one bounce) and vct_two_bounce_quality.csv, over the
-// scenes not in `left_out`.
+// The priors from `directory`'s quality.csv (one bounce) and, where it has one,
+// vct_two_bounce_quality.csv, over the scenes not in `left_out`.
 planning::OwnErrorPriors corpus_priors(const std::filesystem::path& directory,
                                        const std::map<std::string, ThinWalls>& walls,
                                        const std::set<std::string>& left_out = {});

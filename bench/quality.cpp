@@ -8,6 +8,7 @@
 #include "bench/reference_cache.hpp"
 #include "bench/markdown_blocks.hpp"
 #include "bench/corpus.hpp"
+#include "bench/corpus_priors.hpp"
 #include "bench/scenes.hpp"
 #include "renderer/base/hash.hpp"
 #include "renderer/base/log.hpp"
@@ -18,6 +19,7 @@
 #include "renderer/renderer.hpp"
 #include "renderer/scene_analysis.hpp"
 #include "renderer/scene/builtin.hpp"
+#include "renderer/scene/gltf_import.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -25,6 +27,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <optional>
 #include <sstream>
 
@@ -58,6 +61,11 @@ struct Options {
     fs::path cache = "build/bench-cache";
     fs::path markdown = "docs/benchmarks.md";
     std::vector<std::string> scenes;  // empty: all
+    // A deployment's own scenes (--gltf FILE ...) instead of the bench's, and the planner's priors
+    // measured on them (--priors-out FILE: `bounced --priors FILE` plans with them).
+    std::vector<fs::path> gltf_files;
+    std::optional<fs::path> priors_out;
+    bool out_given = false, markdown_given = false;
 };
 
 struct Row {
@@ -229,6 +237,45 @@ void write_preview(const fs::path& path, image::Frame frame) {
 }
 
 // One row of the corpus's analysis table.
+// Each file as a bench scene named by its stem (its own camera, or the importer's default view; the
+// importer logs what it fell back on).
+std::vector<bench::BenchScene> gltf_scenes(const std::vector<fs::path>& files) {
+    std::vector<bench::BenchScene> scenes;
+    for (const fs::path& file : files) {
+        std::ifstream in(file, std::ios::binary);
+        const std::string bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+        scenes.push_back({file.stem().string(), file.string(), scene::import_gltf_file(file),
+                          hash_bytes(bytes.data(), bytes.size())});
+    }
+    return scenes;
+}
+
+// The planner's priors from this run's quality.csv: per GPU method and preset, the largest and the
+// median over the scenes measured (vct's presets left out where the analysis finds them leaking),
+// as bench/planner --held-out computes them from the corpus; `bounced --priors FILE` plans with
+// them, and with the bench's where this run measured nothing.
+void write_priors(const fs::path& file, const Options& options, const std::vector<bench::BenchScene>& scenes) {
+    std::vector<bench::BenchScene> measured;
+    std::string names;
+    for (const auto& scene : scenes) {
+        if (!options.scenes.empty() && std::find(options.scenes.begin(), options.scenes.end(), scene.name) == options.scenes.end()) {
+            continue;
+        }
+        measured.push_back(scene);
+        names += (names.empty() ? "" : ", ") + scene.name;
+    }
+    planning::OwnErrorPriors priors = bench::corpus_priors(options.out, bench::thin_walls_of(measured));
+    priors.source = fmt::format("bounce_bench_quality on {}", names);
+    nlohmann::json tables = priors.to_json();
+    for (const char* empty : {"vct_second_largest", "vct_second_typical", "isr_occluded_largest"}) {
+        if (tables[empty].empty()) tables.erase(empty);
+    }
+    if (file.has_parent_path()) fs::create_directories(file.parent_path());
+    std::ofstream(file) << tables.dump(2) << "\n";
+    log::info("bench", "wrote the planner's priors from {} to {} (bounced --priors {})", names, file.string(),
+              file.string());
+}
+
 std::string analysis_row(const bench::BenchScene& bench_scene) {
     const SceneAnalysis analysis = analyze_scene(bench_scene.scene);
     std::string leaks;
@@ -253,9 +300,11 @@ int main(int argc, char** argv) {
         else if (flag == "--reference-spp") options.reference_spp = arguments.number();
         else if (flag == "--reference-bounces") options.reference_bounces = arguments.number();
         else if (flag == "--repeats") options.repeats = std::max(1, arguments.number());
-        else if (flag == "--out") options.out = arguments.value();
+        else if (flag == "--out") options.out = arguments.value(), options.out_given = true;
         else if (flag == "--cache") options.cache = arguments.value();
-        else if (flag == "--markdown") options.markdown = arguments.value();
+        else if (flag == "--markdown") options.markdown = arguments.value(), options.markdown_given = true;
+        else if (flag == "--gltf") options.gltf_files.emplace_back(arguments.value());
+        else if (flag == "--priors-out") options.priors_out = arguments.value();
         else if (flag == "--scene") options.scenes.push_back(arguments.value());
         else if (flag == "--corpus") options.corpus = true;
         else if (flag == "--pixel-centre") options.pixel_centre = true;
@@ -268,7 +317,8 @@ int main(int argc, char** argv) {
             std::fprintf(stderr,
                          "usage: quality [--size N] [--reference-spp N] [--reference-bounces N] [--repeats N]\n"
                          "               [--scene NAME ...] [--method NAME ...] [--knob NAME=VALUE ...]\n"
-                         "               [--corpus [--detail N]] [--pixel-centre] [--unoccluded]\n"
+                         "               [--corpus [--detail N] | --gltf FILE ...] [--priors-out FILE]\n"
+                         "               [--pixel-centre] [--unoccluded]\n"
                          "               [--previews DIR]\n"
                          "               [--out DIR]\n"
                          "               [--cache DIR]\n"
@@ -277,6 +327,11 @@ int main(int argc, char** argv) {
                          "(the isr sections are bench/isr's: bounce_bench_isr)\n");
             return 2;
         }
+    }
+    if (!options.gltf_files.empty() && (options.corpus || !options.out_given || !options.markdown_given)) {
+        std::fprintf(stderr, "quality: --gltf measures your scenes instead of the bench's (not with --corpus), into an "
+                             "--out and a --markdown of their own\n");
+        return 2;
     }
     const std::string& command = arguments.command();
     for (const std::string& method : options.methods) {
@@ -295,8 +350,9 @@ int main(int argc, char** argv) {
         std::vector<Row> rows;
         std::string details, analysis_rows;
         const auto& registry = methods::MethodRegistry::builtin();
-        const std::vector<bench::BenchScene> scenes =
-            options.corpus ? bench::corpus_scenes(options.detail) : bench::quality_scenes();
+        const std::vector<bench::BenchScene> scenes = !options.gltf_files.empty() ? gltf_scenes(options.gltf_files)
+                                                      : options.corpus              ? bench::corpus_scenes(options.detail)
+                                                                                    : bench::quality_scenes();
         for (const auto& bench_scene : scenes) {
             if (!options.scenes.empty() &&
                 std::find(options.scenes.begin(), options.scenes.end(), bench_scene.name) == options.scenes.end()) {
@@ -452,6 +508,7 @@ int main(int argc, char** argv) {
         write_csv(options.out / "quality.csv", rows);
         write_markdown(options.markdown, rows, options, renderer.gpu_info().summary(), command, details);
         log::info("bench", "wrote {} and {}", (options.out / "quality.csv").string(), options.markdown.string());
+        if (options.priors_out) write_priors(*options.priors_out, options, scenes);
         return 0;
     } catch (const std::exception& error) {
         std::fprintf(stderr, "quality: %s\n", error.what());

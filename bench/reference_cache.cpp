@@ -38,9 +38,11 @@ std::uint64_t scene_hash(const scene::Scene& scene) {
 // The reference image, from the cache when the same scene, camera, size, bounces and code made it.
 image::Frame reference_image(const BenchScene& bench_scene, const methods::reference::PathTracer& tracer,
                              const ReferenceSpec& spec, int bounces) {
+    const std::string file = bench_scene.file_hash ? fmt::format("-file{:016x}", bench_scene.file_hash) : "";
     const std::string key =
-        fmt::format("{}-{:016x}-{}px-{}b-{}spp{}{}.exr", bench_scene.name, scene_hash(bench_scene.scene), spec.size,
-                    bounces, spec.spp, spec.pixel_centre ? "-centre" : "", spec.indirect_visibility ? "" : "-unoccluded");
+        fmt::format("{}{}-{:016x}-{}px-{}b-{}spp{}{}.exr", bench_scene.name, file, scene_hash(bench_scene.scene),
+                    spec.size, bounces, spec.spp, spec.pixel_centre ? "-centre" : "",
+                    spec.indirect_visibility ? "" : "-unoccluded");
     const fs::path path = spec.cache / key;
     if (fs::exists(path)) {
         std::ifstream in(path, std::ios::binary);

@@ -4,6 +4,7 @@
 
 #include "renderer/scene/scene.hpp"
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -13,6 +14,9 @@ struct BenchScene {
     std::string name;
     std::string description;
     scene::Scene scene;
+    // A scene read from a file: a hash of its bytes, in the reference cache's key (an edited mesh
+    // changes no light, material, transform or camera the key otherwise hashes).
+    std::uint64_t file_hash = 0;
 };
 
 std::vector<BenchScene> quality_scenes();

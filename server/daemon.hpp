@@ -3,6 +3,7 @@
 #pragma once
 
 #include "protocol/protocol.hpp"
+#include "renderer/planning/priors.hpp"
 #include "server/byte_budget.hpp"
 #include "server/metrics.hpp"
 #include "server/render_service.hpp"
@@ -58,6 +59,9 @@ struct DaemonConfig {
     int network_threads = 2;
     int calibration_size = 64;  // the cost model's larger frame, pixels a side (--calibration-size)
     int calibration_change_frames = 3;  // frames timed per change (--calibration-change-frames)
+    // The planner's own-error priors, measured on a deployment's own scenes (--priors; the file
+    // bench/quality --priors-out writes); nullopt: the bench corpus' (OwnErrorPriors::bench).
+    std::optional<std::filesystem::path> priors_file;
 };
 
 class Session;
@@ -74,6 +78,7 @@ public:
 
     // For sessions.
     const DaemonConfig& config() const { return config_; }
+    const planning::OwnErrorPriors& priors() const { return priors_; }
     const std::optional<std::string>& token() const { return token_; }
     protocol::Limits limits() const;
     // What a frame may carry before its connection has authenticated: a `hello`, no more.
@@ -110,6 +115,7 @@ public:
     std::uint64_t next_connection_number() { return ++connections_accepted_; }
 
 private:
+    planning::OwnErrorPriors priors_ = planning::OwnErrorPriors::bench();  // read at start (--priors)
     void accept();
     void start_http_server();
     void begin_shutdown();

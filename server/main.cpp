@@ -130,7 +130,7 @@ Options parse(int argc, char** argv) {
     app.footer("Byte counts (the -bytes flags, --gpu-memory-budget) take a K, M, G or T suffix (powers of 1024).");
 
     std::string listen, device, log_level = "info", log_format = "text", size;
-    std::string port_file, scene_root, cache_dir, token_file, metrics_listen, http_listen;
+    std::string port_file, scene_root, cache_dir, token_file, metrics_listen, http_listen, priors_file;
     std::vector<std::string> knobs;
     std::vector<Limit> limits = daemon_limits();
     const char* daemon_group = "Daemon";
@@ -140,6 +140,10 @@ Options parse(int argc, char** argv) {
     app.add_option("--scene-root", scene_root, "scene.load paths resolve inside DIR [loading by path is off]")
         ->group(daemon_group);
     app.add_option("--cache-dir", cache_dir, "where baked structures are cached")->group(daemon_group);
+    app.add_option("--priors", priors_file,
+                   "budgets: the methods' own-error priors measured on your scenes (bounce_bench_quality --priors-out) "
+                   "[the bench corpus']")
+        ->group(daemon_group);
     app.add_option("--token-file", token_file, "clients must send this token (required off loopback)")
         ->group(daemon_group);
     auto* metrics_option =
@@ -217,6 +221,7 @@ Options parse(int argc, char** argv) {
     if (!port_file.empty()) options.daemon.port_file = port_file;
     if (!scene_root.empty()) options.daemon.scene_root = scene_root;
     if (!cache_dir.empty()) options.daemon.cache_dir = cache_dir;
+    if (!priors_file.empty()) options.daemon.priors_file = priors_file;
     if (!token_file.empty()) options.daemon.token_file = token_file;
     if (!metrics_listen.empty()) options.daemon.metrics_listen = metrics_listen;
     if (!http_listen.empty()) {

@@ -407,6 +407,7 @@ void RequestHandlers::plan_budgeted(RenderOrder& order, Renderer& renderer, Scen
         candidate.height = height;
         return renderer.memory_refusal(*entry.resources, candidate);
     };
+    inputs.priors = &daemon_.priors();
     const planning::Plan plan = planning::plan(inputs, *order.budget);
     frame.method = plan.chosen.method;
     frame.preset = plan.chosen.preset;
@@ -768,6 +769,7 @@ json RequestHandlers::stats(Renderer& renderer, SceneRegistry& registry) {
     reply["planner"] = device_costs_  ? json{{"cost_model", "ready"}}
                        : calibration_ ? json{{"cost_model", "calibrating"}, {"calibrated_fraction", calibration_->fraction()}}
                                       : json{{"cost_model", "none"}};
+    reply["planner"]["priors"] = daemon_.priors().source;
     reply["gpu_memory"] = {{"budget_bytes", renderer.memory_budget().bytes},
                            {"budget_source", renderer.memory_budget().source},
                            {"resident_bytes", renderer.resident_bytes()}};

@@ -37,7 +37,7 @@ std::pair<double, std::string> own_error(const std::string& method, const std::s
         }
         return priors.largest_of(method, name, bounces).value_or(0.0);
     };
-    const std::string bench = occluded_isr ? "on the bench's occluded Cornell variants" : "on the bench scenes";
+    const std::string bench = "on " + (occluded_isr ? priors.occluded_source : priors.source);
     const double prior = prior_of(preset);
     if (!measured) return {prior, bench};
     if (const auto own = measured->own_error(method, preset, bounces)) {

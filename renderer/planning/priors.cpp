@@ -1,5 +1,15 @@
 #include "renderer/planning/priors.hpp"
 
+#include "renderer/base/error.hpp"
+#include "renderer/methods/registry.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <vector>
+
 namespace bounce::planning {
 
 namespace {
@@ -82,6 +92,123 @@ const OwnErrorPriors& OwnErrorPriors::bench() {
         return priors;
     }();
     return tables;
+}
+
+namespace {
+
+constexpr double kLargestRelMse = 100.0;
+
+const std::vector<std::string>& gpu_methods() {
+    static const std::vector<std::string> names = [] {
+        std::vector<std::string> gpu;
+        const auto& registry = methods::MethodRegistry::builtin();
+        for (const auto& name : registry.names()) {
+            if (registry.find(name).device == methods::MethodDevice::gpu) gpu.push_back(name);
+        }
+        return gpu;
+    }();
+    return names;
+}
+
+void check_preset(const std::string& preset, const std::string& where) {
+    const auto& presets = methods::preset_names();
+    if (std::find(presets.begin(), presets.end(), preset) == presets.end()) {
+        throw InputError(fmt::format("{}: unknown preset '{}'", where, preset));
+    }
+}
+
+double rel_mse_at(const nlohmann::json& value, const std::string& where) {
+    if (!value.is_number() || !std::isfinite(value.get<double>()) || value.get<double>() < 0.0 ||
+        value.get<double>() > kLargestRelMse) {
+        throw InputError(fmt::format("{}: {} is not a relMSE in [0, {:g}]", where, value.dump(), kLargestRelMse));
+    }
+    return value.get<double>();
+}
+
+const nlohmann::json& object_at(const nlohmann::json& value, const std::string& where) {
+    if (!value.is_object()) throw InputError(fmt::format("{}: expected an object, not {}", where, value.type_name()));
+    return value;
+}
+
+// {METHOD: {PRESET: relMSE}} into `table`, entry by entry.
+void read_table(const nlohmann::json& tables, const char* name, OwnErrorPriors::Table& table, const std::string& where) {
+    if (!tables.contains(name)) return;
+    const std::string at = fmt::format("{}: {}", where, name);
+    for (const auto& [method, presets] : object_at(tables[name], at).items()) {
+        const auto& gpu = gpu_methods();
+        if (std::find(gpu.begin(), gpu.end(), method) == gpu.end()) {
+            throw InputError(fmt::format("{}: '{}' is not a GPU method (known: {})", at, method, fmt::join(gpu, ", ")));
+        }
+        for (const auto& [preset, value] : object_at(presets, at + "." + method).items()) {
+            const std::string entry = fmt::format("{}.{}.{}", at, method, preset);
+            check_preset(preset, entry);
+            table[{method, preset}] = rel_mse_at(value, entry);
+        }
+    }
+}
+
+// {PRESET: relMSE} into `table`.
+void read_presets(const nlohmann::json& tables, const char* name, std::map<std::string, double>& table,
+                  const std::string& where) {
+    if (!tables.contains(name)) return;
+    const std::string at = fmt::format("{}: {}", where, name);
+    for (const auto& [preset, value] : object_at(tables[name], at).items()) {
+        check_preset(preset, at + "." + preset);
+        table[preset] = rel_mse_at(value, at + "." + preset);
+    }
+}
+
+}  // namespace
+
+nlohmann::json OwnErrorPriors::to_json() const {
+    nlohmann::json tables = {{"source", source}};
+    for (const auto& [name, table] : {std::pair<const char*, const Table*>{"largest", &largest}, {"typical", &typical}}) {
+        nlohmann::json out = nlohmann::json::object();
+        for (const auto& [key, value] : *table) out[key.first][key.second] = value;
+        tables[name] = out;
+    }
+    tables["vct_second_largest"] = vct_second_largest;
+    tables["vct_second_typical"] = vct_second_typical;
+    tables["isr_occluded_largest"] = isr_occluded_largest;
+    return tables;
+}
+
+OwnErrorPriors OwnErrorPriors::from_json(const nlohmann::json& tables, const OwnErrorPriors& base,
+                                         const std::string& where) {
+    object_at(tables, where);
+    static const std::vector<std::string> known = {"source", "largest", "typical", "vct_second_largest",
+                                                   "vct_second_typical", "isr_occluded_largest"};
+    for (const auto& [name, value] : tables.items()) {
+        if (std::find(known.begin(), known.end(), name) == known.end()) {
+            throw InputError(fmt::format("{}: unknown field '{}' (known: {})", where, name, fmt::join(known, ", ")));
+        }
+    }
+    OwnErrorPriors priors = base;
+    read_table(tables, "largest", priors.largest, where);
+    read_table(tables, "typical", priors.typical, where);
+    read_presets(tables, "vct_second_largest", priors.vct_second_largest, where);
+    read_presets(tables, "vct_second_typical", priors.vct_second_typical, where);
+    read_presets(tables, "isr_occluded_largest", priors.isr_occluded_largest, where);
+    std::string source = where;
+    if (tables.contains("source")) {
+        if (!tables["source"].is_string()) throw InputError(fmt::format("{}: source must be a string", where));
+        source = fmt::format("{} ({})", tables["source"].get<std::string>(), where);
+    }
+    if (tables.contains("largest") || tables.contains("typical")) priors.source = source;
+    if (tables.contains("isr_occluded_largest")) priors.occluded_source = source;
+    return priors;
+}
+
+OwnErrorPriors OwnErrorPriors::read(const std::filesystem::path& file, const OwnErrorPriors& base) {
+    std::ifstream in(file);
+    if (!in) throw InputError(fmt::format("cannot read the priors file {}", file.string()));
+    nlohmann::json tables;
+    try {
+        tables = nlohmann::json::parse(in);
+    } catch (const nlohmann::json::exception& error) {
+        throw InputError(fmt::format("the priors file {} is not JSON: {}", file.string(), error.what()));
+    }
+    return from_json(tables, base, file.string());
 }
 
 }  // namespace bounce::planning

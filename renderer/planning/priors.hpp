@@ -2,10 +2,14 @@
 // measured nothing of it (error_model.hpp): per method and preset, the relMSE against the reference
 // with as many bounces, at 128x128 through pixel centres, the largest (a promise) and the median (what
 // a spot check expects) over the bench corpus' scenes. The daemon plans with the committed tables
-// (bench()); bench/planner --held-out plans each scene with the tables of the others, which says
-// whether the promises hold on a scene the priors never saw.
+// (bench()), or with a deployment's own (`bounced --priors FILE`, measured on its own scenes by
+// `bounce_bench_quality --gltf FILE --priors-out FILE`); bench/planner --held-out plans each scene
+// with the tables of the others, which says whether the promises hold on a scene the priors never saw.
 #pragma once
 
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
 #include <map>
 #include <optional>
 #include <string>
@@ -24,6 +28,9 @@ struct OwnErrorPriors {
     // Cornell variants (bench/results/quality.csv), with walls between light and receivers, is
     // promised there.
     std::map<std::string, double> isr_occluded_largest;
+    // Where the tables were measured, as a plan's `why` names them ("on the bench scenes").
+    std::string source = "the bench scenes";
+    std::string occluded_source = "the bench's occluded Cornell variants";
 
     // The largest at `bounces` where measured apart at that count (vct's second bounce), else at the
     // preset's own; nullopt for methods without one.
@@ -33,6 +40,15 @@ struct OwnErrorPriors {
     // The committed corpus tables (tests/unit/planner_priors_test.cpp checks them against
     // bench/results/corpus).
     static const OwnErrorPriors& bench();
+
+    // The tables as JSON: {"source", "largest": {METHOD: {PRESET: relMSE}}, "typical": {...},
+    // "vct_second_largest": {PRESET: relMSE}, "vct_second_typical", "isr_occluded_largest"}.
+    nlohmann::json to_json() const;
+    // `base` with what `file` measured in its place, entry by entry (a file may give some methods or
+    // presets alone); `source` names the file's scenes in plans. Throws InputError naming the file
+    // and the entry: unknown method or preset, a value not a finite relMSE in [0, 100].
+    static OwnErrorPriors read(const std::filesystem::path& file, const OwnErrorPriors& base = bench());
+    static OwnErrorPriors from_json(const nlohmann::json& tables, const OwnErrorPriors& base, const std::string& where);
 };
 
 }  // namespace bounce::planning

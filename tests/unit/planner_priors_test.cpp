@@ -5,12 +5,15 @@
 // committed corpus tables and checks the priors against them; and that the priors of a scene held
 // out (bench/planner --held-out) are the other scenes'.
 #include "bench/corpus_priors.hpp"
+#include "renderer/base/error.hpp"
 #include "renderer/planning/error_model.hpp"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <fstream>
 #include <map>
 #include <set>
 #include <string>
@@ -104,6 +107,90 @@ TEST(PlannerPriors, AHeldOutScenesPriorsAreTheOtherScenes) {
         }
         EXPECT_EQ(held_out.vct_second_largest.size(), 5u);
     }
+}
+
+// A deployment's priors (`bounced --priors FILE`, written by bench/quality --priors-out): the file's
+// entries replace the bench's one by one, the rest stay, and plans name where they were measured.
+TEST(PlannerPriors, ADeploymentsFileReplacesWhatItMeasuredAndKeepsTheRest) {
+    const planning::OwnErrorPriors& bench = planning::OwnErrorPriors::bench();
+    // What the bench writes reads back as it was.
+    const auto again = planning::OwnErrorPriors::from_json(bench.to_json(), planning::OwnErrorPriors{}, "bench.json");
+    EXPECT_EQ(again.largest, bench.largest);
+    EXPECT_EQ(again.typical, bench.typical);
+    EXPECT_EQ(again.vct_second_largest, bench.vct_second_largest);
+    EXPECT_EQ(again.isr_occluded_largest, bench.isr_occluded_largest);
+
+    const nlohmann::json file = {{"source", "our atria"}, {"largest", {{"cssm", {{"low", 0.5}}}}},
+                                 {"typical", {{"cssm", {{"low", 0.25}}}}}};
+    const auto ours = planning::OwnErrorPriors::from_json(file, bench, "atria.json");
+    EXPECT_EQ(*ours.largest_of("cssm", "low"), 0.5);
+    EXPECT_EQ(*ours.typical_of("cssm", "low"), 0.25);
+    EXPECT_EQ(*ours.largest_of("cssm", "draft"), *bench.largest_of("cssm", "draft"));
+    EXPECT_EQ(ours.isr_occluded_largest, bench.isr_occluded_largest);
+    EXPECT_EQ(ours.source, "our atria (atria.json)");
+    EXPECT_EQ(ours.occluded_source, bench.occluded_source);
+
+    // A plan's error basis names them.
+    SceneAnalysis analysis;
+    for (int k = 0; k <= 12; ++k) {
+        analysis.bounces.stopped_error.push_back(k == 12 ? 0.0 : 0.1 / std::pow(2.0, k));
+        analysis.bounces.noise_per_sample.push_back(0.5);
+        analysis.bounces.sample_ns.push_back(1000.0);
+    }
+    const auto prediction = planning::predict_error(analysis, "cssm", "low", {{"bounces", 8}}, nullptr, ours);
+    EXPECT_NEAR(prediction.rel_mse, 0.5 + 0.1 / 256.0, 1e-12);
+    EXPECT_NE(prediction.basis.find("on our atria (atria.json)"), std::string::npos) << prediction.basis;
+}
+
+// Every malformed entry is refused naming the file and the entry, before a plan reads it.
+TEST(PlannerPriors, AMalformedFileIsRefusedNamingTheEntry) {
+    const planning::OwnErrorPriors& bench = planning::OwnErrorPriors::bench();
+    const auto refusal = [&](const nlohmann::json& file) {
+        try {
+            planning::OwnErrorPriors::from_json(file, bench, "p.json");
+        } catch (const InputError& error) {
+            return std::string(error.what());
+        }
+        return std::string("(accepted)");
+    };
+    EXPECT_EQ(refusal({{"largest", {{"photon", {{"low", 0.1}}}}}}),
+              "p.json: largest: 'photon' is not a GPU method (known: direct, vct, isr, cssm)");
+    EXPECT_EQ(refusal({{"largest", {{"reference", {{"low", 0.1}}}}}}),
+              "p.json: largest: 'reference' is not a GPU method (known: direct, vct, isr, cssm)");
+    EXPECT_EQ(refusal({{"typical", {{"isr", {{"insane", 0.1}}}}}}), "p.json: typical.isr.insane: unknown preset 'insane'");
+    EXPECT_EQ(refusal({{"largest", {{"isr", {{"low", -0.1}}}}}}), "p.json: largest.isr.low: -0.1 is not a relMSE in [0, 100]");
+    EXPECT_EQ(refusal({{"largest", {{"isr", {{"low", 1e9}}}}}}),
+              "p.json: largest.isr.low: 1000000000.0 is not a relMSE in [0, 100]");
+    EXPECT_EQ(refusal({{"largest", {{"isr", {{"low", "small"}}}}}}),
+              "p.json: largest.isr.low: \"small\" is not a relMSE in [0, 100]");
+    EXPECT_EQ(refusal({{"largest", {{"isr", 0.1}}}}), "p.json: largest.isr: expected an object, not number");
+    EXPECT_EQ(refusal({{"isr_occluded_largest", {{"huge", 0.1}}}}), "p.json: isr_occluded_largest.huge: unknown preset 'huge'");
+    EXPECT_EQ(refusal({{"largets", {}}}),
+              "p.json: unknown field 'largets' (known: source, largest, typical, vct_second_largest, vct_second_typical, "
+              "isr_occluded_largest)");
+    EXPECT_EQ(refusal(nlohmann::json::array()), "p.json: expected an object, not array");
+
+    const auto path = std::filesystem::temp_directory_path() / "bounce-priors-not-json.json";
+    std::ofstream(path) << "{\"largest\": ";
+    try {
+        planning::OwnErrorPriors::read(path);
+        ADD_FAILURE() << "a truncated file was read";
+    } catch (const InputError& error) {
+        EXPECT_NE(std::string(error.what()).find("is not JSON"), std::string::npos) << error.what();
+    }
+    std::filesystem::remove(path);
+}
+
+// What bench/quality writes of the corpus (corpus_priors, as --priors-out writes it) a daemon reads
+// back: the committed tables.
+TEST(PlannerPriors, TheBenchsFileOfTheCorpusReadsBackAsTheCommittedTables) {
+    const planning::OwnErrorPriors corpus = bench::corpus_priors(kCorpus, walls());
+    const auto path = std::filesystem::temp_directory_path() / "bounce-priors-corpus.json";
+    std::ofstream(path) << corpus.to_json().dump(2);
+    const planning::OwnErrorPriors read = planning::OwnErrorPriors::read(path, planning::OwnErrorPriors{});
+    std::filesystem::remove(path);
+    expect_tables_equal(planning::OwnErrorPriors::bench().largest, read.largest, "largest");
+    expect_tables_equal(planning::OwnErrorPriors::bench().typical, read.typical, "typical");
 }
 
 }  // namespace
