@@ -80,7 +80,7 @@ std::map<std::string, ThinWalls> corpus_thin_walls() { return thin_walls_of(corp
 
 planning::OwnErrorPriors corpus_priors(const std::filesystem::path& directory,
                                        const std::map<std::string, ThinWalls>& walls,
-                                       const std::set<std::string>& left_out) {
+                                       const std::set<std::string>& left_out, bool two_bounce_table) {
     const auto leaking = [&](const std::string& method, const std::string& preset) {
         std::set<std::string> scenes;
         if (method != "vct") return scenes;
@@ -95,7 +95,7 @@ planning::OwnErrorPriors corpus_priors(const std::filesystem::path& directory,
             std::tie(priors.largest[key], priors.typical[key]) = *figures;
         }
     }
-    if (!std::filesystem::exists(directory / "vct_two_bounce_quality.csv")) return priors;
+    if (!two_bounce_table || !std::filesystem::exists(directory / "vct_two_bounce_quality.csv")) return priors;
     for (const auto& [key, by_scene] : read_corpus_errors(directory / "vct_two_bounce_quality.csv", 2)) {
         if (key.first != "vct") continue;
         if (const auto figures = largest_and_median(by_scene, left_out, leaking(key.first, key.second))) {

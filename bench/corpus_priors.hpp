@@ -30,10 +30,10 @@ CorpusErrors read_corpus_errors(const std::filesystem::path& csv, int bounces = 
 std::map<std::string, ThinWalls> thin_walls_of(const std::vector<BenchScene>& scenes);
 std::map<std::string, ThinWalls> corpus_thin_walls();
 
-// The priors from `directory`'s quality.csv (one bounce) and, where it has one,
-// vct_two_bounce_quality.csv, over the scenes not in `left_out`.
+// The priors from `directory`'s quality.csv (one bounce) and, with `two_bounce_table` and where it
+// has one, vct_two_bounce_quality.csv, over the scenes not in `left_out`.
 planning::OwnErrorPriors corpus_priors(const std::filesystem::path& directory,
                                        const std::map<std::string, ThinWalls>& walls,
-                                       const std::set<std::string>& left_out = {});
+                                       const std::set<std::string>& left_out = {}, bool two_bounce_table = true);
 
 }  // namespace bounce::bench

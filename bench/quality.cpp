@@ -29,6 +29,7 @@
 #include <fstream>
 #include <iterator>
 #include <optional>
+#include <span>
 #include <sstream>
 
 namespace {
@@ -236,16 +237,40 @@ void write_preview(const fs::path& path, image::Frame frame) {
     std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
 }
 
-// One row of the corpus's analysis table.
+// What a scene read from a file renders from: its file's bytes, and the geometry and textures it
+// imported (a .gltf's buffers and images may be files of their own).
+std::uint64_t imported_content_hash(const std::string& file_bytes, const scene::Scene& scene) {
+    Hasher hash;
+    hash.add(hash_bytes(file_bytes.data(), file_bytes.size()));
+    for (const auto& mesh : scene.meshes) {
+        for (const auto& primitive : mesh.primitives) {
+            hash.add_span(std::span<const glm::vec3>(primitive.positions));
+            hash.add_span(std::span<const std::uint32_t>(primitive.indices));
+            hash.add_span(std::span<const glm::vec2>(primitive.uv0));
+            hash.add(primitive.material);
+        }
+    }
+    for (const auto& texture : scene.textures) hash.add_span(std::span<const std::uint8_t>(texture.rgba8));
+    return hash.value();
+}
+
 // Each file as a bench scene named by its stem (its own camera, or the importer's default view; the
-// importer logs what it fell back on).
+// importer logs what it fell back on). Two files of one stem would share their rows: refused.
 std::vector<bench::BenchScene> gltf_scenes(const std::vector<fs::path>& files) {
     std::vector<bench::BenchScene> scenes;
     for (const fs::path& file : files) {
+        const std::string name = file.stem().string();
+        for (const auto& other : scenes) {
+            if (other.name == name) {
+                throw std::runtime_error(fmt::format("--gltf {} and {}: two scenes named '{}' (rename one)",
+                                                     other.description, file.string(), name));
+            }
+        }
         std::ifstream in(file, std::ios::binary);
         const std::string bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-        scenes.push_back({file.stem().string(), file.string(), scene::import_gltf_file(file),
-                          hash_bytes(bytes.data(), bytes.size())});
+        scene::Scene scene = scene::import_gltf_file(file);
+        const std::uint64_t hash = imported_content_hash(bytes, scene);
+        scenes.push_back({name, file.string(), std::move(scene), hash});
     }
     return scenes;
 }
@@ -253,29 +278,37 @@ std::vector<bench::BenchScene> gltf_scenes(const std::vector<fs::path>& files) {
 // The planner's priors from this run's quality.csv: per GPU method and preset, the largest and the
 // median over the scenes measured (vct's presets left out where the analysis finds them leaking),
 // as bench/planner --held-out computes them from the corpus; `bounced --priors FILE` plans with
-// them, and with the bench's where this run measured nothing.
+// them, and with the bench's where this run measured nothing. The file is read back as the daemon
+// reads it before it is written.
 void write_priors(const fs::path& file, const Options& options, const std::vector<bench::BenchScene>& scenes) {
     std::vector<bench::BenchScene> measured;
-    std::string names;
+    std::vector<std::string> names;
     for (const auto& scene : scenes) {
-        if (!options.scenes.empty() && std::find(options.scenes.begin(), options.scenes.end(), scene.name) == options.scenes.end()) {
+        if (!options.scenes.empty() &&
+            std::find(options.scenes.begin(), options.scenes.end(), scene.name) == options.scenes.end()) {
             continue;
         }
         measured.push_back(scene);
-        names += (names.empty() ? "" : ", ") + scene.name;
+        names.push_back(scene.name);
     }
-    planning::OwnErrorPriors priors = bench::corpus_priors(options.out, bench::thin_walls_of(measured));
-    priors.source = fmt::format("bounce_bench_quality on {}", names);
-    nlohmann::json tables = priors.to_json();
-    for (const char* empty : {"vct_second_largest", "vct_second_typical", "isr_occluded_largest"}) {
-        if (tables[empty].empty()) tables.erase(empty);
+    // A two-bounce table in --out is another run's, unless these are the corpus' scenes.
+    planning::OwnErrorPriors priors =
+        bench::corpus_priors(options.out, bench::thin_walls_of(measured), {}, /*two_bounce_table=*/options.corpus);
+    priors.source = fmt::format("the scene{} {}", names.size() == 1 ? "" : "s", fmt::join(names, ", "));
+    const nlohmann::json tables = priors.to_json();
+    if (!tables.contains("largest")) {
+        throw std::runtime_error("--priors-out: no GPU method was measured (--method names none?)");
     }
+    planning::OwnErrorPriors::from_json(tables, planning::OwnErrorPriors::bench(), file.string());
     if (file.has_parent_path()) fs::create_directories(file.parent_path());
-    std::ofstream(file) << tables.dump(2) << "\n";
-    log::info("bench", "wrote the planner's priors from {} to {} (bounced --priors {})", names, file.string(),
+    std::ofstream out(file);
+    out << tables.dump(2) << "\n";
+    if (!out) throw std::runtime_error(fmt::format("--priors-out: cannot write {}", file.string()));
+    log::info("bench", "wrote the planner's priors from {} to {} (bounced --priors {})", priors.source, file.string(),
               file.string());
 }
 
+// One row of the corpus's analysis table.
 std::string analysis_row(const bench::BenchScene& bench_scene) {
     const SceneAnalysis analysis = analyze_scene(bench_scene.scene);
     std::string leaks;
@@ -328,6 +361,10 @@ int main(int argc, char** argv) {
             return 2;
         }
     }
+    if (options.priors_out && !options.knobs.empty()) {
+        std::fprintf(stderr, "quality: --priors-out measures the presets as they are (not with --knob)\n");
+        return 2;
+    }
     if (!options.gltf_files.empty() && (options.corpus || !options.out_given || !options.markdown_given)) {
         std::fprintf(stderr, "quality: --gltf measures your scenes instead of the bench's (not with --corpus), into an "
                              "--out and a --markdown of their own\n");
@@ -351,8 +388,8 @@ int main(int argc, char** argv) {
         std::string details, analysis_rows;
         const auto& registry = methods::MethodRegistry::builtin();
         const std::vector<bench::BenchScene> scenes = !options.gltf_files.empty() ? gltf_scenes(options.gltf_files)
-                                                      : options.corpus              ? bench::corpus_scenes(options.detail)
-                                                                                    : bench::quality_scenes();
+                                                      : options.corpus ? bench::corpus_scenes(options.detail)
+                                                                       : bench::quality_scenes();
         for (const auto& bench_scene : scenes) {
             if (!options.scenes.empty() &&
                 std::find(options.scenes.begin(), options.scenes.end(), bench_scene.name) == options.scenes.end()) {
@@ -500,7 +537,8 @@ int main(int argc, char** argv) {
                        "of the light, the vct presets with walls thinner than a voxel between two spaces, and the "
                        "share of light-to-receiver pairs that are occluded (isr without imperfect shadow maps "
                        "ignores it).\n\n"
-                       "| scene | triangles | bounces for 10% / 5% / 2% | vct leaks at | occluded | isr draft suitable |\n"
+                       "| scene | triangles | bounces for 10% / 5% / 2% | vct leaks at | occluded | "
+                       "isr draft suitable |\n"
                        "|---|---|---|---|---|---|\n" +
                        analysis_rows;
         }

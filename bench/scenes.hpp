@@ -14,8 +14,9 @@ struct BenchScene {
     std::string name;
     std::string description;
     scene::Scene scene;
-    // A scene read from a file: a hash of its bytes, in the reference cache's key (an edited mesh
-    // changes no light, material, transform or camera the key otherwise hashes).
+    // A scene read from a file: a hash of its bytes and of the geometry and textures it imported, in
+    // the reference cache's key (an edited mesh changes no light, material, transform or camera the
+    // key otherwise hashes).
     std::uint64_t file_hash = 0;
 };
 

@@ -1,7 +1,7 @@
 // What a scene needs of a method, measured on the scene itself: how much of its light arrives after
 // each bounce, where a wall is thinner than vct's voxels, and how often indirect light is occluded
-// on its way (which isr without its imperfect shadow maps does not model). The planner reads these to model only what the scene
-// requires; `scene.describe` shows them.
+// on its way (which isr without its imperfect shadow maps does not model). The planner reads these
+// to model only what the scene requires; `scene.describe` shows them.
 #pragma once
 
 #include "renderer/scene/scene.hpp"

@@ -55,8 +55,12 @@ Daemon::Daemon(DaemonConfig config)
     scene_root_.max_scene_bytes = config_.max_scene_bytes;
     scene_root_.max_scenes = config_.max_scenes;
     if (config_.priors_file) {
-        priors_ = planning::OwnErrorPriors::read(*config_.priors_file);
-        log::info("daemon", "budgets plan with the own-error priors of {}", priors_.source);
+        try {
+            priors_ = planning::OwnErrorPriors::read(*config_.priors_file);
+        } catch (const InputError& error) {
+            throw InputError(fmt::format("--priors: {}", error.what()));
+        }
+        log::info("daemon", "budgets plan with the own-error priors of {}", priors_.description());
     }
     render_ = std::make_unique<RenderService>(gpu::DeviceChoice::resolve(config_.device), config_.queue_capacity);
     // The built-in scene, and one tiny frame so every shader is compiled before we report ready.

@@ -115,13 +115,13 @@ public:
     std::uint64_t next_connection_number() { return ++connections_accepted_; }
 
 private:
-    planning::OwnErrorPriors priors_ = planning::OwnErrorPriors::bench();  // read at start (--priors)
     void accept();
     void start_http_server();
     void begin_shutdown();
 
     DaemonConfig config_;
     std::optional<std::string> token_;
+    planning::OwnErrorPriors priors_ = planning::OwnErrorPriors::bench();  // read at start (--priors)
     SceneRoot scene_root_;
     std::unique_ptr<RenderService> render_;
     Metrics metrics_;

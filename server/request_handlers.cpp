@@ -769,7 +769,7 @@ json RequestHandlers::stats(Renderer& renderer, SceneRegistry& registry) {
     reply["planner"] = device_costs_  ? json{{"cost_model", "ready"}}
                        : calibration_ ? json{{"cost_model", "calibrating"}, {"calibrated_fraction", calibration_->fraction()}}
                                       : json{{"cost_model", "none"}};
-    reply["planner"]["priors"] = daemon_.priors().source;
+    reply["planner"]["priors"] = daemon_.priors().description();
     reply["gpu_memory"] = {{"budget_bytes", renderer.memory_budget().bytes},
                            {"budget_source", renderer.memory_budget().source},
                            {"resident_bytes", renderer.resident_bytes()}};

@@ -37,7 +37,8 @@ std::pair<double, std::string> own_error(const std::string& method, const std::s
         }
         return priors.largest_of(method, name, bounces).value_or(0.0);
     };
-    const std::string bench = "on " + (occluded_isr ? priors.occluded_source : priors.source);
+    const std::string bench =
+        "on " + (occluded_isr ? priors.occluded_source : priors.source_of(method, preset, bounces));
     const double prior = prior_of(preset);
     if (!measured) return {prior, bench};
     if (const auto own = measured->own_error(method, preset, bounces)) {
@@ -154,9 +155,10 @@ ErrorPrediction predict_error(const SceneAnalysis& analysis, const std::string& 
     if (analysis.visibility.mostly_occluded()) {
         const methods::MethodRegistry& registry = methods::MethodRegistry::builtin();
         const methods::MethodInfo& info = registry.find(method);
-        const std::string unmodelled = info.unmodelled_indirect_visibility
-                                           ? info.unmodelled_indirect_visibility(registry.resolve(method, preset, knobs))
-                                           : std::string();
+        const std::string unmodelled =
+            info.unmodelled_indirect_visibility
+                ? info.unmodelled_indirect_visibility(registry.resolve(method, preset, knobs))
+                : std::string();
         if (!unmodelled.empty()) {
             prediction.ruled_out =
                 fmt::format("{:.0f}% of the indirect light is occluded, which {} {} does not model ({})",

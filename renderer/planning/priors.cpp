@@ -36,6 +36,18 @@ std::optional<double> OwnErrorPriors::typical_of(const std::string& method, cons
     return look_up(typical, vct_second_typical, method, preset, bounces);
 }
 
+const std::string& OwnErrorPriors::source_of(const std::string& method, const std::string& preset, int bounces) const {
+    if (from_file.empty()) return source;
+    const bool second = method == "vct" && bounces >= 2 && vct_second_largest.count(preset);
+    return from_file.count({second ? "vct-2" : method, preset}) ? source : base_source;
+}
+
+std::string OwnErrorPriors::description() const {
+    if (from_file.empty()) return source;
+    return fmt::format("{} for {} entr{}, {} for the rest", source, from_file.size(),
+                       from_file.size() == 1 ? "y" : "ies", base_source);
+}
+
 const OwnErrorPriors& OwnErrorPriors::bench() {
     static const OwnErrorPriors tables = [] {
         OwnErrorPriors priors;
@@ -96,8 +108,6 @@ const OwnErrorPriors& OwnErrorPriors::bench() {
 
 namespace {
 
-constexpr double kLargestRelMse = 100.0;
-
 const std::vector<std::string>& gpu_methods() {
     static const std::vector<std::string> names = [] {
         std::vector<std::string> gpu;
@@ -117,44 +127,49 @@ void check_preset(const std::string& preset, const std::string& where) {
     }
 }
 
+// relMSE has no upper bound (a bright frame over a black reference), but is finite and not negative.
 double rel_mse_at(const nlohmann::json& value, const std::string& where) {
-    if (!value.is_number() || !std::isfinite(value.get<double>()) || value.get<double>() < 0.0 ||
-        value.get<double>() > kLargestRelMse) {
-        throw InputError(fmt::format("{}: {} is not a relMSE in [0, {:g}]", where, value.dump(), kLargestRelMse));
+    if (!value.is_number() || !std::isfinite(value.get<double>()) || value.get<double>() < 0.0) {
+        throw InputError(fmt::format("{}: {} is not a relMSE (a finite number, at least 0)", where, value.dump()));
     }
     return value.get<double>();
 }
 
 const nlohmann::json& object_at(const nlohmann::json& value, const std::string& where) {
     if (!value.is_object()) throw InputError(fmt::format("{}: expected an object, not {}", where, value.type_name()));
+    if (value.empty()) throw InputError(fmt::format("{}: empty", where));
     return value;
 }
 
-// {METHOD: {PRESET: relMSE}} into `table`, entry by entry.
-void read_table(const nlohmann::json& tables, const char* name, OwnErrorPriors::Table& table, const std::string& where) {
+// {METHOD: {PRESET: relMSE}} into `table`, entry by entry, each entry's key into `read`.
+void read_table(const nlohmann::json& tables, const char* name, OwnErrorPriors::Table& table, const std::string& where,
+                std::set<std::pair<std::string, std::string>>& read) {
     if (!tables.contains(name)) return;
     const std::string at = fmt::format("{}: {}", where, name);
     for (const auto& [method, presets] : object_at(tables[name], at).items()) {
         const auto& gpu = gpu_methods();
         if (std::find(gpu.begin(), gpu.end(), method) == gpu.end()) {
-            throw InputError(fmt::format("{}: '{}' is not a GPU method (known: {})", at, method, fmt::join(gpu, ", ")));
+            throw InputError(
+                fmt::format("{}: '{}' is not a GPU method (known: {})", at, method, fmt::join(gpu, ", ")));
         }
         for (const auto& [preset, value] : object_at(presets, at + "." + method).items()) {
             const std::string entry = fmt::format("{}.{}.{}", at, method, preset);
             check_preset(preset, entry);
             table[{method, preset}] = rel_mse_at(value, entry);
+            read.insert({method, preset});
         }
     }
 }
 
-// {PRESET: relMSE} into `table`.
+// {PRESET: relMSE} into `table`, each preset as (`method`, preset) into `read`.
 void read_presets(const nlohmann::json& tables, const char* name, std::map<std::string, double>& table,
-                  const std::string& where) {
+                  const std::string& where, const char* method, std::set<std::pair<std::string, std::string>>& read) {
     if (!tables.contains(name)) return;
     const std::string at = fmt::format("{}: {}", where, name);
     for (const auto& [preset, value] : object_at(tables[name], at).items()) {
         check_preset(preset, at + "." + preset);
         table[preset] = rel_mse_at(value, at + "." + preset);
+        read.insert({method, preset});
     }
 }
 
@@ -162,14 +177,18 @@ void read_presets(const nlohmann::json& tables, const char* name, std::map<std::
 
 nlohmann::json OwnErrorPriors::to_json() const {
     nlohmann::json tables = {{"source", source}};
-    for (const auto& [name, table] : {std::pair<const char*, const Table*>{"largest", &largest}, {"typical", &typical}}) {
+    for (const auto& [name, table] :
+         {std::pair<const char*, const Table*>{"largest", &largest}, {"typical", &typical}}) {
         nlohmann::json out = nlohmann::json::object();
         for (const auto& [key, value] : *table) out[key.first][key.second] = value;
         tables[name] = out;
     }
-    tables["vct_second_largest"] = vct_second_largest;
-    tables["vct_second_typical"] = vct_second_typical;
-    tables["isr_occluded_largest"] = isr_occluded_largest;
+    if (!vct_second_largest.empty()) tables["vct_second_largest"] = vct_second_largest;
+    if (!vct_second_typical.empty()) tables["vct_second_typical"] = vct_second_typical;
+    if (!isr_occluded_largest.empty()) tables["isr_occluded_largest"] = isr_occluded_largest;
+    for (const char* name : {"largest", "typical"}) {
+        if (tables[name].empty()) tables.erase(name);
+    }
     return tables;
 }
 
@@ -180,22 +199,31 @@ OwnErrorPriors OwnErrorPriors::from_json(const nlohmann::json& tables, const Own
                                                    "vct_second_typical", "isr_occluded_largest"};
     for (const auto& [name, value] : tables.items()) {
         if (std::find(known.begin(), known.end(), name) == known.end()) {
-            throw InputError(fmt::format("{}: unknown field '{}' (known: {})", where, name, fmt::join(known, ", ")));
+            throw InputError(
+                fmt::format("{}: unknown field '{}' (known: {})", where, name, fmt::join(known, ", ")));
         }
     }
-    OwnErrorPriors priors = base;
-    read_table(tables, "largest", priors.largest, where);
-    read_table(tables, "typical", priors.typical, where);
-    read_presets(tables, "vct_second_largest", priors.vct_second_largest, where);
-    read_presets(tables, "vct_second_typical", priors.vct_second_typical, where);
-    read_presets(tables, "isr_occluded_largest", priors.isr_occluded_largest, where);
     std::string source = where;
     if (tables.contains("source")) {
-        if (!tables["source"].is_string()) throw InputError(fmt::format("{}: source must be a string", where));
+        if (!tables["source"].is_string()) {
+            throw InputError(fmt::format("{}: source: {} is not a string", where, tables["source"].dump()));
+        }
         source = fmt::format("{} ({})", tables["source"].get<std::string>(), where);
     }
-    if (tables.contains("largest") || tables.contains("typical")) priors.source = source;
-    if (tables.contains("isr_occluded_largest")) priors.occluded_source = source;
+    OwnErrorPriors priors = base;
+    std::set<std::pair<std::string, std::string>> read, occluded;
+    read_table(tables, "largest", priors.largest, where, read);
+    read_table(tables, "typical", priors.typical, where, read);
+    read_presets(tables, "vct_second_largest", priors.vct_second_largest, where, "vct-2", read);
+    read_presets(tables, "vct_second_typical", priors.vct_second_typical, where, "vct-2", read);
+    read_presets(tables, "isr_occluded_largest", priors.isr_occluded_largest, where, "isr", occluded);
+    if (!read.empty()) {
+        // The base's entries keep their source: a file may measure some methods alone.
+        priors.base_source = base.source;
+        priors.source = source;
+        priors.from_file = std::move(read);
+    }
+    if (!occluded.empty()) priors.occluded_source = source;
     return priors;
 }
 

@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <map>
 #include <optional>
+#include <set>
 #include <string>
 #include <utility>
 
@@ -28,9 +29,17 @@ struct OwnErrorPriors {
     // Cornell variants (bench/results/quality.csv), with walls between light and receivers, is
     // promised there.
     std::map<std::string, double> isr_occluded_largest;
-    // Where the tables were measured, as a plan's `why` names them ("on the bench scenes").
+    // Where the tables were measured, as a plan's `why` names them ("on the bench scenes"): every
+    // entry's, or, where `from_file` is not empty, the entries it lists (a file's), the others
+    // `base_source`'s.
     std::string source = "the bench scenes";
+    std::string base_source = "the bench scenes";
+    std::set<std::pair<std::string, std::string>> from_file;  // (method, preset); vct's second bounce as "vct-2"
     std::string occluded_source = "the bench's occluded Cornell variants";
+    // Where the prior of `method` at `preset` and `bounces` was measured.
+    const std::string& source_of(const std::string& method, const std::string& preset, int bounces = 1) const;
+    // Where all of them were: "SOURCE", or "SOURCE for N entries, BASE for the rest".
+    std::string description() const;
 
     // The largest at `bounces` where measured apart at that count (vct's second bounce), else at the
     // preset's own; nullopt for methods without one.
@@ -42,11 +51,15 @@ struct OwnErrorPriors {
     static const OwnErrorPriors& bench();
 
     // The tables as JSON: {"source", "largest": {METHOD: {PRESET: relMSE}}, "typical": {...},
-    // "vct_second_largest": {PRESET: relMSE}, "vct_second_typical", "isr_occluded_largest"}.
+    // "vct_second_largest": {PRESET: relMSE}, "vct_second_typical", "isr_occluded_largest"}; the
+    // tables left empty are left out.
     nlohmann::json to_json() const;
-    // `base` with what `file` measured in its place, entry by entry (a file may give some methods or
-    // presets alone); `source` names the file's scenes in plans. Throws InputError naming the file
-    // and the entry: unknown method or preset, a value not a finite relMSE in [0, 100].
+    // `base` (one source's tables, as bench() is) with what `file` measured in its place, entry by
+    // entry (a file may give some methods or presets alone); its `source` names the file's scenes in
+    // plans of its entries, with the file. Throws
+    // InputError naming the file and the entry: a field other than those above, a table or method
+    // that is not an object, an empty table, a method that is not a GPU method, an unknown preset, a
+    // value that is not a finite relMSE (at least 0), a `source` that is not a string.
     static OwnErrorPriors read(const std::filesystem::path& file, const OwnErrorPriors& base = bench());
     static OwnErrorPriors from_json(const nlohmann::json& tables, const OwnErrorPriors& base, const std::string& where);
 };

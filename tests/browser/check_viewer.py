@@ -222,7 +222,7 @@ def check_budget(tools: DevTools, tcp_port: int, work: str, methods: list[str]) 
     tools.evaluate("(() => { const m = document.getElementById('method'); m.value = 'auto';"
                    " m.dispatchEvent(new Event('change')); })()")
     # The first budget calibrates the device's cost model (the daemon's smallest calibration).
-    state = wait_for_final(tools, frames, 240, "method auto", plan=True)
+    state = wait_for_final(tools, frames, 180, "method auto", plan=True)
     plan = json.loads(tools.evaluate("JSON.stringify(lastPlan)"))
     controls = json.loads(tools.evaluate(
         "JSON.stringify({kind: $('budget-kind').value, value: $('budget-value').value,"
@@ -237,11 +237,23 @@ def check_budget(tools: DevTools, tcp_port: int, work: str, methods: list[str]) 
     if not controls["shown"].startswith(f"{plan['method']} {plan['preset']}") or controls["why"] != plan["why"]:
         fail(f"the panel does not show the plan: {controls}")
 
+    # A target error instead: the frame time goes (a merge patch keeps what it does not null).
+    frames = int(state["frames"])
+    tools.evaluate("(() => { $('budget-kind').value = 'max_error'; $('budget-value').value = '0.5';"
+                   " $('budget-value').dispatchEvent(new Event('change')); })()")
+    state = wait_for_final(tools, frames, 180, "a target error", plan=True)
+    plan = json.loads(tools.evaluate("JSON.stringify(lastPlan)"))
+    print(json.dumps({"plan for relMSE 0.5": plan}))
+    if "relMSE 0.5" not in plan["why"] or "100 ms" in plan["why"]:
+        fail(f"the stream did not plan for relMSE 0.5 alone: {plan['why']}")
+    if plan["meets_budget"] and plan["predicted_error"] > 0.5:
+        fail(f"a plan said to meet relMSE 0.5 predicts {plan['predicted_error']}")
+
     # Without the budget the stream keeps the plan's method and preset (its planned knobs go).
     frames = int(state["frames"])
     tools.evaluate("(() => { const k = document.getElementById('budget-kind'); k.value = '';"
                    " k.dispatchEvent(new Event('change')); })()")
-    wait_for_final(tools, frames, 240, "budget removed", plan=False)
+    wait_for_final(tools, frames, 180, "budget removed", plan=False)
     kept = json.loads(tools.evaluate("JSON.stringify({method: $('method').value, preset: $('preset').value,"
                                      " preset_disabled: $('preset').disabled})"))
     if kept != {"method": plan["method"], "preset": plan["preset"], "preset_disabled": False}:

@@ -506,14 +506,17 @@ TEST(Budget, PlansTheMemoryBudgetWouldRefuseAreRuledOutWithTheRendersOwnRefusal)
 // preset (the bench says 0.05 to 1.25), a budget within vct is planned on the file's figure, and the
 // plan's `why` and `stats` name where the file says it was measured.
 TEST(Budget, ADeploymentsPriorsAreWhatPlansPromiseFrom) {
-    const auto file = std::filesystem::temp_directory_path() / ("bounce-priors-" + std::to_string(::getpid()) + ".json");
+    const auto file =
+        std::filesystem::temp_directory_path() / ("bounce-priors-" + std::to_string(::getpid()) + ".json");
     json vct;
     for (const char* preset : {"draft", "low", "medium", "high", "ultra"}) vct[preset] = 0.001;
-    std::ofstream(file) << json{{"source", "a deployment's rooms"}, {"largest", {{"vct", vct}}}, {"typical", {{"vct", vct}}}};
+    std::ofstream(file) << json{
+        {"source", "a deployment's rooms"}, {"largest", {{"vct", vct}}}, {"typical", {{"vct", vct}}}};
     BudgetDaemon d(false, 100.0, {"--priors", file.string()});
     std::filesystem::remove(file);
     const std::string source = "a deployment's rooms (" + file.string() + ")";
-    EXPECT_EQ(d.client.request(MessageType::stats, json::object()).body["planner"]["priors"], source);
+    EXPECT_EQ(d.client.request(MessageType::stats, json::object()).body["planner"]["priors"],
+              source + " for 5 entries, the bench scenes for the rest");
     const auto reply = d.render({{"method", "vct"}, {"budget", {{"max_error", 0.5}}}, {"width", 32}, {"height", 32}});
     const json& plan = reply.body["plan"];
     EXPECT_EQ(plan["method"], "vct");

@@ -10,6 +10,7 @@
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -118,6 +119,7 @@ TEST(PlannerPriors, ADeploymentsFileReplacesWhatItMeasuredAndKeepsTheRest) {
     EXPECT_EQ(again.largest, bench.largest);
     EXPECT_EQ(again.typical, bench.typical);
     EXPECT_EQ(again.vct_second_largest, bench.vct_second_largest);
+    EXPECT_EQ(again.vct_second_typical, bench.vct_second_typical);
     EXPECT_EQ(again.isr_occluded_largest, bench.isr_occluded_largest);
 
     const nlohmann::json file = {{"source", "our atria"}, {"largest", {{"cssm", {{"low", 0.5}}}}},
@@ -127,8 +129,17 @@ TEST(PlannerPriors, ADeploymentsFileReplacesWhatItMeasuredAndKeepsTheRest) {
     EXPECT_EQ(*ours.typical_of("cssm", "low"), 0.25);
     EXPECT_EQ(*ours.largest_of("cssm", "draft"), *bench.largest_of("cssm", "draft"));
     EXPECT_EQ(ours.isr_occluded_largest, bench.isr_occluded_largest);
-    EXPECT_EQ(ours.source, "our atria (atria.json)");
+    EXPECT_EQ(ours.source_of("cssm", "low"), "our atria (atria.json)");
+    // What the file did not measure is still the bench's, and said to be.
+    EXPECT_EQ(ours.source_of("cssm", "draft"), "the bench scenes");
+    EXPECT_EQ(ours.source_of("vct", "low", 2), "the bench scenes");
+    EXPECT_EQ(ours.description(), "our atria (atria.json) for 1 entry, the bench scenes for the rest");
     EXPECT_EQ(ours.occluded_source, bench.occluded_source);
+    // A file of vct's second bounce alone is its source there alone.
+    const auto second = planning::OwnErrorPriors::from_json({{"vct_second_largest", {{"low", 0.2}}}}, bench, "v.json");
+    EXPECT_EQ(*second.largest_of("vct", "low", 2), 0.2);
+    EXPECT_EQ(second.source_of("vct", "low", 2), "v.json");
+    EXPECT_EQ(second.source_of("vct", "low", 1), "the bench scenes");
 
     // A plan's error basis names them.
     SceneAnalysis analysis;
@@ -140,6 +151,8 @@ TEST(PlannerPriors, ADeploymentsFileReplacesWhatItMeasuredAndKeepsTheRest) {
     const auto prediction = planning::predict_error(analysis, "cssm", "low", {{"bounces", 8}}, nullptr, ours);
     EXPECT_NEAR(prediction.rel_mse, 0.5 + 0.1 / 256.0, 1e-12);
     EXPECT_NE(prediction.basis.find("on our atria (atria.json)"), std::string::npos) << prediction.basis;
+    const auto draft = planning::predict_error(analysis, "cssm", "draft", {{"bounces", 8}}, nullptr, ours);
+    EXPECT_NE(draft.basis.find("on the bench scenes"), std::string::npos) << draft.basis;
 }
 
 // Every malformed entry is refused naming the file and the entry, before a plan reads it.
@@ -157,20 +170,27 @@ TEST(PlannerPriors, AMalformedFileIsRefusedNamingTheEntry) {
               "p.json: largest: 'photon' is not a GPU method (known: direct, vct, isr, cssm)");
     EXPECT_EQ(refusal({{"largest", {{"reference", {{"low", 0.1}}}}}}),
               "p.json: largest: 'reference' is not a GPU method (known: direct, vct, isr, cssm)");
-    EXPECT_EQ(refusal({{"typical", {{"isr", {{"insane", 0.1}}}}}}), "p.json: typical.isr.insane: unknown preset 'insane'");
-    EXPECT_EQ(refusal({{"largest", {{"isr", {{"low", -0.1}}}}}}), "p.json: largest.isr.low: -0.1 is not a relMSE in [0, 100]");
-    EXPECT_EQ(refusal({{"largest", {{"isr", {{"low", 1e9}}}}}}),
-              "p.json: largest.isr.low: 1000000000.0 is not a relMSE in [0, 100]");
+    EXPECT_EQ(refusal({{"typical", {{"isr", {{"insane", 0.1}}}}}}),
+              "p.json: typical.isr.insane: unknown preset 'insane'");
+    EXPECT_EQ(refusal({{"largest", {{"isr", {{"low", -0.1}}}}}}),
+              "p.json: largest.isr.low: -0.1 is not a relMSE (a finite number, at least 0)");
     EXPECT_EQ(refusal({{"largest", {{"isr", {{"low", "small"}}}}}}),
-              "p.json: largest.isr.low: \"small\" is not a relMSE in [0, 100]");
+              "p.json: largest.isr.low: \"small\" is not a relMSE (a finite number, at least 0)");
+    // relMSE has no upper bound: a bright frame over a black reference.
+    EXPECT_EQ(refusal({{"largest", {{"isr", {{"low", 1e9}}}}}}), "(accepted)");
+    EXPECT_EQ(refusal({{"largest", nlohmann::json::object()}}), "p.json: largest: empty");
+    EXPECT_EQ(refusal({{"largest", {{"isr", nlohmann::json::object()}}}}), "p.json: largest.isr: empty");
+    EXPECT_EQ(refusal({{"source", 7}, {"largest", {{"isr", {{"low", 0.1}}}}}}), "p.json: source: 7 is not a string");
     EXPECT_EQ(refusal({{"largest", {{"isr", 0.1}}}}), "p.json: largest.isr: expected an object, not number");
-    EXPECT_EQ(refusal({{"isr_occluded_largest", {{"huge", 0.1}}}}), "p.json: isr_occluded_largest.huge: unknown preset 'huge'");
+    EXPECT_EQ(refusal({{"isr_occluded_largest", {{"huge", 0.1}}}}),
+              "p.json: isr_occluded_largest.huge: unknown preset 'huge'");
     EXPECT_EQ(refusal({{"largets", {}}}),
-              "p.json: unknown field 'largets' (known: source, largest, typical, vct_second_largest, vct_second_typical, "
-              "isr_occluded_largest)");
+              "p.json: unknown field 'largets' (known: source, largest, typical, vct_second_largest, "
+              "vct_second_typical, isr_occluded_largest)");
     EXPECT_EQ(refusal(nlohmann::json::array()), "p.json: expected an object, not array");
 
-    const auto path = std::filesystem::temp_directory_path() / "bounce-priors-not-json.json";
+    const auto path =
+        std::filesystem::temp_directory_path() / fmt::format("bounce-priors-not-json-{}.json", ::getpid());
     std::ofstream(path) << "{\"largest\": ";
     try {
         planning::OwnErrorPriors::read(path);
@@ -185,12 +205,17 @@ TEST(PlannerPriors, AMalformedFileIsRefusedNamingTheEntry) {
 // back: the committed tables.
 TEST(PlannerPriors, TheBenchsFileOfTheCorpusReadsBackAsTheCommittedTables) {
     const planning::OwnErrorPriors corpus = bench::corpus_priors(kCorpus, walls());
-    const auto path = std::filesystem::temp_directory_path() / "bounce-priors-corpus.json";
+    const auto path = std::filesystem::temp_directory_path() / fmt::format("bounce-priors-corpus-{}.json", ::getpid());
     std::ofstream(path) << corpus.to_json().dump(2);
     const planning::OwnErrorPriors read = planning::OwnErrorPriors::read(path, planning::OwnErrorPriors{});
     std::filesystem::remove(path);
-    expect_tables_equal(planning::OwnErrorPriors::bench().largest, read.largest, "largest");
-    expect_tables_equal(planning::OwnErrorPriors::bench().typical, read.typical, "typical");
+    const planning::OwnErrorPriors& bench = planning::OwnErrorPriors::bench();
+    expect_tables_equal(bench.largest, read.largest, "largest");
+    expect_tables_equal(bench.typical, read.typical, "typical");
+    for (const auto& [preset, figure] : bench.vct_second_largest) {
+        EXPECT_NEAR(read.vct_second_largest.at(preset), figure, kRounding) << preset;
+        EXPECT_NEAR(read.vct_second_typical.at(preset), bench.vct_second_typical.at(preset), kRounding) << preset;
+    }
 }
 
 }  // namespace
