@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
@@ -30,6 +31,8 @@ std::optional<std::pair<double, double>> largest_and_median(const std::map<std::
     std::vector<double> all, promised;
     for (const auto& [scene, error] : by_scene) {
         if (left_out.count(scene)) continue;
+        // A frame bench/quality could not measure (values not finite) leaves nothing to promise.
+        if (std::isnan(error)) return std::pair{error, error};
         all.push_back(error);
         if (!leaking.count(scene)) promised.push_back(error);
     }

@@ -28,6 +28,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <optional>
 #include <span>
 #include <sstream>
@@ -475,6 +476,13 @@ int main(int argc, char** argv) {
                     row.rmse = full.rmse;
                     row.mean_ratio = full.mean_reference > 0 ? full.mean_test / full.mean_reference : 0.0;
                     row.rel_mse_same_bounces = image::compare(median.frame, truth_at(row.bounces)).rel_mse;
+                    // relMSE skips pixels that are not finite: a frame of them would read as exact. It
+                    // is measured as nothing (NaN), which --priors-out refuses to promise.
+                    if (const std::size_t bad = median.frame.non_finite_count(); bad > 0) {
+                        log::warn("bench", "{} {} {}: {} values not finite; its relMSE is not measured", row.scene,
+                                  method, preset, bad);
+                        row.rel_mse = row.rel_mse_same_bounces = std::numeric_limits<double>::quiet_NaN();
+                    }
                     if (options.unoccluded && row.bounces == 1) {
                         const auto against = image::compare(median.frame, unoccluded_truth());
                         row.rel_mse_unoccluded = against.rel_mse;

@@ -218,5 +218,26 @@ TEST(PlannerPriors, TheBenchsFileOfTheCorpusReadsBackAsTheCommittedTables) {
     }
 }
 
+// A frame bench/quality could not measure (values not finite: its relMSE written as nan) makes no
+// prior: the entry is NaN, whichever scene came first, and a priors file of it is refused.
+TEST(PlannerPriors, AFrameTheBenchCouldNotMeasureIsNotPromised) {
+    const auto directory = std::filesystem::temp_directory_path() / fmt::format("bounce-priors-nan-{}", ::getpid());
+    std::filesystem::create_directories(directory);
+    std::ofstream(directory / "quality.csv") << "scene,method,preset,bounces,rel_mse_same_bounces\n"
+                                             << "a,cssm,low,1,0.01\nb,cssm,low,1,nan\nc,cssm,low,1,0.02\n"
+                                             << "a,cssm,draft,1,0.03\n";
+    const planning::OwnErrorPriors priors = bench::corpus_priors(directory, {}, {}, false);
+    std::filesystem::remove_all(directory);
+    EXPECT_TRUE(std::isnan(priors.largest.at({"cssm", "low"})));
+    EXPECT_TRUE(std::isnan(priors.typical.at({"cssm", "low"})));
+    EXPECT_EQ(priors.largest.at({"cssm", "draft"}), 0.03);
+    try {
+        planning::OwnErrorPriors::from_json(priors.to_json(), planning::OwnErrorPriors::bench(), "p.json");
+        ADD_FAILURE() << "a prior of a frame not measured was accepted";
+    } catch (const InputError& error) {
+        EXPECT_NE(std::string(error.what()).find("cssm.low: null is not a relMSE"), std::string::npos) << error.what();
+    }
+}
+
 }  // namespace
 }  // namespace bounce
