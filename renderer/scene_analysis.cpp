@@ -250,7 +250,7 @@ ThinWalls thin_walls(const scene::Scene& scene, const raytrace::RayScene& rays, 
     const float extent = glm::compMax(bounds.extent());
     ThinWalls walls;
     const methods::MethodInfo& vct = methods::MethodRegistry::builtin().find("vct");
-    for (const auto& [name, knobs] : vct.presets) walls.presets[name].voxel_size = extent / knobs.at("resolution");
+    for (const auto& [name, knobs] : vct.presets) walls.presets[name].voxel_size = vct.voxel_size(knobs, extent);
     if (surfaces.empty() || !(extent > 0.0f)) return walls;
 
     const float epsilon = 1e-5f * extent;  // past the surface the ray starts on

@@ -54,6 +54,10 @@ struct MethodInfo {
     // (IndirectVisibility::mostly_occluded). Null: every frame of the method models it, or the
     // method computes no indirect light.
     std::function<std::string(const KnobValues&)> unmodelled_indirect_visibility;
+    // The edge of the cells a frame with these knobs gathers light in, in a scene whose largest
+    // extent is `extent` (vct: its leaf voxels): a lit wall thinner than that between two spaces
+    // lets light through (the scene analysis' thin walls). Null: the method has no such cells.
+    std::function<double(const KnobValues&, double extent)> voxel_size;
 };
 
 class MethodRegistry {

@@ -83,6 +83,20 @@ TEST(MethodRegistry, IsrSaysItModelsIndirectVisibilityWhereItsFramesMakeTheMaps)
     }
 }
 
+// The scene analysis sizes vct's thin walls by the method's own word: its leaf voxels, the scene's
+// extent over `resolution` (docs/methods.md, "vct"). No other method has voxels.
+TEST(MethodRegistry, VctSaysHowLargeItsVoxelsAre) {
+    const auto& registry = MethodRegistry::builtin();
+    const MethodInfo& vct = registry.find("vct");
+    ASSERT_TRUE(vct.voxel_size);
+    for (const auto& preset : preset_names()) {
+        const KnobValues knobs = registry.resolve("vct", preset, {});
+        EXPECT_DOUBLE_EQ(vct.voxel_size(knobs, 12.0), 12.0 / knobs.at("resolution")) << preset;
+    }
+    EXPECT_DOUBLE_EQ(vct.voxel_size(registry.resolve("vct", "low", {{"resolution", 100}}), 5.0), 0.05);
+    for (const char* method : {"direct", "isr", "cssm", "reference"}) EXPECT_FALSE(registry.find(method).voxel_size) << method;
+}
+
 TEST(MethodRegistry, IncompleteMethodsAreRejected) {
     MethodRegistry registry;
     MethodInfo info;

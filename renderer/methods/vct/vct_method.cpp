@@ -297,6 +297,7 @@ MethodInfo method_info() {
                     {"high", preset(64, 16, 0.5, 512, 2048)},
                     {"ultra", preset(96, 32, 0.35, 512, 2048)}};
     info.create = [] { return std::make_unique<VctMethod>(); };
+    info.voxel_size = [](const KnobValues& knobs, double extent) { return extent / knobs.at("resolution"); };
     info.estimate = [](const EstimateInput& input) {
         MemoryEstimate estimate = direct_light_estimate(input);
         if (input.knob_int("ao") != 0) estimate[1].bytes = 0;  // ambient occlusion draws no direct light
