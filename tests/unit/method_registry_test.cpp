@@ -94,7 +94,9 @@ TEST(MethodRegistry, VctSaysHowLargeItsVoxelsAre) {
         EXPECT_DOUBLE_EQ(vct.voxel_size(knobs, 12.0), 12.0 / knobs.at("resolution")) << preset;
     }
     EXPECT_DOUBLE_EQ(vct.voxel_size(registry.resolve("vct", "low", {{"resolution", 100}}), 5.0), 0.05);
-    for (const char* method : {"direct", "isr", "cssm", "reference"}) EXPECT_FALSE(registry.find(method).voxel_size) << method;
+    for (const char* method : {"direct", "isr", "cssm", "reference"}) {
+        EXPECT_FALSE(registry.find(method).voxel_size) << method;
+    }
 }
 
 TEST(MethodRegistry, IncompleteMethodsAreRejected) {
