@@ -19,7 +19,6 @@
 #include "renderer/renderer.hpp"
 #include "renderer/scene_analysis.hpp"
 #include "renderer/scene/builtin.hpp"
-#include "renderer/scene/gltf_import.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -27,10 +26,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <iterator>
 #include <limits>
 #include <optional>
-#include <span>
 #include <sstream>
 
 namespace {
@@ -238,44 +235,6 @@ void write_preview(const fs::path& path, image::Frame frame) {
     std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
 }
 
-// What a scene read from a file renders from: its file's bytes, and the geometry and textures it
-// imported (a .gltf's buffers and images may be files of their own).
-std::uint64_t imported_content_hash(const std::string& file_bytes, const scene::Scene& scene) {
-    Hasher hash;
-    hash.add(hash_bytes(file_bytes.data(), file_bytes.size()));
-    for (const auto& mesh : scene.meshes) {
-        for (const auto& primitive : mesh.primitives) {
-            hash.add_span(std::span<const glm::vec3>(primitive.positions));
-            hash.add_span(std::span<const std::uint32_t>(primitive.indices));
-            hash.add_span(std::span<const glm::vec2>(primitive.uv0));
-            hash.add(primitive.material);
-        }
-    }
-    for (const auto& texture : scene.textures) hash.add_span(std::span<const std::uint8_t>(texture.rgba8));
-    return hash.value();
-}
-
-// Each file as a bench scene named by its stem (its own camera, or the importer's default view; the
-// importer logs what it fell back on). Two files of one stem would share their rows: refused.
-std::vector<bench::BenchScene> gltf_scenes(const std::vector<fs::path>& files) {
-    std::vector<bench::BenchScene> scenes;
-    for (const fs::path& file : files) {
-        const std::string name = file.stem().string();
-        for (const auto& other : scenes) {
-            if (other.name == name) {
-                throw std::runtime_error(fmt::format("--gltf {} and {}: two scenes named '{}' (rename one)",
-                                                     other.description, file.string(), name));
-            }
-        }
-        std::ifstream in(file, std::ios::binary);
-        const std::string bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-        scene::Scene scene = scene::import_gltf_file(file);
-        const std::uint64_t hash = imported_content_hash(bytes, scene);
-        scenes.push_back({name, file.string(), std::move(scene), hash});
-    }
-    return scenes;
-}
-
 // The planner's priors from this run's quality.csv: per GPU method and preset, the largest and the
 // median over the scenes measured (vct's presets left out where the analysis finds them leaking),
 // as bench/planner --held-out computes them from the corpus; `bounced --priors FILE` plans with
@@ -388,9 +347,10 @@ int main(int argc, char** argv) {
         std::vector<Row> rows;
         std::string details, analysis_rows;
         const auto& registry = methods::MethodRegistry::builtin();
-        const std::vector<bench::BenchScene> scenes = !options.gltf_files.empty() ? gltf_scenes(options.gltf_files)
-                                                      : options.corpus ? bench::corpus_scenes(options.detail)
-                                                                       : bench::quality_scenes();
+        const std::vector<bench::BenchScene> scenes =
+            !options.gltf_files.empty() ? bench::gltf_scenes(options.gltf_files)
+            : options.corpus            ? bench::corpus_scenes(options.detail)
+                                        : bench::quality_scenes();
         for (const auto& bench_scene : scenes) {
             if (!options.scenes.empty() &&
                 std::find(options.scenes.begin(), options.scenes.end(), bench_scene.name) == options.scenes.end()) {

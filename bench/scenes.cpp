@@ -1,8 +1,56 @@
 #include "bench/scenes.hpp"
 
+#include "renderer/base/hash.hpp"
 #include "renderer/scene/builtin.hpp"
+#include "renderer/scene/gltf_import.hpp"
+
+#include <fmt/format.h>
+
+#include <fstream>
+#include <iterator>
+#include <span>
+#include <stdexcept>
 
 namespace bounce::bench {
+namespace {
+
+// What a scene read from a file renders from: its file's bytes, and the geometry and textures it
+// imported (a .gltf's buffers and images may be files of their own).
+std::uint64_t imported_content_hash(const std::string& file_bytes, const scene::Scene& scene) {
+    Hasher hash;
+    hash.add(hash_bytes(file_bytes.data(), file_bytes.size()));
+    for (const auto& mesh : scene.meshes) {
+        for (const auto& primitive : mesh.primitives) {
+            hash.add_span<glm::vec3>(primitive.positions);
+            hash.add_span<std::uint32_t>(primitive.indices);
+            hash.add_span<glm::vec2>(primitive.uv0);
+            hash.add(primitive.material);
+        }
+    }
+    for (const auto& texture : scene.textures) hash.add_span<std::uint8_t>(texture.rgba8);
+    return hash.value();
+}
+
+}  // namespace
+
+std::vector<BenchScene> gltf_scenes(const std::vector<std::filesystem::path>& files) {
+    std::vector<BenchScene> scenes;
+    for (const std::filesystem::path& file : files) {
+        const std::string name = file.stem().string();
+        for (const auto& other : scenes) {
+            if (other.name == name) {
+                throw std::runtime_error(fmt::format("--gltf {} and {}: two scenes named '{}' (rename one)",
+                                                     other.description, file.string(), name));
+            }
+        }
+        std::ifstream in(file, std::ios::binary);
+        const std::string bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+        scene::Scene scene = scene::import_gltf_file(file);
+        const std::uint64_t hash = imported_content_hash(bytes, scene);
+        scenes.push_back({name, file.string(), std::move(scene), hash});
+    }
+    return scenes;
+}
 
 std::vector<BenchScene> quality_scenes() {
     std::vector<BenchScene> scenes;

@@ -2,13 +2,18 @@
 // finite, no degenerate triangles, lights and a camera that looks at them; and the analysis tells
 // the open street from the closed rooms as the theory of enclosures says.
 #include "bench/corpus.hpp"
+#include "bench/scenes.hpp"
 #include "renderer/raytrace/ray_scene.hpp"
 #include "renderer/scene/mesh_utils.hpp"
 #include "renderer/scene_analysis.hpp"
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
+#include <fstream>
 #include <map>
+#include <stdexcept>
+#include <unistd.h>
 
 namespace bounce {
 namespace {
@@ -56,6 +61,40 @@ TEST(Corpus, TheOpenStreetNeedsFewerBouncesThanTheClosedRooms) {
         SCOPED_TRACE(closed);
         EXPECT_GT(bounces.at(closed).bounces_for(0.05), bounces.at("outdoor").bounces_for(0.05));
     }
+}
+
+// A deployment's files as bench scenes (bench/quality --gltf): named by their stem, their reference
+// cached under a hash of what they render from. An edit of an external buffer (a .glb whose
+// triangle is in triangle.bin) changes that hash although the .glb's own bytes do not change; the
+// same files read again keep it. Two files of one stem are refused, naming both.
+TEST(Corpus, AFilesSceneIsKeyedByWhatItRendersFrom) {
+    const auto data = std::filesystem::path(BOUNCE_SOURCE_DIR) / "tests/data/gltf";
+    const auto directory =
+        std::filesystem::temp_directory_path() / ("bounce-gltf-scenes-" + std::to_string(::getpid()));
+    std::filesystem::create_directories(directory);
+    for (const char* name : {"external_buffer.glb", "triangle.bin"}) {
+        std::filesystem::copy_file(data / name, directory / name, std::filesystem::copy_options::overwrite_existing);
+    }
+    const auto scenes = bench::gltf_scenes({directory / "external_buffer.glb"});
+    ASSERT_EQ(scenes.size(), 1u);
+    EXPECT_EQ(scenes[0].name, "external_buffer");
+    EXPECT_NE(scenes[0].file_hash, 0u);
+    EXPECT_EQ(bench::gltf_scenes({directory / "external_buffer.glb"})[0].file_hash, scenes[0].file_hash);
+    {
+        std::fstream bin(directory / "triangle.bin", std::ios::in | std::ios::out | std::ios::binary);
+        const float moved = 2.0f;  // the second vertex's x, 1 before
+        bin.seekp(3 * sizeof(float));
+        bin.write(reinterpret_cast<const char*>(&moved), sizeof(moved));
+    }
+    EXPECT_NE(bench::gltf_scenes({directory / "external_buffer.glb"})[0].file_hash, scenes[0].file_hash);
+    try {
+        bench::gltf_scenes({directory / "external_buffer.glb", data / "external_buffer.glb"});
+        ADD_FAILURE() << "two files of one stem were taken";
+    } catch (const std::runtime_error& error) {
+        EXPECT_NE(std::string(error.what()).find("two scenes named 'external_buffer'"), std::string::npos)
+            << error.what();
+    }
+    std::filesystem::remove_all(directory);
 }
 
 }  // namespace
