@@ -3,7 +3,9 @@
 // resident memory and the error against the reference; it also measures the reference itself
 // (error reached per CPU second). Writes a CSV, a Markdown table (docs/benchmarks.md) and, through
 // bench/plot_quality.py, a plot of error against time. The isr and cssm sections of the Markdown are
-// bench/isr's and bench/cssm's; it keeps them.
+// bench/isr's and bench/cssm's; it keeps them. Beside the CSV, ladder.csv: each preset's own error
+// against each cheaper preset's, with the reference's noise in their difference (bench/preset_ladder.py
+// reads it; --ladder-only writes it alone).
 #include "bench/common.hpp"
 #include "bench/reference_cache.hpp"
 #include "bench/markdown_blocks.hpp"
@@ -56,6 +58,10 @@ struct Options {
     bool unoccluded = false;
     int repeats = 3;
     std::vector<std::string> methods;  // measure only these (the reference among them); all when empty
+    std::vector<std::string> presets;  // of the GPU methods, only these; all when empty
+    // The preset ladder alone (--ladder-only): one frame of each preset after its warm-up, ladder.csv
+    // into --out, no other table, and docs/benchmarks.md as it is.
+    bool ladder_only = false;
     fs::path out = "bench/results";
     fs::path cache = "build/bench-cache";
     fs::path markdown = "docs/benchmarks.md";
@@ -88,6 +94,30 @@ struct Row {
     // shadow map redrawn).
     double dimmed_ms = 0;
 };
+
+// Each preset of a method on a scene against each cheaper preset of the same bounce count: the
+// difference of their own errors (against the reference at those bounces) and the standard
+// deviation the reference's noise gives that difference (image::rel_mse_difference_noise). A
+// preset's own error falls with its time where each difference is negative, or within two of these.
+struct LadderRow {
+    std::string scene, method, preset, cheaper;
+    int bounces = 0;
+    double rel_mse_same_bounces = 0, cheaper_rel_mse_same_bounces = 0, noise = 0;
+    // The scene analysis finds walls thinner than a voxel of either preset (vct): the planner rules
+    // such a preset out on the scene, whatever its error.
+    bool thin_walls = false;
+};
+
+void write_ladder_csv(const fs::path& path, const std::vector<LadderRow>& rows) {
+    std::ofstream out(path);
+    out << "scene,method,preset,cheaper,bounces,rel_mse_same_bounces,cheaper_rel_mse_same_bounces,difference,noise,"
+           "thin_walls\n";
+    for (const LadderRow& r : rows) {
+        out << fmt::format("{},{},{},{},{},{:.9g},{:.9g},{:.9g},{:.3g},{}\n", r.scene, r.method, r.preset, r.cheaper,
+                           r.bounces, r.rel_mse_same_bounces, r.cheaper_rel_mse_same_bounces,
+                           r.rel_mse_same_bounces - r.cheaper_rel_mse_same_bounces, r.noise, r.thin_walls ? 1 : 0);
+    }
+}
 
 bench::ReferenceSpec reference_spec(const Options& options) {
     bench::ReferenceSpec spec;
@@ -304,14 +334,17 @@ int main(int argc, char** argv) {
         else if (flag == "--previews") options.previews = arguments.value();
         else if (flag == "--detail") options.detail = std::max(1, arguments.number());
         else if (flag == "--method") options.methods.push_back(arguments.value());
+        else if (flag == "--preset") options.presets.push_back(arguments.value());
+        else if (flag == "--ladder-only") options.ladder_only = true;
         else if (flag == "--knob") arguments.knob(options.knobs);
         else if (flag == "--unoccluded") options.unoccluded = true;
         else {
             std::fprintf(stderr,
                          "usage: quality [--size N] [--reference-spp N] [--reference-bounces N] [--repeats N]\n"
-                         "               [--scene NAME ...] [--method NAME ...] [--knob NAME=VALUE ...]\n"
+                         "               [--scene NAME ...] [--method NAME ...] [--preset NAME ...]\n"
+                         "               [--knob NAME=VALUE ...]\n"
                          "               [--corpus [--detail N] | --gltf FILE ...] [--priors-out FILE]\n"
-                         "               [--pixel-centre] [--unoccluded]\n"
+                         "               [--pixel-centre] [--unoccluded] [--ladder-only]\n"
                          "               [--previews DIR]\n"
                          "               [--out DIR]\n"
                          "               [--cache DIR]\n"
@@ -321,9 +354,20 @@ int main(int argc, char** argv) {
             return 2;
         }
     }
-    if (options.priors_out && !options.knobs.empty()) {
-        std::fprintf(stderr, "quality: --priors-out measures the presets as they are (not with --knob)\n");
+    if (options.ladder_only && (options.priors_out || !options.out_given)) {
+        std::fprintf(stderr, "quality: --ladder-only writes the ladder alone, into an --out of its own\n");
         return 2;
+    }
+    if (options.priors_out && (!options.knobs.empty() || !options.presets.empty())) {
+        std::fprintf(stderr, "quality: --priors-out measures every preset as it is (not with --knob or --preset)\n");
+        return 2;
+    }
+    for (const std::string& preset : options.presets) {
+        const auto& names = methods::preset_names();
+        if (std::find(names.begin(), names.end(), preset) == names.end()) {
+            std::fprintf(stderr, "quality: unknown preset '%s'\n", preset.c_str());
+            return 2;
+        }
     }
     if (!options.gltf_files.empty() && (options.corpus || !options.out_given || !options.markdown_given)) {
         std::fprintf(stderr, "quality: --gltf measures your scenes instead of the bench's (not with --corpus), into an "
@@ -345,6 +389,7 @@ int main(int argc, char** argv) {
     try {
         Renderer renderer(gpu::DeviceChoice::resolve(std::nullopt));
         std::vector<Row> rows;
+        std::vector<LadderRow> ladder;
         std::string details, analysis_rows;
         const auto& registry = methods::MethodRegistry::builtin();
         const std::vector<bench::BenchScene> scenes =
@@ -379,6 +424,19 @@ int main(int argc, char** argv) {
                 return *unoccluded;
             };
             if (options.corpus) analysis_rows += analysis_row(bench_scene);
+            // Where vct's voxels are wider than the scene's walls (the planner rules such presets out).
+            const ThinWalls thin_walls = measured("vct") ? bench::thin_walls_of({bench_scene}).at(bench_scene.name)
+                                                         : ThinWalls{};
+            std::map<int, std::vector<float>> variance_by_bounces;  // of the reference at each bounce count
+            auto variance_at = [&](int bounces) -> const std::vector<float>& {
+                auto it = variance_by_bounces.find(bounces);
+                if (it == variance_by_bounces.end()) {
+                    const auto spec = reference_spec(options);
+                    auto variance = bench::reference_variance(bench_scene, tracer, spec, bounces);
+                    it = variance_by_bounces.emplace(bounces, std::move(variance)).first;
+                }
+                return it->second;
+            };
             scene::Scene relit_scene = bench_scene.scene;  // its lights change to time a relit frame
             auto resources = renderer.upload(relit_scene);
             for (const auto& method : registry.names()) {
@@ -394,22 +452,38 @@ int main(int argc, char** argv) {
                         knobs[name] = value;
                     }
                 }
+                struct Rung {
+                    std::string preset;
+                    int bounces;
+                    double rel_mse_same_bounces;
+                    image::Frame frame;
+                };
+                std::vector<Rung> rungs;  // the presets measured so far, cheapest first
                 for (const auto& preset : methods::preset_names()) {
+                    if (!options.presets.empty() &&
+                        std::find(options.presets.begin(), options.presets.end(), preset) == options.presets.end()) {
+                        continue;
+                    }
                     const RenderRequest request = linear_request(method, preset, knobs, options.size);
                     const RenderResult cold = renderer.render(*resources, request);  // warm-up: shaders, structures
                     std::vector<RenderResult> results;
-                    for (int r = 0; r < options.repeats; ++r) results.push_back(renderer.render(*resources, request));
+                    const int repeats = options.ladder_only ? 1 : options.repeats;
+                    for (int r = 0; r < repeats; ++r) results.push_back(renderer.render(*resources, request));
                     std::sort(results.begin(), results.end(),
                               [](const auto& a, const auto& b) { return a.stats.render_ms < b.stats.render_ms; });
                     const RenderResult& median = results[results.size() / 2];
-                    // Every light changed by amounts no comparison sees; back as they were for the next preset.
-                    bench::change_every_light(relit_scene, bench_scene.scene.lights, 1);
-                    const RenderResult relit = renderer.render(*resources, request);
-                    relit_scene.lights = bench_scene.scene.lights;
-                    renderer.render(*resources, request);  // lit as they are again
-                    for (scene::Light& light : relit_scene.lights) light.intensity *= 1.001f;
-                    const double dimmed_ms = renderer.render(*resources, request).stats.render_ms;
-                    relit_scene.lights = bench_scene.scene.lights;
+                    RenderResult relit = median;
+                    double dimmed_ms = 0.0;
+                    if (!options.ladder_only) {
+                        // Every light changed by amounts no comparison sees; back as they were for the next preset.
+                        bench::change_every_light(relit_scene, bench_scene.scene.lights, 1);
+                        relit = renderer.render(*resources, request);
+                        relit_scene.lights = bench_scene.scene.lights;
+                        renderer.render(*resources, request);  // lit as they are again
+                        for (scene::Light& light : relit_scene.lights) light.intensity *= 1.001f;
+                        dimmed_ms = renderer.render(*resources, request).stats.render_ms;
+                        relit_scene.lights = bench_scene.scene.lights;
+                    }
                     if (options.previews && preset == "medium") {
                         write_preview(*options.previews / fmt::format("{}-{}.png", bench_scene.name, method), median.frame);
                     }
@@ -457,17 +531,29 @@ int main(int argc, char** argv) {
                               row.scene, method, preset, row.wall_ms, row.cold_ms, row.relit_ms, cold_passes, row.rel_mse,
                               row.rel_mse_same_bounces);
                     rows.push_back(row);
+                    if (std::isfinite(row.rel_mse_same_bounces)) {
+                        for (const Rung& cheaper : rungs) {
+                            if (cheaper.bounces != row.bounces) continue;
+                            const double noise = image::rel_mse_difference_noise(
+                                cheaper.frame, median.frame, truth_at(row.bounces), variance_at(row.bounces));
+                            const bool thin =
+                                method == "vct" && (thin_walls.leaks(preset) || thin_walls.leaks(cheaper.preset));
+                            ladder.push_back({row.scene, method, preset, cheaper.preset, row.bounces,
+                                              row.rel_mse_same_bounces, cheaper.rel_mse_same_bounces, noise, thin});
+                        }
+                        rungs.push_back({preset, row.bounces, row.rel_mse_same_bounces, median.frame});
+                    }
                 }
             }
             resources.reset();
-            if (bench_scene.name == "cornell" && measured("vct")) {
+            if (bench_scene.name == "cornell" && measured("vct") && !options.ladder_only) {
                 details += "\n## vct per pass (bench/quality)\n\nThe built-in Cornell box. Cold: a fresh scene, so the "
                            "octree is built, the light injected and mipmapped, then cones traced; warm: the same view "
                            "again (cones only). Sparse: the octree; dense: the same pipeline over every level's "
                            "full lattice (knob `dense`). Structure MiB: nodes, leaf data and voxel pools.\n\n" +
                            vct_passes_markdown(renderer, bench_scene.scene, {256, 512});
             }
-            if (bench_scene.name == "thin_wall" && measured("vct")) {
+            if (bench_scene.name == "thin_wall" && measured("vct") && !options.ladder_only) {
                 details += fmt::format("\n## Light leaking through a thin wall (bench/quality, {0}x{0})\n\n"
                                        "thin_wall: a 2 cm slab seals the light above it, so the reference is exactly "
                                        "zero below it.\n\n",
@@ -476,7 +562,7 @@ int main(int argc, char** argv) {
             }
             // The reference itself: error reached per CPU second.
             for (const int spp : {1, 4, 16, 64}) {
-                if (!measured("reference")) break;
+                if (!measured("reference") || options.ladder_only) break;
                 methods::reference::PathTracerSettings settings;
                 settings.max_bounces = options.reference_bounces;
                 settings.seed = 7;
@@ -511,9 +597,15 @@ int main(int argc, char** argv) {
                        analysis_rows;
         }
         fs::create_directories(options.out);
+        write_ladder_csv(options.out / "ladder.csv", ladder);
+        if (options.ladder_only) {
+            log::info("bench", "wrote {}", (options.out / "ladder.csv").string());
+            return 0;
+        }
         write_csv(options.out / "quality.csv", rows);
         write_markdown(options.markdown, rows, options, renderer.gpu_info().summary(), command, details);
-        log::info("bench", "wrote {} and {}", (options.out / "quality.csv").string(), options.markdown.string());
+        log::info("bench", "wrote {}, {} and {}", (options.out / "quality.csv").string(),
+                  (options.out / "ladder.csv").string(), options.markdown.string());
         if (options.priors_out) write_priors(*options.priors_out, options, scenes);
         return 0;
     } catch (const std::exception& error) {

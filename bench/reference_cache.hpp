@@ -7,6 +7,7 @@
 #include "renderer/methods/reference/path_tracer.hpp"
 
 #include <filesystem>
+#include <vector>
 
 namespace bounce::bench {
 
@@ -26,5 +27,10 @@ struct ReferenceSpec {
 // progress in the log) and cached.
 image::Frame reference_image(const BenchScene& bench_scene, const methods::reference::PathTracer& tracer,
                              const ReferenceSpec& spec, int bounces);
+
+// The variance of each pixel's mean luminance in that reference (PixelFeatures::variance), cached
+// beside it: what its noise weighs (image::rel_mse_difference_noise).
+std::vector<float> reference_variance(const BenchScene& bench_scene, const methods::reference::PathTracer& tracer,
+                                      const ReferenceSpec& spec, int bounces);
 
 }  // namespace bounce::bench

@@ -8,6 +8,9 @@
 
 namespace bounce::image {
 
+// Rec. 709 luminance of linear RGB: what the path tracer's variances and the denoiser's weights are of.
+inline float luminance(const glm::vec3& rgb) { return 0.2126f * rgb.r + 0.7152f * rgb.g + 0.0722f * rgb.b; }
+
 struct Frame {
     int width = 0;
     int height = 0;

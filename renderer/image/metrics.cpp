@@ -70,6 +70,36 @@ ErrorMetrics compare(const Frame& test, const Frame& reference, Weight weight) {
     return metrics;
 }
 
+double rel_mse_difference_noise(const Frame& a, const Frame& b, const Frame& reference,
+                                const std::vector<float>& luminance_variance) {
+    const std::size_t pixels = static_cast<std::size_t>(reference.width) * static_cast<std::size_t>(reference.height);
+    BOUNCE_CHECK(a.width == reference.width && a.height == reference.height && b.width == reference.width &&
+                     b.height == reference.height && a.rgba.size() == pixels * 4 && b.rgba.size() == pixels * 4 &&
+                     reference.rgba.size() == pixels * 4 && luminance_variance.size() == pixels,
+                 "cannot weigh the noise of a {}x{} reference against {}x{} and {}x{} frames and {} variances",
+                 reference.width, reference.height, a.width, a.height, b.width, b.height, luminance_variance.size());
+    double variance = 0.0;
+    std::size_t counted = 0;
+    for (std::size_t i = 0; i < pixels; ++i) {
+        const float *pa = &a.rgba[i * 4], *pb = &b.rgba[i * 4], *r = &reference.rgba[i * 4];
+        if (!finite_rgb(pa) || !finite_rgb(pb) || !finite_rgb(r)) continue;
+        ++counted;
+        const float v = luminance_variance[i];
+        const double deviation = std::isfinite(v) ? std::sqrt(std::max(0.0f, v)) : 0.0;
+        const double lum = luminance(glm::vec3(r[0], r[1], r[2]));
+        double term = 0.0;  // the pixel's sum over channels of the difference's coefficient times sigma_c
+        for (int c = 0; c < 3; ++c) {
+            const double w = static_cast<double>(r[c]) * r[c] + 0.01;
+            const double sigma = lum > 0.0 ? deviation * r[c] / lum : deviation;
+            const double ta = pa[c], tb = pb[c], rc = r[c];
+            term += (tb - ta) / w * (1.0 + rc * (ta + tb - 2.0 * rc) / w) * sigma;
+        }
+        variance += term * term;
+    }
+    if (counted == 0) return 0.0;
+    return 2.0 * std::sqrt(variance) / (static_cast<double>(counted) * 3.0);
+}
+
 Leak leak(const Frame& test, const Frame& reference) {
     BOUNCE_CHECK(test.width == reference.width && test.height == reference.height &&
                      test.rgba.size() == reference.rgba.size(),

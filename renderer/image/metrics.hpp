@@ -5,6 +5,7 @@
 #include "renderer/image/frame.hpp"
 
 #include <cstddef>
+#include <vector>
 
 namespace bounce::image {
 
@@ -28,6 +29,18 @@ enum class Weight { own_value, neighbourhood_median };
 // Compares `test` with `reference`; throws Error if their sizes differ. Pixels where either image
 // is non-finite are counted and left out of the error sums.
 ErrorMetrics compare(const Frame& test, const Frame& reference, Weight weight = Weight::own_value);
+
+// How far the reference's own noise moves the difference of two frames' relMSEs against it: the
+// standard deviation of compare(b, r).rel_mse - compare(a, r).rel_mse over the reference's draws.
+// With r = truth + n, to first order in n each value moves that difference by
+// -2 (b - a) / w (1 + r (a + b - 2r) / w) n / M, w = r^2 + 0.01 (the weight moves with r too), over
+// the M values compared. n's variance per pixel is `luminance_variance` (of the pixel's mean, as the
+// path tracer reports it), each channel its share r_c / luminance of the luminance's deviation, the
+// three perfectly correlated (the same paths carry them). A difference of the relMSEs beyond two of
+// these is the frames', not the reference's draw. Throws Error on a size mismatch; pixels a frame
+// holds non-finite are left out as compare() leaves them, and a non-finite variance counts as none.
+double rel_mse_difference_noise(const Frame& a, const Frame& b, const Frame& reference,
+                                const std::vector<float>& luminance_variance);
 
 // Light leaking into regions the reference proves dark: the test's mean RGB radiance over the
 // pixels where the reference has geometry (alpha > 0) and exactly zero radiance, relative to the

@@ -14,7 +14,7 @@ namespace {
 constexpr float kKernel[5] = {1.0f / 16.0f, 1.0f / 4.0f, 3.0f / 8.0f, 1.0f / 4.0f, 1.0f / 16.0f};
 constexpr float kAlbedoFloor = 1e-3f;  // below it a pixel is filtered as radiance (black surfaces, misses)
 
-float luminance(const glm::vec3& c) { return 0.2126f * c.r + 0.7152f * c.g + 0.0722f * c.b; }
+using image::luminance;
 
 }  // namespace
 

@@ -39,7 +39,7 @@ private:
     std::uint64_t state_;
 };
 
-float luminance(const glm::vec3& c) { return 0.2126f * c.r + 0.7152f * c.g + 0.0722f * c.b; }
+using image::luminance;
 
 // Per pixel in Accumulator::feature_sums_: albedo RGB, normal XYZ, depth, hits, luminance^2.
 constexpr std::size_t kFeatureFloats = 9;
