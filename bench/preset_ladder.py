@@ -53,6 +53,12 @@ def rises(rows):
     return out, scenes
 
 
+def sigmas(deviations):
+    # Past a thousand the count says only that the reference has next to no noise there (direct
+    # light from point lights through pixel centres has none: its variance is float rounding).
+    return f"{deviations:.0f} sigma" if deviations < 1000 else "over 1000 sigma"
+
+
 def main(argv):
     markdown = "--markdown" in argv
     paths = [a for a in argv if a != "--markdown"] or DEFAULT
@@ -72,7 +78,8 @@ def main(argv):
             print(f"{method}: {summary}")
         for preset in ORDER[1:]:
             where = found[method].get(preset, {})
-            text = ", ".join(f"{scene} (over {cheaper} by {share:.0%}, {deviations:.0f} sigma"
+            text = ", ".join(f"{scene} (over {cheaper} by {share:.0%}, "
+                             f"{sigmas(deviations)}"
                              f"{'; thin walls' if thin_walls else ''})"
                              for scene, (cheaper, _, share, deviations, thin_walls) in sorted(where.items()))
             if markdown:

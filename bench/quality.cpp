@@ -3,9 +3,9 @@
 // resident memory and the error against the reference; it also measures the reference itself
 // (error reached per CPU second). Writes a CSV, a Markdown table (docs/benchmarks.md) and, through
 // bench/plot_quality.py, a plot of error against time. The isr and cssm sections of the Markdown are
-// bench/isr's and bench/cssm's; it keeps them. Beside the CSV, ladder.csv: each preset's own error
-// against each cheaper preset's, with the reference's noise in their difference (bench/preset_ladder.py
-// reads it; --ladder-only writes it alone).
+// bench/isr's and bench/cssm's; it keeps them. With --ladder-only, ladder.csv alone: each preset's own
+// error against each cheaper preset's, with the reference's noise in their difference
+// (bench/preset_ladder.py reads it).
 #include "bench/common.hpp"
 #include "bench/reference_cache.hpp"
 #include "bench/markdown_blocks.hpp"
@@ -59,8 +59,9 @@ struct Options {
     int repeats = 3;
     std::vector<std::string> methods;  // measure only these (the reference among them); all when empty
     std::vector<std::string> presets;  // of the GPU methods, only these; all when empty
-    // The preset ladder alone (--ladder-only): one frame of each preset after its warm-up, ladder.csv
-    // into --out, no other table, and docs/benchmarks.md as it is.
+    // The preset ladder (--ladder-only): one frame of each preset after its warm-up, ladder.csv into
+    // --out, no other table, and docs/benchmarks.md as it is. Its references are the ones the ladder
+    // names (through pixel centres, say), so it is never written beside a quality.csv.
     bool ladder_only = false;
     fs::path out = "bench/results";
     fs::path cache = "build/bench-cache";
@@ -369,7 +370,8 @@ int main(int argc, char** argv) {
             return 2;
         }
     }
-    if (!options.gltf_files.empty() && (options.corpus || !options.out_given || !options.markdown_given)) {
+    if (!options.gltf_files.empty() &&
+        (options.corpus || !options.out_given || (!options.markdown_given && !options.ladder_only))) {
         std::fprintf(stderr, "quality: --gltf measures your scenes instead of the bench's (not with --corpus), into an "
                              "--out and a --markdown of their own\n");
         return 2;
@@ -472,7 +474,7 @@ int main(int argc, char** argv) {
                     std::sort(results.begin(), results.end(),
                               [](const auto& a, const auto& b) { return a.stats.render_ms < b.stats.render_ms; });
                     const RenderResult& median = results[results.size() / 2];
-                    RenderResult relit = median;
+                    RenderResult relit;  // the ladder times no relit frame
                     double dimmed_ms = 0.0;
                     if (!options.ladder_only) {
                         // Every light changed by amounts no comparison sees; back as they were for the next preset.
@@ -597,15 +599,14 @@ int main(int argc, char** argv) {
                        analysis_rows;
         }
         fs::create_directories(options.out);
-        write_ladder_csv(options.out / "ladder.csv", ladder);
-        if (options.ladder_only) {
+        if (options.ladder_only) {  // never beside a quality.csv of other references
+            write_ladder_csv(options.out / "ladder.csv", ladder);
             log::info("bench", "wrote {}", (options.out / "ladder.csv").string());
             return 0;
         }
         write_csv(options.out / "quality.csv", rows);
         write_markdown(options.markdown, rows, options, renderer.gpu_info().summary(), command, details);
-        log::info("bench", "wrote {}, {} and {}", (options.out / "quality.csv").string(),
-                  (options.out / "ladder.csv").string(), options.markdown.string());
+        log::info("bench", "wrote {} and {}", (options.out / "quality.csv").string(), options.markdown.string());
         if (options.priors_out) write_priors(*options.priors_out, options, scenes);
         return 0;
     } catch (const std::exception& error) {
