@@ -427,8 +427,9 @@ int main(int argc, char** argv) {
             };
             if (options.corpus) analysis_rows += analysis_row(bench_scene);
             // Where vct's voxels are wider than the scene's walls (the planner rules such presets out).
-            const ThinWalls thin_walls = measured("vct") ? bench::thin_walls_of({bench_scene}).at(bench_scene.name)
-                                                         : ThinWalls{};
+            const ThinWalls thin_walls = options.ladder_only && measured("vct")
+                                             ? bench::thin_walls_of({bench_scene}).at(bench_scene.name)
+                                             : ThinWalls{};
             std::map<int, std::vector<float>> variance_by_bounces;  // of the reference at each bounce count
             auto variance_at = [&](int bounces) -> const std::vector<float>& {
                 auto it = variance_by_bounces.find(bounces);
@@ -533,7 +534,7 @@ int main(int argc, char** argv) {
                               row.scene, method, preset, row.wall_ms, row.cold_ms, row.relit_ms, cold_passes, row.rel_mse,
                               row.rel_mse_same_bounces);
                     rows.push_back(row);
-                    if (std::isfinite(row.rel_mse_same_bounces)) {
+                    if (options.ladder_only && std::isfinite(row.rel_mse_same_bounces)) {
                         for (const Rung& cheaper : rungs) {
                             if (cheaper.bounces != row.bounces) continue;
                             const double noise = image::rel_mse_difference_noise(
