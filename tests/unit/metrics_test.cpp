@@ -165,5 +165,26 @@ TEST(Metrics, TheReferencesNoiseInADifferenceOfRelMsesIsPredicted) {
     EXPECT_THROW(rel_mse_difference_noise(constant(h, w, 0.0f), dark_b, truth, variance), Error);
 }
 
+// Hostile values: a pixel a frame holds non-finite is left out, as compare() leaves it out (it is not
+// counted in the mean either), and a non-finite variance counts as none; the result stays finite.
+TEST(Metrics, TheNoiseOfADifferenceLeavesOutWhatIsNotFinite) {
+    Frame reference = constant(2, 1, 0.5f), a = constant(2, 1, 0.4f), b = constant(2, 1, 0.6f);
+    const std::vector<float> variance = {1e-4f, 1e-4f};
+    const double both = rel_mse_difference_noise(a, b, reference, variance);
+    ASSERT_GT(both, 0.0);
+    // Pixel 1 not finite in a: pixel 0's term alone, over 3 values instead of 6.
+    Frame broken = a;
+    broken.rgba[4] = std::numeric_limits<float>::quiet_NaN();
+    Frame agreeing = b;  // pixel 1 the same in both frames: no term, but still counted
+    for (int c = 0; c < 3; ++c) agreeing.rgba[4 + c] = a.rgba[4 + c];
+    const double one = rel_mse_difference_noise(a, agreeing, reference, variance);
+    EXPECT_NEAR(rel_mse_difference_noise(broken, b, reference, variance), 2.0 * one, 1e-12);
+    EXPECT_NEAR(one, both / std::sqrt(2.0), 1e-12);
+    // An infinite variance counts as none; a black reference pixel takes the luminance's deviation.
+    EXPECT_NEAR(rel_mse_difference_noise(a, b, reference, {1e-4f, std::numeric_limits<float>::infinity()}), one, 1e-12);
+    const double black = rel_mse_difference_noise(a, b, constant(2, 1, 0.0f), variance);
+    EXPECT_TRUE(std::isfinite(black) && black > 0.0);
+}
+
 }  // namespace
 }  // namespace bounce::image
