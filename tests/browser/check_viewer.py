@@ -3,8 +3,9 @@
 stream, and its screenshot shows the frame the daemon renders for the page's view.
 
 With --budget, the page's controls then plan the stream: method "auto" takes a budget (a frame
-time of 100 ms), the frames carry their plan and the panel shows it, and removing the budget keeps
-the plan's method and preset: the screenshot is then the daemon's frame of that method and preset.
+time of 100 ms), the frames carry their plan and the panel shows it, a target error added plans for
+both limits and both stay shown, the frame time removed plans for the error alone, and removing the
+budget keeps the plan's method and preset: the screenshot is then the daemon's frame of that method and preset.
 
 Drives Chromium over the DevTools protocol (a WebSocket; the few lines of client it needs are
 here, standard library only). The screenshot's image area is compared with a one-off render of the
@@ -225,10 +226,10 @@ def check_budget(tools: DevTools, tcp_port: int, work: str, methods: list[str]) 
     state = wait_for_final(tools, frames, 180, "method auto", plan=True)
     plan = json.loads(tools.evaluate("JSON.stringify(lastPlan)"))
     controls = json.loads(tools.evaluate(
-        "JSON.stringify({kind: $('budget-kind').value, value: $('budget-value').value,"
+        "JSON.stringify({ms: $('budget-ms').value, error: $('budget-error').value,"
         " preset_disabled: $('preset').disabled, shown: $('st-plan').textContent, why: $('st-plan').title})"))
     print(json.dumps({"plan": plan, "controls": controls}))
-    if controls["kind"] != "max_ms" or float(controls["value"]) != 100.0 or not controls["preset_disabled"]:
+    if controls["ms"] != "100" or controls["error"] != "" or not controls["preset_disabled"]:
         fail(f"method auto did not take a frame time of 100 ms with the preset left to the plan: {controls}")
     if plan["method"] not in methods or state["planMethod"] != plan["method"]:
         fail(f"the plan's method is not one the daemon offers: {plan}")
@@ -237,10 +238,26 @@ def check_budget(tools: DevTools, tcp_port: int, work: str, methods: list[str]) 
     if not controls["shown"].startswith(f"{plan['method']} {plan['preset']}") or controls["why"] != plan["why"]:
         fail(f"the panel does not show the plan: {controls}")
 
-    # A target error instead: the frame time goes (a merge patch keeps what it does not null).
+    def set_limit(field: str, value: str) -> None:
+        tools.evaluate(f"(() => {{ const f = $('{field}'); f.value = '{value}';"
+                       " f.dispatchEvent(new Event('change')); })()")
+
+    # A target error as well: the plan is for both, and both fields keep their limit.
     frames = int(state["frames"])
-    tools.evaluate("(() => { $('budget-kind').value = 'max_error'; $('budget-value').value = '0.5';"
-                   " $('budget-value').dispatchEvent(new Event('change')); })()")
+    set_limit("budget-error", "0.5")
+    state = wait_for_final(tools, frames, 180, "a frame time and a target error", plan=True)
+    plan = json.loads(tools.evaluate("JSON.stringify(lastPlan)"))
+    both = json.loads(tools.evaluate("JSON.stringify({ms: $('budget-ms').value, error: $('budget-error').value,"
+                                     " budget: view.budget})"))
+    print(json.dumps({"plan for 100 ms and relMSE 0.5": plan, "controls": both}))
+    if both != {"ms": "100", "error": "0.5", "budget": {"max_ms": 100, "max_error": 0.5}}:
+        fail(f"the controls do not show both limits of the budget: {both}")
+    if "relMSE 0.5" not in plan["why"] or "100 ms" not in plan["why"]:
+        fail(f"the stream did not plan for both 100 ms and relMSE 0.5: {plan['why']}")
+
+    # The frame time emptied: the target error alone (a merge patch nulls the limit that went).
+    frames = int(state["frames"])
+    set_limit("budget-ms", "")
     state = wait_for_final(tools, frames, 180, "a target error", plan=True)
     plan = json.loads(tools.evaluate("JSON.stringify(lastPlan)"))
     print(json.dumps({"plan for relMSE 0.5": plan}))
@@ -251,8 +268,7 @@ def check_budget(tools: DevTools, tcp_port: int, work: str, methods: list[str]) 
 
     # Without the budget the stream keeps the plan's method and preset (its planned knobs go).
     frames = int(state["frames"])
-    tools.evaluate("(() => { const k = document.getElementById('budget-kind'); k.value = '';"
-                   " k.dispatchEvent(new Event('change')); })()")
+    set_limit("budget-error", "")
     wait_for_final(tools, frames, 180, "budget removed", plan=False)
     kept = json.loads(tools.evaluate("JSON.stringify({method: $('method').value, preset: $('preset').value,"
                                      " preset_disabled: $('preset').disabled})"))
