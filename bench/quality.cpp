@@ -363,6 +363,14 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "quality: --priors-out measures every preset as it is (not with --knob or --preset)\n");
         return 2;
     }
+    // An experiment (a preset alone, or knobs of its own) is not the bench's table: it would replace
+    // the committed docs/benchmarks.md and bench/results/quality.csv with a part of them.
+    if ((!options.knobs.empty() || !options.presets.empty()) && !options.ladder_only &&
+        (!options.out_given || !options.markdown_given)) {
+        std::fprintf(stderr, "quality: --knob and --preset measure an experiment, into an --out and a --markdown of "
+                             "their own (not bench/results/quality.csv and docs/benchmarks.md)\n");
+        return 2;
+    }
     for (const std::string& preset : options.presets) {
         const auto& names = methods::preset_names();
         if (std::find(names.begin(), names.end(), preset) == names.end()) {
