@@ -57,6 +57,15 @@ def main() -> int:
         for row in csv.DictReader(f):
             errors[(row["method"], row["scene"], row["preset"])].append(
                 (float(row["value"]), float(row["rel_mse_same_bounces"])))
+    knobs = defaultdict(set)  # a method's placements are of one knob: pooling two would mean nothing
+    with open(files[0]) as f:
+        for row in csv.DictReader(f):
+            knobs[row["method"]].add(row["knob"])
+    for method, names in knobs.items():
+        if len(names) > 1:
+            print(f"placement_ladder: {method}'s rows vary {sorted(names)}; one knob per method", file=sys.stderr)
+            return 2
+    share = lambda x, y: f"{x / y:.0%}" if y > 0 else "n/a"  # a black frame's relMSE can be 0
     stats = {}
     for key, frames in errors.items():
         values = [e for _, e in frames]
@@ -66,6 +75,8 @@ def main() -> int:
     for method in methods:
         scenes = sorted({s for m, s, _ in stats if m == method})
         if markdown:
+            if len(methods) > 1:
+                print(f"\n{method}:\n")
             print(f"| scene | " + " | ".join(p for p in ORDER) + " |")
             print("|---|" + "---|" * len(ORDER))
         else:
@@ -74,7 +85,7 @@ def main() -> int:
             cells = []
             for preset in ORDER:
                 s = stats.get((method, scene, preset))
-                cells.append("" if s is None else f"{s[0]:.4f} ({s[1]:.4f}-{s[2]:.4f}, {s[3] / s[0]:.0%})")
+                cells.append("" if s is None else f"{s[0]:.4f} ({s[1]:.4f}-{s[2]:.4f}, {share(s[3], s[0])})")
             print(f"| {scene} | " + " | ".join(cells) + " |" if markdown else f"  {scene}: " + "; ".join(
                 f"{p} {c}" for p, c in zip(ORDER, cells)))
         holds = 0
@@ -90,8 +101,8 @@ def main() -> int:
                         continue
                     se = math.sqrt(a[3] ** 2 / a[4] + b[3] ** 2 / b[4])
                     if a[0] - b[0] > 2 * se:
-                        rises.append(f"{preset} over {cheaper} by {a[0] / b[0] - 1:.0%} ({(a[0] - b[0]) / se:.1f} se)"
-                                     if se > 0 else f"{preset} over {cheaper} by {a[0] / b[0] - 1:.0%}")
+                        by = f"{a[0] / b[0] - 1:.0%}" if b[0] > 0 else f"{a[0]:.4f} (over none)"
+                        rises.append(f"{preset} over {cheaper} by {by}" + (f" ({(a[0] - b[0]) / se:.1f} se)" if se > 0 else ""))
             if rises:
                 print(f"{'- ' if markdown else '  '}{method} on {scene}: " + ", ".join(rises))
             else:
