@@ -23,25 +23,53 @@ std::vector<std::string> split(const std::string& line) {
     return fields;
 }
 
+std::size_t column_of(const std::vector<std::string>& header, const std::string& name,
+                      const std::filesystem::path& csv) {
+    const auto it = std::find(header.begin(), header.end(), name);
+    if (it == header.end()) throw std::runtime_error(fmt::format("{} has no column '{}'", csv.string(), name));
+    return static_cast<std::size_t>(it - header.begin());
+}
+
 // The largest (of the scenes that do not leak) and the median (of all) of the errors of the scenes
-// not left out; nullopt where none is left.
+// not left out, each scene's by the largest and the mean of its placements where it has them;
+// nullopt where none is left.
 std::optional<std::pair<double, double>> largest_and_median(const std::map<std::string, double>& by_scene,
+                                                            const std::map<std::string, std::vector<Placement>>& placed,
                                                             const std::set<std::string>& left_out,
                                                             const std::set<std::string>& leaking) {
-    std::vector<double> all, promised;
-    for (const auto& [scene, error] : by_scene) {
+    std::vector<double> expected, largest_of_all, promised;
+    for (const auto& [scene, own] : by_scene) {
         if (left_out.count(scene)) continue;
         // A frame bench/quality could not measure (values not finite) leaves nothing to promise.
-        if (std::isnan(error)) return std::pair{error, error};
-        all.push_back(error);
-        if (!leaking.count(scene)) promised.push_back(error);
+        if (std::isnan(own)) return std::pair{own, own};
+        double largest = own, mean = own;
+        if (const auto it = placed.find(scene); it != placed.end() && !it->second.empty()) {
+            double sum = 0.0;
+            for (const Placement& placement : it->second) {
+                const double error = placement.rel_mse;
+                if (std::isnan(error)) return std::pair{error, error};
+                largest = std::max(largest, error);
+                sum += error;
+            }
+            mean = sum / static_cast<double>(it->second.size());
+        }
+        expected.push_back(mean);
+        largest_of_all.push_back(largest);
+        if (!leaking.count(scene)) promised.push_back(largest);
     }
-    if (all.empty()) return std::nullopt;
-    const double median = planning::median(all);
+    if (expected.empty()) return std::nullopt;
+    const double median = planning::median(expected);
     // Where every scene left leaks, the planner rules the preset out on such scenes and has no
     // measure of it elsewhere: the largest of them all, not none.
-    const std::vector<double>& over = promised.empty() ? all : promised;
+    const std::vector<double>& over = promised.empty() ? largest_of_all : promised;
     return std::pair{*std::max_element(over.begin(), over.end()), median};
+}
+
+const std::map<std::string, std::vector<Placement>>& placed_of(const PlacementErrors& placements,
+                                                               const std::pair<std::string, std::string>& key) {
+    static const std::map<std::string, std::vector<Placement>> none;
+    const auto it = placements.find(key);
+    return it == placements.end() ? none : it->second;
 }
 
 }  // namespace
@@ -52,11 +80,7 @@ CorpusErrors read_corpus_errors(const std::filesystem::path& csv, int bounces) {
     std::string line;
     std::getline(in, line);
     const std::vector<std::string> header = split(line);
-    const auto column = [&](const std::string& name) {
-        const auto it = std::find(header.begin(), header.end(), name);
-        if (it == header.end()) throw std::runtime_error(fmt::format("{} has no column '{}'", csv.string(), name));
-        return static_cast<std::size_t>(it - header.begin());
-    };
+    const auto column = [&](const std::string& name) { return column_of(header, name, csv); };
     const std::size_t scene = column("scene"), method = column("method"), preset = column("preset"),
                       bounce_count = column("bounces"), error = column("rel_mse_same_bounces");
     CorpusErrors errors;
@@ -67,6 +91,39 @@ CorpusErrors read_corpus_errors(const std::filesystem::path& csv, int bounces) {
         errors[{fields[method], fields[preset]}][fields[scene]] = std::stod(fields[error]);
     }
     return errors;
+}
+
+PlacementErrors read_placement_errors(const std::vector<std::filesystem::path>& csvs) {
+    PlacementErrors errors;
+    for (const auto& csv : csvs) {
+        std::ifstream in(csv);
+        if (!in) throw std::runtime_error(fmt::format("cannot read {}", csv.string()));
+        std::string line;
+        std::getline(in, line);
+        const std::vector<std::string> header = split(line);
+        const std::size_t scene = column_of(header, "scene", csv), method = column_of(header, "method", csv),
+                          preset = column_of(header, "preset", csv), knob = column_of(header, "knob", csv),
+                          value = column_of(header, "value", csv),
+                          error = column_of(header, "rel_mse_same_bounces", csv);
+        for (int number = 2; std::getline(in, line); ++number) {
+            const std::vector<std::string> fields = split(line);
+            if (fields.size() < header.size()) {
+                throw std::runtime_error(fmt::format("{}:{}: {} fields where the header has {}", csv.string(), number,
+                                                     fields.size(), header.size()));
+            }
+            errors[{fields[method], fields[preset]}][fields[scene]].push_back(
+                {fields[knob], std::stod(fields[value]), std::stod(fields[error])});
+        }
+    }
+    return errors;
+}
+
+std::vector<std::filesystem::path> placement_files(const std::filesystem::path& results) {
+    std::vector<std::filesystem::path> files;
+    for (const char* name : {"cssm_placement.csv", "vct_placement.csv"}) {
+        if (std::filesystem::exists(results / name)) files.push_back(results / name);
+    }
+    return files;
 }
 
 std::map<std::string, ThinWalls> thin_walls_of(const std::vector<BenchScene>& scenes) {
@@ -83,7 +140,8 @@ std::map<std::string, ThinWalls> corpus_thin_walls() { return thin_walls_of(corp
 
 planning::OwnErrorPriors corpus_priors(const std::filesystem::path& directory,
                                        const std::map<std::string, ThinWalls>& walls,
-                                       const std::set<std::string>& left_out, bool two_bounce_table) {
+                                       const std::set<std::string>& left_out, bool two_bounce_table,
+                                       const PlacementErrors& placements) {
     const auto leaking = [&](const std::string& method, const std::string& preset) {
         std::set<std::string> scenes;
         if (method != "vct") return scenes;
@@ -94,14 +152,16 @@ planning::OwnErrorPriors corpus_priors(const std::filesystem::path& directory,
     };
     planning::OwnErrorPriors priors;
     for (const auto& [key, by_scene] : read_corpus_errors(directory / "quality.csv")) {
-        if (const auto figures = largest_and_median(by_scene, left_out, leaking(key.first, key.second))) {
+        if (const auto figures =
+                largest_and_median(by_scene, placed_of(placements, key), left_out, leaking(key.first, key.second))) {
             std::tie(priors.largest[key], priors.typical[key]) = *figures;
         }
     }
     if (!two_bounce_table || !std::filesystem::exists(directory / "vct_two_bounce_quality.csv")) return priors;
     for (const auto& [key, by_scene] : read_corpus_errors(directory / "vct_two_bounce_quality.csv", 2)) {
         if (key.first != "vct") continue;
-        if (const auto figures = largest_and_median(by_scene, left_out, leaking(key.first, key.second))) {
+        // No placements of the second bounce are measured: its own frames alone.
+        if (const auto figures = largest_and_median(by_scene, {}, left_out, leaking(key.first, key.second))) {
             std::tie(priors.vct_second_largest[key.second], priors.vct_second_typical[key.second]) = *figures;
         }
     }

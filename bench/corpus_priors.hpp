@@ -21,9 +21,26 @@ namespace bounce::bench {
 // relMSE against the reference with as many bounces, by (method, preset), then by scene.
 using CorpusErrors = std::map<std::pair<std::string, std::string>, std::map<std::string, double>>;
 
+// The same at nearby placements of a preset's samples (its atlas or voxel grid a little denser or
+// coarser, everything else the preset's), by (method, preset), then by scene: one figure per
+// placement, in the order the files give them.
+struct Placement {
+    std::string knob;  // what moves the samples: atlas_resolution, resolution
+    double value = 0.0;
+    double rel_mse = 0.0;
+};
+using PlacementErrors = std::map<std::pair<std::string, std::string>, std::map<std::string, std::vector<Placement>>>;
+
 // The GPU rows of a bench/quality CSV (`rel_mse_same_bounces`) at `bounces`; -1: at every count (the
 // presets' own). Throws std::runtime_error, naming the file, where it cannot be read or lacks a column.
 CorpusErrors read_corpus_errors(const std::filesystem::path& csv, int bounces = -1);
+
+// The rows of bench/placement_ladder.py's files (scene, method, preset, knob, value,
+// rel_mse_same_bounces). Throws std::runtime_error, naming the file, as read_corpus_errors does.
+PlacementErrors read_placement_errors(const std::vector<std::filesystem::path>& csvs);
+
+// The committed placement files under `results` (bench/results): cssm's atlas, vct's grid.
+std::vector<std::filesystem::path> placement_files(const std::filesystem::path& results);
 
 // Each scene's thin walls, as the planner's analysis finds them (its bounce frames kept small: only
 // the walls are wanted); the corpus scenes'.
@@ -31,9 +48,14 @@ std::map<std::string, ThinWalls> thin_walls_of(const std::vector<BenchScene>& sc
 std::map<std::string, ThinWalls> corpus_thin_walls();
 
 // The priors from `directory`'s quality.csv (one bounce) and, with `two_bounce_table` and where it
-// has one, vct_two_bounce_quality.csv, over the scenes not in `left_out`.
+// has one, vct_two_bounce_quality.csv, over the scenes not in `left_out`. Where `placements` holds a
+// scene's preset at nearby placements, that scene counts by the largest of them (and its own
+// frame) in the largest, and by their mean in the median: a preset's error at its own placement is
+// one draw (cssm draft's in the atrium 0.018, 0.018 to 0.029 over five), and a promise must hold
+// wherever a scene's surfaces fall in the atlas or grid.
 planning::OwnErrorPriors corpus_priors(const std::filesystem::path& directory,
                                        const std::map<std::string, ThinWalls>& walls,
-                                       const std::set<std::string>& left_out = {}, bool two_bounce_table = true);
+                                       const std::set<std::string>& left_out = {}, bool two_bounce_table = true,
+                                       const PlacementErrors& placements = {});
 
 }  // namespace bounce::bench

@@ -81,7 +81,8 @@ struct Options {
     bool camera_as_warm = false;
     // With --held-out, each scene is planned with the GPU methods' own-error priors of the other
     // corpus scenes (bench/corpus_priors.hpp, from `corpus_results`): whether the promises hold on a
-    // scene the priors never saw. Without, the committed priors, which every scene here made.
+    // scene the priors never saw. Without, the committed priors, which every scene here made. The
+    // placement files (bench/results/*_placement.csv) are read from beside `corpus_results`.
     bool held_out = false;
     fs::path corpus_results = "bench/results/corpus";
 };
@@ -372,6 +373,11 @@ int main(int argc, char** argv) {
         const planning::DeviceCosts device = planning::load_or_calibrate(renderer, options.cache);
         const std::map<std::string, ThinWalls> corpus_walls =
             options.held_out ? bench::corpus_thin_walls() : std::map<std::string, ThinWalls>{};
+        // The committed priors count each corpus scene over placements of cssm's atlas and vct's grid
+        // (bench/corpus_priors.hpp); the held-out ones do too, from the placement files beside the corpus'.
+        const bench::PlacementErrors corpus_placements =
+            options.held_out ? bench::read_placement_errors(bench::placement_files(options.corpus_results / ".."))
+                             : bench::PlacementErrors{};
         std::vector<BudgetRow> rows;
         std::vector<std::pair<std::string, Measured>> fixed_rows;  // scene, fixed plan: the Pareto plot's points
         std::string analysis_md =
@@ -421,7 +427,8 @@ int main(int argc, char** argv) {
                 planning::measure_resample_errors(renderer, *resources, bench::linear_request("direct", "draft", {}, options.size),
                                                   {"direct", "vct", "isr", "cssm"}, &costs, &device)};
             const planning::OwnErrorPriors held_out_priors =
-                options.held_out ? bench::corpus_priors(options.corpus_results, corpus_walls, {bench_scene.name})
+                options.held_out ? bench::corpus_priors(options.corpus_results, corpus_walls, {bench_scene.name},
+                                                           /*two_bounce_table=*/true, corpus_placements)
                                  : planning::OwnErrorPriors{};
             if (options.held_out) inputs.priors = &held_out_priors;
             // As the daemon plans: a plan the memory budget would refuse is ruled out.
