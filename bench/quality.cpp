@@ -71,6 +71,10 @@ struct Options {
     // measured on them (--priors-out FILE: `bounced --priors FILE` plans with them).
     std::vector<fs::path> gltf_files;
     std::optional<fs::path> priors_out;
+    // With --priors-out, bench/placement_ladder.py's files of the same scenes (--placements FILE ...):
+    // each scene then counts by its largest over placements, as the bench's priors do.
+    std::vector<fs::path> placement_files;
+    bench::PlacementErrors placements;
     bool out_given = false, markdown_given = false;
 };
 
@@ -269,8 +273,9 @@ void write_preview(const fs::path& path, image::Frame frame) {
 // The planner's priors from this run's quality.csv: per GPU method and preset, the largest and the
 // median over the scenes measured (vct's presets left out where the analysis finds them leaking),
 // as bench/planner --held-out computes them from the corpus; `bounced --priors FILE` plans with
-// them, and with the bench's where this run measured nothing. The file is read back as the daemon
-// reads it before it is written.
+// them, and with the bench's where this run measured nothing. With --placements, each scene counts
+// by its largest over the placements measured of it (and their mean in the median), as the bench's
+// own priors do. The file is read back as the daemon reads it before it is written.
 void write_priors(const fs::path& file, const Options& options, const std::vector<bench::BenchScene>& scenes) {
     std::vector<bench::BenchScene> measured;
     std::vector<std::string> names;
@@ -284,7 +289,8 @@ void write_priors(const fs::path& file, const Options& options, const std::vecto
     }
     // A two-bounce table in --out is another run's, unless these are the corpus' scenes.
     planning::OwnErrorPriors priors =
-        bench::corpus_priors(options.out, bench::thin_walls_of(measured), {}, /*two_bounce_table=*/options.corpus);
+        bench::corpus_priors(options.out, bench::thin_walls_of(measured), {}, /*two_bounce_table=*/options.corpus,
+                             options.placements);
     priors.source = fmt::format("the scene{} {}", names.size() == 1 ? "" : "s", fmt::join(names, ", "));
     const nlohmann::json tables = priors.to_json();
     if (!tables.contains("largest")) {
@@ -329,6 +335,7 @@ int main(int argc, char** argv) {
         else if (flag == "--markdown") options.markdown = arguments.value(), options.markdown_given = true;
         else if (flag == "--gltf") options.gltf_files.emplace_back(arguments.value());
         else if (flag == "--priors-out") options.priors_out = arguments.value();
+        else if (flag == "--placements") options.placement_files.emplace_back(arguments.value());
         else if (flag == "--scene") options.scenes.push_back(arguments.value());
         else if (flag == "--corpus") options.corpus = true;
         else if (flag == "--pixel-centre") options.pixel_centre = true;
@@ -344,7 +351,7 @@ int main(int argc, char** argv) {
                          "usage: quality [--size N] [--reference-spp N] [--reference-bounces N] [--repeats N]\n"
                          "               [--scene NAME ...] [--method NAME ...] [--preset NAME ...]\n"
                          "               [--knob NAME=VALUE ...]\n"
-                         "               [--corpus [--detail N] | --gltf FILE ...] [--priors-out FILE]\n"
+                         "               [--corpus [--detail N] | --gltf FILE ...] [--priors-out FILE [--placements FILE ...]]\n"
                          "               [--pixel-centre] [--unoccluded] [--ladder-only]\n"
                          "               [--previews DIR]\n"
                          "               [--out DIR]\n"
@@ -362,6 +369,19 @@ int main(int argc, char** argv) {
     if (options.priors_out && (!options.knobs.empty() || !options.presets.empty())) {
         std::fprintf(stderr, "quality: --priors-out measures every preset as it is (not with --knob or --preset)\n");
         return 2;
+    }
+    if (!options.placement_files.empty()) {
+        if (!options.priors_out) {
+            std::fprintf(stderr, "quality: --placements is read by --priors-out alone\n");
+            return 2;
+        }
+        // Read before anything is measured: a file that cannot be read would otherwise fail the run at its end.
+        try {
+            options.placements = bench::read_placement_errors(options.placement_files);
+        } catch (const std::exception& error) {
+            std::fprintf(stderr, "quality: --placements: %s\n", error.what());
+            return 2;
+        }
     }
     // An experiment (a preset alone, or knobs of its own) is not the bench's table: it would replace
     // the committed docs/benchmarks.md and bench/results/quality.csv with a part of them.
