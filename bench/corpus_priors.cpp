@@ -105,14 +105,24 @@ PlacementErrors read_placement_errors(const std::vector<std::filesystem::path>& 
                           preset = column_of(header, "preset", csv), knob = column_of(header, "knob", csv),
                           value = column_of(header, "value", csv),
                           error = column_of(header, "rel_mse_same_bounces", csv);
-        for (int number = 2; std::getline(in, line); ++number) {
+        for (int number_of_line = 2; std::getline(in, line); ++number_of_line) {
             const std::vector<std::string> fields = split(line);
             if (fields.size() < header.size()) {
-                throw std::runtime_error(fmt::format("{}:{}: {} fields where the header has {}", csv.string(), number,
+                throw std::runtime_error(fmt::format("{}:{}: {} fields where the header has {}", csv.string(), number_of_line,
                                                      fields.size(), header.size()));
             }
+            const auto number = [&](std::size_t column) {
+                try {
+                    std::size_t used = 0;
+                    const double parsed = std::stod(fields[column], &used);
+                    if (used == fields[column].size()) return parsed;
+                } catch (const std::logic_error&) {
+                }
+                throw std::runtime_error(fmt::format("{}:{}: {} '{}' is not a number", csv.string(), number_of_line,
+                                                     header[column], fields[column]));
+            };
             errors[{fields[method], fields[preset]}][fields[scene]].push_back(
-                {fields[knob], std::stod(fields[value]), std::stod(fields[error])});
+                {fields[knob], number(value), number(error)});
         }
     }
     return errors;

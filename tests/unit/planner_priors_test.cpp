@@ -183,14 +183,24 @@ TEST(PlannerPriors, PlacementsRaiseTheLargestAndMoveTheMedianToTheirMean) {
     const planning::OwnErrorPriors without = bench::corpus_priors(directory, {}, {}, false);
     const planning::OwnErrorPriors with = bench::corpus_priors(directory, {}, {}, false, placed);
     const planning::OwnErrorPriors held_out = bench::corpus_priors(directory, {}, {"a"}, false, placed);
-    std::ofstream(directory / "cssm_placement.csv") << "scene,method,preset,value,rel_mse_same_bounces\n";
-    std::string refusal;
-    try {
-        bench::read_placement_errors(bench::placement_files(directory));
-    } catch (const std::runtime_error& error) {
-        refusal = error.what();
-    }
+    const auto refusal = [&](const std::string& text) {
+        std::ofstream(directory / "cssm_placement.csv") << text;
+        try {
+            bench::read_placement_errors(bench::placement_files(directory));
+        } catch (const std::runtime_error& error) {
+            return std::string(error.what());
+        }
+        return std::string("(read)");
+    };
+    const std::string no_knob = refusal("scene,method,preset,value,rel_mse_same_bounces\n");
+    const std::string header = "scene,method,preset,knob,value,rel_mse_same_bounces,wall_ms\n";
+    const std::string not_a_number = refusal(header + "a,cssm,low,atlas_resolution,20,0.01x,1\n");
+    const std::string short_row = refusal(header + "a,cssm,low,atlas_resolution,20\n");
     std::filesystem::remove_all(directory);
+    EXPECT_NE(not_a_number.find("cssm_placement.csv:2: rel_mse_same_bounces '0.01x' is not a number"),
+              std::string::npos)
+        << not_a_number;
+    EXPECT_NE(short_row.find("cssm_placement.csv:2: 5 fields where the header has 7"), std::string::npos) << short_row;
     EXPECT_DOUBLE_EQ(without.largest.at({"cssm", "low"}), 0.030);
     EXPECT_DOUBLE_EQ(without.typical.at({"cssm", "low"}), 0.020);
     EXPECT_DOUBLE_EQ(with.largest.at({"cssm", "low"}), 0.050);  // a's placement at 19
@@ -198,7 +208,7 @@ TEST(PlannerPriors, PlacementsRaiseTheLargestAndMoveTheMedianToTheirMean) {
     EXPECT_NEAR(with.typical.at({"cssm", "low"}), 0.030, 1e-12);
     EXPECT_DOUBLE_EQ(held_out.largest.at({"cssm", "low"}), 0.030);  // c's own: b's placements are lower
     EXPECT_NEAR(held_out.typical.at({"cssm", "low"}), 0.5 * (0.012 + 0.030), 1e-12);
-    EXPECT_NE(refusal.find("has no column 'knob'"), std::string::npos) << refusal;
+    EXPECT_NE(no_knob.find("has no column 'knob'"), std::string::npos) << no_knob;
 }
 
 // A deployment's priors (`bounced --priors FILE`, written by bench/quality --priors-out): the file's
