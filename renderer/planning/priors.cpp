@@ -96,7 +96,7 @@ const OwnErrorPriors& OwnErrorPriors::bench() {
             {{"direct", "draft"}, 0.0463}, {{"direct", "low"}, 0.0129},   {{"direct", "medium"}, 0.0096},
             {{"direct", "high"}, 0.0041},  {{"direct", "ultra"}, 0.0019},
             {{"vct", "draft"}, 0.0558},    {{"vct", "low"}, 0.0817},      {{"vct", "medium"}, 0.0816},
-            {{"vct", "high"}, 0.0574},     {{"vct", "ultra"}, 0.0373},
+            {{"vct", "high"}, 0.0523},     {{"vct", "ultra"}, 0.0418},
             {{"isr", "draft"}, 0.0192},    {{"isr", "low"}, 0.0136},      {{"isr", "medium"}, 0.0130},
             {{"isr", "high"}, 0.0125},     {{"isr", "ultra"}, 0.0121},
             {{"cssm", "draft"}, 0.0194},   {{"cssm", "low"}, 0.0153},     {{"cssm", "medium"}, 0.0083},
