@@ -30,24 +30,29 @@ std::size_t column_of(const std::vector<std::string>& header, const std::string&
     return static_cast<std::size_t>(it - header.begin());
 }
 
-// The largest (of the scenes that do not leak) and the median (of all) of the errors of the scenes
-// not left out, each scene's by the largest and the mean of its placements where it has them;
-// nullopt where none is left.
-std::optional<std::pair<double, double>> largest_and_median(const std::map<std::string, double>& by_scene,
-                                                            const std::map<std::string, std::vector<Placement>>& placed,
-                                                            const std::set<std::string>& left_out,
-                                                            const std::set<std::string>& leaking) {
-    std::vector<double> expected, largest_of_all, promised;
+// What the scenes not left out give of one preset: the largest (of the scenes that do not leak) and
+// the median (of all) of their errors, each scene's by the largest and the mean of its placements
+// where it has them; and, where some of them leak, the largest and the median of those alone.
+struct Figures {
+    double largest = 0.0, median = 0.0;
+    std::optional<std::pair<double, double>> leaking;
+};
+
+// nullopt where no scene is left.
+std::optional<Figures> figures_of(const std::map<std::string, double>& by_scene,
+                                  const std::map<std::string, std::vector<Placement>>& placed,
+                                  const std::set<std::string>& left_out, const std::set<std::string>& leaking) {
+    std::vector<double> expected, largest_of_all, promised, leaked_largest, leaked_expected;
     for (const auto& [scene, own] : by_scene) {
         if (left_out.count(scene)) continue;
         // A frame bench/quality could not measure (values not finite) leaves nothing to promise.
-        if (std::isnan(own)) return std::pair{own, own};
+        if (std::isnan(own)) return Figures{own, own, std::nullopt};
         double largest = own, mean = own;
         if (const auto it = placed.find(scene); it != placed.end() && !it->second.empty()) {
             double sum = 0.0;
             for (const Placement& placement : it->second) {
                 const double error = placement.rel_mse;
-                if (std::isnan(error)) return std::pair{error, error};
+                if (std::isnan(error)) return Figures{error, error, std::nullopt};
                 largest = std::max(largest, error);
                 sum += error;
             }
@@ -55,14 +60,25 @@ std::optional<std::pair<double, double>> largest_and_median(const std::map<std::
         }
         expected.push_back(mean);
         largest_of_all.push_back(largest);
-        if (!leaking.count(scene)) promised.push_back(largest);
+        if (leaking.count(scene)) {
+            leaked_largest.push_back(largest);
+            leaked_expected.push_back(mean);
+        } else {
+            promised.push_back(largest);
+        }
     }
     if (expected.empty()) return std::nullopt;
-    const double median = planning::median(expected);
-    // Where every scene left leaks, the planner rules the preset out on such scenes and has no
-    // measure of it elsewhere: the largest of them all, not none.
+    Figures figures;
+    figures.median = planning::median(expected);
+    // Where every scene left leaks, there is no measure of the preset elsewhere: the largest of them
+    // all, not none.
     const std::vector<double>& over = promised.empty() ? largest_of_all : promised;
-    return std::pair{*std::max_element(over.begin(), over.end()), median};
+    figures.largest = *std::max_element(over.begin(), over.end());
+    if (!leaked_largest.empty()) {
+        figures.leaking = std::pair{*std::max_element(leaked_largest.begin(), leaked_largest.end()),
+                                    planning::median(std::move(leaked_expected))};
+    }
+    return figures;
 }
 
 const std::map<std::string, std::vector<Placement>>& placed_of(const PlacementErrors& placements,
@@ -163,16 +179,26 @@ planning::OwnErrorPriors corpus_priors(const std::filesystem::path& directory,
     planning::OwnErrorPriors priors;
     for (const auto& [key, by_scene] : read_corpus_errors(directory / "quality.csv")) {
         if (const auto figures =
-                largest_and_median(by_scene, placed_of(placements, key), left_out, leaking(key.first, key.second))) {
-            std::tie(priors.largest[key], priors.typical[key]) = *figures;
+                figures_of(by_scene, placed_of(placements, key), left_out, leaking(key.first, key.second))) {
+            priors.largest[key] = figures->largest;
+            priors.typical[key] = figures->median;
+            if (figures->leaking) {
+                std::tie(priors.vct_leaking_largest[key.second], priors.vct_leaking_typical[key.second]) =
+                    *figures->leaking;
+            }
         }
     }
     if (!two_bounce_table || !std::filesystem::exists(directory / "vct_two_bounce_quality.csv")) return priors;
     for (const auto& [key, by_scene] : read_corpus_errors(directory / "vct_two_bounce_quality.csv", 2)) {
         if (key.first != "vct") continue;
         // No placements of the second bounce are measured: its own frames alone.
-        if (const auto figures = largest_and_median(by_scene, {}, left_out, leaking(key.first, key.second))) {
-            std::tie(priors.vct_second_largest[key.second], priors.vct_second_typical[key.second]) = *figures;
+        if (const auto figures = figures_of(by_scene, {}, left_out, leaking(key.first, key.second))) {
+            priors.vct_second_largest[key.second] = figures->largest;
+            priors.vct_second_typical[key.second] = figures->median;
+            if (figures->leaking) {
+                std::tie(priors.vct_second_leaking_largest[key.second],
+                         priors.vct_second_leaking_typical[key.second]) = *figures->leaking;
+            }
         }
     }
     return priors;

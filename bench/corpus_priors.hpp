@@ -1,8 +1,9 @@
 // The planner's own-error priors (renderer/planning/priors.hpp) as bench/quality's corpus tables give
 // them: per GPU method and preset, the largest and the median over the corpus scenes of the relMSE
-// against the reference with as many bounces, leaving out vct's presets where the analysis finds
-// them leaking (the planner rules them out there). With scenes left out, the priors a scene would
-// have had if the bench had never seen it (bench/planner --held-out).
+// against the reference with as many bounces, counting vct's presets apart where the analysis finds
+// them leaking (OwnErrorPriors::vct_leaking_largest: what the planner promises of them on such
+// scenes). With scenes left out, the priors a scene would have had if the bench had never seen it
+// (bench/planner --held-out).
 #pragma once
 
 #include "renderer/planning/priors.hpp"
@@ -50,7 +51,8 @@ std::map<std::string, ThinWalls> corpus_thin_walls();
 // The priors from `directory`'s quality.csv (one bounce) and, with `two_bounce_table` and where it
 // has one, vct_two_bounce_quality.csv, over the scenes not in `left_out`. Where `placements` holds a
 // scene's preset at nearby placements, that scene counts by the largest of them (and its own
-// frame) in the largest, and by their mean in the median: a preset's error at its own placement is
+// frame) in the largest, and by their mean in the median (the leaking tables likewise, over the
+// scenes where vct's preset leaks): a preset's error at its own placement is
 // one draw (cssm draft's in the atrium 0.018, 0.018 to 0.029 over five), and a promise must hold
 // wherever a scene's surfaces fall in the atlas or grid.
 planning::OwnErrorPriors corpus_priors(const std::filesystem::path& directory,

@@ -200,6 +200,7 @@ Measured render_plan(Renderer& renderer, SceneResources& resources, const scene:
     log::info("bench", "{}: {:.1f} ms, relMSE {:.4f}{}", name, result.stats.render_ms, error,
               errors.size() > 1 && *most > *least ? fmt::format(" ({} frames, {:.4f} to {:.4f})", errors.size(), *least, *most) : "");
     Measured measured{name, result.stats.render_ms, error, *most - *least, method, preset, knobs};
+    measured.scale = scale;
     if (kept_frame) *kept_frame = result.frame;
     if (comparisons && scale == 1.0) {
         comparisons->add(1, std::make_shared<const RenderResult>(std::move(result)), &analysis, costs);
@@ -233,6 +234,7 @@ Measured render_as_it_comes(Renderer& renderer, SceneResources& resources, const
                       result.stats.render_ms, image::compare(scaled_back(result.frame, light_factor), truth).rel_mse, 0.0,
                       plan.method, plan.preset,
                       plan.knobs};
+    measured.scale = plan.scale;
     log::info("bench", "{}: {:.1f} ms as it came (redid {}), relMSE {:.4f}", measured.label, measured.ms,
               to_string(result.stats.change), measured.rel_mse);
     return measured;
@@ -698,7 +700,7 @@ int main(int argc, char** argv) {
                                                        error_text(*r.fixed))
                                          : "none meets it",
                                  r.holds ? (r.holds_strictly                      ? "yes"
-                                            : r.fixed && r.fixed->label == r.planned.label ? "yes, the same plan"
+                                            : r.fixed && same_plan(*r.fixed, r.planned) ? "yes, the same plan"
                                                                                            : "yes, within the noise floor")
                                          : "**no**");
             auto& [holds, strictly, count] = holding[r.pass];

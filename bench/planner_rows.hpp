@@ -27,6 +27,7 @@ struct Measured {
     // a fixed plan and 4.0 ms as the planned frame, the same plan). 0 where not timed again.
     double ms_again = 0.0;
     double comparator_ms() const { return ms_again > 0.0 ? ms_again : ms; }
+    double scale = 1.0;  // the frame rendered at this fraction of the size and upsampled
 };
 
 struct BudgetRow {
@@ -46,6 +47,11 @@ struct BudgetRow {
 
 // How much two frames of the same plan differ by chance, for the planned plan or the comparator.
 double noise_floor(const BudgetRow& row);
+
+// Whether two frames are of one plan: the same label, or the same method and preset with the same
+// knobs once the preset's own fill them in (the planner names `bounces` 1 where a fixed plan leaves
+// it to vct draft).
+bool same_plan(const Measured& a, const Measured& b);
 
 // A time budget T holds when the planned frame took at most 1.2 T, with error no worse than the most
 // accurate of `comparators` within T: by no more than two frames of one of the two plans differ by

@@ -25,20 +25,24 @@ namespace {
 //     predicted: its coarser atlas misses the sun's patches);
 //   - else the prior.
 // `occluded`: the analysis finds most of the scene's indirect light occluded, where isr's priors are
-// those of the Cornell variants (OwnErrorPriors::isr_occluded_largest).
-std::pair<double, std::string> own_error(const std::string& method, const std::string& preset, int bounces,
-                                         const SceneMeasurements* measured, const OwnErrorPriors& priors, bool occluded) {
-    const bool occluded_isr = occluded && method == "isr";
+// those of the Cornell variants (OwnErrorPriors::isr_occluded_largest). Where vct's preset leaks
+// (leaks_through_thin_walls), its priors are those of the bench's scenes where it leaks.
+std::pair<double, std::string> own_error(const SceneAnalysis& analysis, const std::string& method,
+                                         const std::string& preset, int bounces, const SceneMeasurements* measured,
+                                         const OwnErrorPriors& priors) {
+    const bool occluded_isr = analysis.visibility.mostly_occluded() && method == "isr";
     const auto prior_of = [&](const std::string& name) {
         if (occluded_isr) {
             if (const auto it = priors.isr_occluded_largest.find(name); it != priors.isr_occluded_largest.end()) {
                 return it->second;
             }
         }
-        return priors.largest_of(method, name, bounces).value_or(0.0);
+        return priors.largest_of(method, name, bounces, leaks_through_thin_walls(analysis, method, name)).value_or(0.0);
     };
     const std::string bench =
-        "on " + (occluded_isr ? priors.occluded_source : priors.source_of(method, preset, bounces));
+        "on " + (occluded_isr ? priors.occluded_source
+                 : leaks_through_thin_walls(analysis, method, preset) ? priors.leaking_source
+                                                                      : priors.source_of(method, preset, bounces));
     const double prior = prior_of(preset);
     if (!measured) return {prior, bench};
     if (const auto own = measured->own_error(method, preset, bounces)) {
@@ -67,6 +71,10 @@ std::pair<double, std::string> own_error(const std::string& method, const std::s
 }
 
 }  // namespace
+
+bool leaks_through_thin_walls(const SceneAnalysis& analysis, const std::string& method, const std::string& preset) {
+    return method == "vct" && analysis.thin_walls.leaks(preset);
+}
 
 std::optional<double> typical_own_error(const std::string& method, const std::string& preset, int bounces) {
     return OwnErrorPriors::bench().typical_of(method, preset, bounces);
@@ -140,15 +148,22 @@ ErrorPrediction predict_error(const SceneAnalysis& analysis, const std::string& 
                                            : ")";
         return prediction;
     }
-    const auto [own, own_basis] =
-        own_error(method, preset, bounces, measured, priors, analysis.visibility.mostly_occluded());
+    const auto [own, own_basis] = own_error(analysis, method, preset, bounces, measured, priors);
     prediction.rel_mse = stopped + own;
     prediction.basis = fmt::format("{} bounce{} lack {:.3f}; {} {} adds {:.3f} {}", bounces, bounces == 1 ? "" : "s",
                                    stopped, method, preset, own, own_basis);
-    if (method == "vct" && analysis.thin_walls.leaks(preset)) {
-        prediction.ruled_out = fmt::format("{:.0f}% of the surface is a lit wall thinner than vct {}'s {:.3f} m voxels",
-                                           100.0 * analysis.thin_walls.presets.at(preset).leaking_area, preset,
-                                           analysis.thin_walls.presets.at(preset).voxel_size);
+    if (leaks_through_thin_walls(analysis, method, preset)) {
+        // Promised what the bench's leaking scenes measured, or what this scene's frames did; with
+        // neither, nothing is known of how far the light leaks.
+        const ThinWalls::Preset& walls = analysis.thin_walls.presets.at(preset);
+        const std::string thin = fmt::format("{:.0f}% of the surface is a lit wall thinner than vct {}'s {:.3f} m voxels",
+                                             100.0 * walls.leaking_area, preset, walls.voxel_size);
+        const bool measured_here = measured && measured->own_error(method, preset, bounces);
+        if (measured_here || priors.largest_of(method, preset, bounces, /*leaking=*/true)) {
+            prediction.basis += " (" + thin + ")";
+        } else {
+            prediction.ruled_out = thin + ", and no scene where it leaks has measured it";
+        }
     }
     // A method that lets indirect light through what occludes it (isr without imperfect shadow maps)
     // is ruled out where most of that light is occluded.

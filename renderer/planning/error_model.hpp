@@ -11,9 +11,14 @@
 //     with their priors;
 //   - the reference's noise: the per-sample variance over the samples, the larger of the analysis'
 //     and what the scene's reference frames measured (SceneMeasurements::noise);
-//   - ruled out: vct where walls are thinner than its voxels (light leaks through them), and where
-//     most indirect light is occluded, a frame whose method gives a reason it lets that light through
-//     (MethodInfo::unmodelled_indirect_visibility: isr without imperfect shadow maps).
+//   - where walls are thinner than vct's voxels (light leaks through them), vct's prior is the
+//     largest the bench measured on its scenes where the preset leaks (OwnErrorPriors::
+//     vct_leaking_largest), far above the rest: it is chosen only where nothing else is predicted
+//     better, and probed beside a reference until the scene's own frames measure it. Where no such
+//     scene has measured the preset, and the scene has not, it is ruled out;
+//   - ruled out where most indirect light is occluded: a frame whose method gives a reason it lets
+//     that light through (MethodInfo::unmodelled_indirect_visibility: isr without imperfect shadow
+//     maps).
 //
 // The parts add: they are errors of different origin.
 #pragma once
@@ -40,6 +45,10 @@ std::optional<double> own_error_prior(const std::string& method, const std::stri
 // The median of the same over the bench's scenes (OwnErrorPriors::bench().typical_of): what to expect of
 // a GPU plan on a scene where nothing is measured (spot checks try such plans), never what to promise.
 std::optional<double> typical_own_error(const std::string& method, const std::string& preset, int bounces = 1);
+
+// Whether vct's voxels at `preset` are thicker than the scene's lit walls (ThinWalls::leaks); false
+// for other methods.
+bool leaks_through_thin_walls(const SceneAnalysis& analysis, const std::string& method, const std::string& preset);
 
 // The indirect bounces a plan models: 0 for direct, 1 for vct and isr, the `bounces` knob for cssm
 // and the reference.

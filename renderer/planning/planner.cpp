@@ -604,7 +604,8 @@ std::optional<Checks> spot_checks(const std::vector<Candidate>& all, const Candi
         // that stands, and where it is over E the frames tried before have ruled it out
         // (ruled_out_by_measurements); a check would be traced for nothing.
         if (inputs.scene && inputs.scene->own_error(c.method, c.preset, bounces)) continue;
-        const auto typical = inputs.own_error_priors().typical_of(c.method, c.preset, bounces);
+        const auto typical = inputs.own_error_priors().typical_of(
+            c.method, c.preset, bounces, leaks_through_thin_walls(analysis, c.method, c.preset));
         if (!typical) continue;
         if (*typical + BounceEnergy::at(analysis.bounces.stopped_error, bounces) > target) continue;
         plausible.push_back(&c);

@@ -55,6 +55,17 @@ void expect_tables_equal(const planning::OwnErrorPriors::Table& committed,
     }
 }
 
+void expect_presets_equal(const std::map<std::string, double>& committed, const std::map<std::string, double>& corpus,
+                          const char* which) {
+    EXPECT_EQ(committed.size(), corpus.size()) << which;
+    for (const auto& [preset, figure] : corpus) {
+        SCOPED_TRACE(fmt::format("{} {}", which, preset));
+        const auto it = committed.find(preset);
+        ASSERT_NE(it, committed.end());
+        EXPECT_NEAR(it->second, figure, kRounding) << "the table says " << it->second << ", the corpus " << figure;
+    }
+}
+
 TEST(PlannerPriors, AreTheCorpusTablesLargestAndMedianErrors) {
     ASSERT_EQ(bench::placement_files(kCorpus / "..").size(), 2u);  // cssm's atlas, vct's grid
     const planning::OwnErrorPriors corpus = committed_corpus_priors();
@@ -62,6 +73,14 @@ TEST(PlannerPriors, AreTheCorpusTablesLargestAndMedianErrors) {
     EXPECT_EQ(corpus.largest.size(), 20u);  // four GPU methods, five presets
     expect_tables_equal(committed.largest, corpus.largest, "largest");
     expect_tables_equal(committed.typical, corpus.typical, "median");
+    // Where vct's presets leak, apart: the furnished room leaks at draft and low, the atrium to medium.
+    EXPECT_EQ(corpus.vct_leaking_largest.size(), 3u);
+    expect_presets_equal(committed.vct_leaking_largest, corpus.vct_leaking_largest, "leaking largest");
+    expect_presets_equal(committed.vct_leaking_typical, corpus.vct_leaking_typical, "leaking median");
+    expect_presets_equal(committed.vct_second_leaking_largest, corpus.vct_second_leaking_largest,
+                         "second bounce leaking largest");
+    expect_presets_equal(committed.vct_second_leaking_typical, corpus.vct_second_leaking_typical,
+                         "second bounce leaking median");
     for (const auto& [key, by_scene] : bench::read_corpus_errors(kCorpus / "quality.csv")) {
         EXPECT_EQ(by_scene.size(), 5u) << key.first << " " << key.second;
     }
@@ -125,11 +144,33 @@ TEST(PlannerPriors, AHeldOutScenesPriorsAreTheOtherScenes) {
                 if (key.first != "vct" || !walls().at(other).leaks(key.second)) promised.push_back(most);
             }
             ASSERT_EQ(means.size(), 4u);
+            const std::vector<double> unsorted_means = means;
             if (promised.empty()) promised = largest;
             std::sort(means.begin(), means.end());
             EXPECT_DOUBLE_EQ(held_out.largest.at(key), *std::max_element(promised.begin(), promised.end()));
             EXPECT_NEAR(held_out.typical.at(key), 0.5 * (means[1] + means[2]), 1e-12);
+            if (key.first != "vct") continue;
+            // Where the preset leaks, the other scenes that leak there.
+            std::vector<double> leaked_largest, leaked_means;
+            std::size_t other = 0;  // the index in `largest` and `unsorted_means`
+            for (const auto& [name, error] : by_scene) {
+                if (name == scene) continue;
+                if (walls().at(name).leaks(key.second)) {
+                    leaked_largest.push_back(largest[other]);
+                    leaked_means.push_back(unsorted_means[other]);
+                }
+                ++other;
+            }
+            if (leaked_largest.empty()) {
+                EXPECT_EQ(held_out.vct_leaking_largest.count(key.second), 0u);
+                continue;
+            }
+            EXPECT_DOUBLE_EQ(held_out.vct_leaking_largest.at(key.second),
+                             *std::max_element(leaked_largest.begin(), leaked_largest.end()));
+            EXPECT_NEAR(held_out.vct_leaking_typical.at(key.second), planning::median(leaked_means), 1e-12);
         }
+        // The atrium held out leaves the furnished room alone leaking, at draft and low.
+        if (scene == "atrium") EXPECT_EQ(held_out.vct_leaking_largest.size(), 2u);
         EXPECT_EQ(held_out.vct_second_largest.size(), 5u);
     }
 }
@@ -222,6 +263,17 @@ TEST(PlannerPriors, ADeploymentsFileReplacesWhatItMeasuredAndKeepsTheRest) {
     EXPECT_EQ(again.vct_second_largest, bench.vct_second_largest);
     EXPECT_EQ(again.vct_second_typical, bench.vct_second_typical);
     EXPECT_EQ(again.isr_occluded_largest, bench.isr_occluded_largest);
+    EXPECT_EQ(again.vct_leaking_largest, bench.vct_leaking_largest);
+    EXPECT_EQ(again.vct_leaking_typical, bench.vct_leaking_typical);
+    EXPECT_EQ(again.vct_second_leaking_largest, bench.vct_second_leaking_largest);
+    EXPECT_EQ(again.vct_second_leaking_typical, bench.vct_second_leaking_typical);
+    // A file's leaking tables are their source where vct leaks, and there alone.
+    const auto leaking = planning::OwnErrorPriors::from_json({{"vct_leaking_largest", {{"high", 0.9}}}}, bench, "l.json");
+    EXPECT_EQ(*leaking.largest_of("vct", "high", 1, /*leaking=*/true), 0.9);
+    EXPECT_EQ(*leaking.largest_of("vct", "draft", 1, true), bench.vct_leaking_largest.at("draft"));
+    EXPECT_FALSE(leaking.largest_of("isr", "draft", 1, true).has_value());
+    EXPECT_EQ(leaking.leaking_source, "l.json");
+    EXPECT_EQ(leaking.source_of("vct", "high"), "the bench scenes");
 
     const nlohmann::json file = {{"source", "our atria"}, {"largest", {{"cssm", {{"low", 0.5}}}}},
                                  {"typical", {{"cssm", {{"low", 0.25}}}}}};
@@ -287,7 +339,8 @@ TEST(PlannerPriors, AMalformedFileIsRefusedNamingTheEntry) {
               "p.json: isr_occluded_largest.huge: unknown preset 'huge'");
     EXPECT_EQ(refusal({{"largets", {}}}),
               "p.json: unknown field 'largets' (known: source, largest, typical, vct_second_largest, "
-              "vct_second_typical, isr_occluded_largest)");
+              "vct_second_typical, isr_occluded_largest, vct_leaking_largest, vct_leaking_typical, "
+              "vct_second_leaking_largest, vct_second_leaking_typical)");
     EXPECT_EQ(refusal(nlohmann::json::array()), "p.json: expected an object, not array");
 
     const auto path =

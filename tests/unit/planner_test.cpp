@@ -244,13 +244,37 @@ TEST(ErrorModel, AGpuMethodAddsItsBenchPriorToTheBouncesItLacks) {
     EXPECT_DOUBLE_EQ(predict_error(analysis, "direct", "ultra", {}).rel_mse, 0.1 + *own_error_prior("direct", "ultra"));
 }
 
-TEST(ErrorModel, LeakingVctAndOccludedIsrAreRuledOutWithTheirReason) {
+TEST(ErrorModel, OccludedIsrIsRuledOutAndLeakingVctPromisedWhatLeakingScenesMeasured) {
     SceneAnalysis analysis = made_up_analysis();
     analysis.thin_walls.presets["draft"].leaking_area = 0.2;
     analysis.visibility.pairs = 1000;
     analysis.visibility.occluded_fraction = 0.8;
-    EXPECT_TRUE(predict_error(analysis, "vct", "draft", {}).ruled_out.has_value());
-    EXPECT_FALSE(predict_error(analysis, "vct", "low", {}).ruled_out.has_value());
+    // Where vct draft leaks, it is promised the largest the bench's leaking scenes measured of it,
+    // and the basis says why; low, which does not leak, keeps the corpus' prior.
+    const planning::OwnErrorPriors& bench = planning::OwnErrorPriors::bench();
+    const ErrorPrediction leaking = predict_error(analysis, "vct", "draft", {});
+    EXPECT_FALSE(leaking.ruled_out.has_value());
+    EXPECT_DOUBLE_EQ(leaking.rel_mse, 0.1 / 2.0 + bench.vct_leaking_largest.at("draft"));
+    EXPECT_GT(bench.vct_leaking_largest.at("draft"), *bench.largest_of("vct", "draft"));
+    EXPECT_NE(leaking.basis.find("where it leaks"), std::string::npos) << leaking.basis;
+    EXPECT_NE(leaking.basis.find("thinner than vct draft"), std::string::npos) << leaking.basis;
+    EXPECT_DOUBLE_EQ(predict_error(analysis, "vct", "draft", {{"bounces", 2}}).rel_mse,
+                     0.1 / 4.0 + bench.vct_second_leaking_largest.at("draft"));
+    EXPECT_DOUBLE_EQ(predict_error(analysis, "vct", "low", {}).rel_mse, 0.1 / 2.0 + *bench.largest_of("vct", "low"));
+    // With no leaking scene measured at the preset, it is ruled out with the reason, until this
+    // scene's own frames measure it; then what they measured stands.
+    planning::OwnErrorPriors unmeasured = bench;
+    unmeasured.vct_leaking_largest.clear();
+    unmeasured.vct_second_leaking_largest.clear();
+    const ErrorPrediction unknown = predict_error(analysis, "vct", "draft", {}, nullptr, unmeasured);
+    ASSERT_TRUE(unknown.ruled_out.has_value());
+    EXPECT_NE(unknown.ruled_out->find("thinner than vct draft"), std::string::npos) << *unknown.ruled_out;
+    SceneMeasurements measured;
+    measured.record_own_error("vct", "draft", 1, 0.06);
+    const ErrorPrediction here = predict_error(analysis, "vct", "draft", {}, &measured, unmeasured);
+    EXPECT_FALSE(here.ruled_out.has_value());
+    EXPECT_DOUBLE_EQ(here.rel_mse, 0.1 / 2.0 + 0.06);
+    EXPECT_DOUBLE_EQ(predict_error(analysis, "vct", "draft", {}, &measured).rel_mse, 0.1 / 2.0 + 0.06);
     // isr draft gathers without visibility; from low up its presets make imperfect shadow maps.
     EXPECT_TRUE(predict_error(analysis, "isr", "draft", {}).ruled_out.has_value());
     EXPECT_FALSE(predict_error(analysis, "isr", "medium", {}).ruled_out.has_value());
@@ -275,9 +299,16 @@ TEST(ErrorModel, LeakingVctAndOccludedIsrAreRuledOutWithTheirReason) {
     }
     std::vector<std::string> ruled_out;
     const auto all = candidates({analysis, device, nullptr, 64, 64, std::nullopt}, &ruled_out);
-    for (const Candidate& c : all) {
-        EXPECT_FALSE((c.method == "isr" || c.method == "vct") && c.preset == "draft") << c.method << " " << c.preset;
-    }
+    for (const Candidate& c : all) EXPECT_FALSE(c.method == "isr" && c.preset == "draft") << c.method << " " << c.preset;
+    EXPECT_TRUE(std::any_of(all.begin(), all.end(), [](const Candidate& c) {
+        return c.method == "vct" && c.preset == "draft";
+    }));
+    ASSERT_EQ(ruled_out.size(), 1u);  // isr draft
+    EXPECT_NE(ruled_out.front().find("isr draft"), std::string::npos) << ruled_out.front();
+    PlanningInputs without_leaking_priors{analysis, device, nullptr, 64, 64, std::nullopt};
+    without_leaking_priors.priors = &unmeasured;
+    ruled_out.clear();
+    candidates(without_leaking_priors, &ruled_out);
     EXPECT_EQ(ruled_out.size(), 2u);  // vct draft and isr draft
     EXPECT_NE(ruled_out.front().find("thinner than vct draft"), std::string::npos) << ruled_out.front();
 }
