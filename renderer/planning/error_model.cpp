@@ -24,8 +24,8 @@ namespace {
 //     medium measured 0.18 of its prior, and low, promised as much, measures 0.062 where 0.011 was
 //     predicted: its coarser atlas misses the sun's patches);
 //   - else the prior.
-// `occluded`: the analysis finds most of the scene's indirect light occluded, where isr's priors are
-// those of the Cornell variants (OwnErrorPriors::isr_occluded_largest). Where vct's preset leaks
+// Where the analysis finds most of the scene's indirect light occluded, isr's priors are those of
+// the Cornell variants (OwnErrorPriors::isr_occluded_largest); where vct's preset leaks
 // (leaks_through_thin_walls), its priors are those of the bench's scenes where it leaks.
 std::pair<double, std::string> own_error(const SceneAnalysis& analysis, const std::string& method,
                                          const std::string& preset, int bounces, const SceneMeasurements* measured,
