@@ -348,5 +348,29 @@ TEST(Planner, ATargetErrorTriesPlausibleGpuPlansWithASpotCheckBeforeTheReference
     }
 }
 
+// A spot check expects of vct, where its preset leaks, what the bench's leaking scenes measured
+// (OwnErrorPriors::vct_leaking_typical), not the corpus' median: a plan expected to fit the target
+// elsewhere is not traced where its walls leak.
+TEST(Planner, ASpotCheckExpectsOfLeakingVctWhatLeakingScenesMeasured) {
+    SceneAnalysis analysis = made_up_analysis();
+    const DeviceCosts device = costs_for_checks();
+    OwnErrorPriors priors = OwnErrorPriors::bench();
+    for (auto& [key, largest] : priors.largest) largest = 1.0;  // nothing promised: the reference is the plan
+    for (auto& [preset, largest] : priors.vct_second_largest) largest = 1.0;
+    priors.vct_second_typical["draft"] = 0.001;  // with the 0.025 that 2 bounces lack, within 0.05
+    PlanningInputs inputs{analysis, device, nullptr, 128, 128, std::nullopt};
+    inputs.priors = &priors;
+    const auto checks_vct_draft = [&](const PlanningInputs& in) {
+        const Plan plan = planning::plan(in, {std::nullopt, 0.05});
+        EXPECT_EQ(plan.chosen.method, "reference") << plan.why;
+        return std::any_of(plan.checks.begin(), plan.checks.end(),
+                           [](const Candidate& c) { return c.method == "vct" && c.preset == "draft"; });
+    };
+    EXPECT_TRUE(checks_vct_draft(inputs));
+    analysis.thin_walls.presets["draft"].leaking_area = 0.2;
+    ASSERT_GT(priors.vct_second_leaking_typical.at("draft") + 0.025, 0.05);
+    EXPECT_FALSE(checks_vct_draft(inputs));
+}
+
 }  // namespace
 }  // namespace bounce::planning
