@@ -626,7 +626,7 @@ void RequestHandlers::render_probes(const RenderOrder& order, Renderer& renderer
             if (std::any_of(order.reference_probes.begin(), order.reference_probes.end(), [&](const RenderRequest& reference) {
                     return planning::modelled_bounces(reference.method, reference.knobs) == bounces;
                 })) {
-                entry.resources->measurements->record_compared(probe.method, probe.preset);
+                entry.resources->measurements->record_compared(probe.method, probe.preset, bounces);
             }
         } catch (const std::exception& error) {
             // A probe only teaches the planner: its failure is logged, and the request it rode on stands.

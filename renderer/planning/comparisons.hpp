@@ -7,7 +7,8 @@
 // sample over its samples) - the light of the bounces the reference has and the GPU frame lacks
 // (stopped_error[k] - stopped_error[b] from the analysis) + where the reference is a bounce prefix
 // of a frame of more bounces, what the GPU frame's error adds to the later bounces' light beyond
-// their sum (Comparison::cross_term). The noise is the reference's statistic
+// their sum (Comparison::cross_term); negative where the frame's error fills in that later light, never
+// below -stopped_error[b]. The noise is the reference's statistic
 // scaled by what two reference frames of a view measured it to make (calibrate_noise). Left out: comparisons where those two
 // are over half of the relMSE (the own part would be mostly noise or missing light), references
 // that are denoised, without indirect visibility, with ambient occlusion or under 16 samples, and

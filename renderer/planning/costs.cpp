@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <iterator>
+#include <limits>
 #include <cmath>
 #include <fstream>
 #include <vector>
@@ -426,7 +427,7 @@ std::optional<double> SceneMeasurements::least_noise_scale() const {
 
 void SceneMeasurements::record_own_error(const std::string& method, const std::string& preset, int bounces, double rel_mse,
                                          std::optional<std::uint64_t> bound_of_view) {
-    if (!(rel_mse >= 0.0) || !std::isfinite(rel_mse)) return;
+    if (!std::isfinite(rel_mse)) return;
     const std::lock_guard lock(mutex_);
     auto& kept = own_errors_[{method, preset, bounces}];
     if (bound_of_view) {
@@ -442,7 +443,7 @@ void SceneMeasurements::record_own_error(const std::string& method, const std::s
 
 void SceneMeasurements::record_own_estimate(const std::string& method, const std::string& preset, int bounces,
                                             double rel_mse, std::uint64_t view, double taken_out) {
-    if (!(rel_mse >= 0.0) || !std::isfinite(rel_mse) || !(taken_out >= 0.0)) return;
+    if (!std::isfinite(rel_mse) || !(taken_out >= 0.0)) return;
     const std::lock_guard lock(mutex_);
     auto& kept = own_errors_[{method, preset, bounces}];
     const RecordedOwnError estimate{rel_mse, view, false, taken_out};
@@ -459,7 +460,7 @@ namespace {
 
 template <typename Records>
 double largest_own_error(const Records& kept) {
-    double largest = 0.0;
+    double largest = -std::numeric_limits<double>::infinity();
     for (const auto& recorded : kept) largest = std::max(largest, recorded.rel_mse);
     return largest;
 }
@@ -494,14 +495,20 @@ std::map<std::string, double> SceneMeasurements::own_errors(const std::string& m
     return largest;
 }
 
-void SceneMeasurements::record_compared(const std::string& method, const std::string& preset) {
+void SceneMeasurements::record_compared(const std::string& method, const std::string& preset, int bounces) {
     const std::lock_guard lock(mutex_);
-    compared_.insert({method, preset});
+    compared_.insert({method, preset, bounces});
 }
 
 bool SceneMeasurements::compared(const std::string& method, const std::string& preset) const {
     const std::lock_guard lock(mutex_);
-    return compared_.count({method, preset}) > 0;
+    const auto first = compared_.lower_bound({method, preset, std::numeric_limits<int>::min()});
+    return first != compared_.end() && std::get<0>(*first) == method && std::get<1>(*first) == preset;
+}
+
+bool SceneMeasurements::compared(const std::string& method, const std::string& preset, int bounces) const {
+    const std::lock_guard lock(mutex_);
+    return compared_.count({method, preset, bounces}) > 0;
 }
 
 }  // namespace bounce::planning

@@ -248,16 +248,20 @@ public:
     // The largest of the last comparisons at this preset and bounce count, else at this preset's
     // larger bounce counts (the own error is net of the bounces' light, but each bounce a method
     // computes adds its own error: in the glossy gallery cssm low erred 0.018 at 2 bounces and 0.037
-    // at 8, so fewer bounces do not tell more); nullopt when the preset has none such.
+    // at 8, so fewer bounces do not tell more); nullopt when the preset has none such. At its own
+    // bounce count it may be negative (the frame's error fills in light the bounces lack:
+    // comparisons.hpp); carried from larger counts it is at least 0.
     std::optional<OwnError> own_error(const std::string& method, const std::string& preset, int bounces) const;
     // Every preset of `method` with an own error measured here at `at_least_bounces` or more, with
     // its largest.
     std::map<std::string, double> own_errors(const std::string& method, int at_least_bounces = 0) const;
-    // Whether a frame of the preset was compared with a reference frame here, whether or not that
-    // told its own error (the planner probes a preset once per scene), unless the light of the
-    // bounces it lacked drowned it (a reference of its own bounce count can still tell).
-    void record_compared(const std::string& method, const std::string& preset);
+    // Whether a frame of the preset (at `bounces`, or at any count) was compared with a reference
+    // frame here, whether or not that told its own error (the planner probes a preset once per scene
+    // and bounce count it probes), unless the light of the bounces it lacked drowned it (a reference
+    // of its own bounce count can still tell).
+    void record_compared(const std::string& method, const std::string& preset, int bounces);
     bool compared(const std::string& method, const std::string& preset) const;
+    bool compared(const std::string& method, const std::string& preset, int bounces) const;
 
     static constexpr std::size_t kKept = 5;  // frames kept per preset and size: a median of them ignores one slow frame
 
@@ -284,7 +288,7 @@ private:
         double taken_out = 0.0;             // an estimate's: what its comparison took out
     };
     std::map<std::tuple<std::string, std::string, int>, std::deque<RecordedOwnError>> own_errors_;
-    std::set<std::pair<std::string, std::string>> compared_;
+    std::set<std::tuple<std::string, std::string, int>> compared_;
 };
 
 }  // namespace bounce::planning

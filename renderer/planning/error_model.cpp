@@ -149,7 +149,7 @@ ErrorPrediction predict_error(const SceneAnalysis& analysis, const std::string& 
         return prediction;
     }
     const auto [own, own_basis] = own_error(analysis, method, preset, bounces, measured, priors);
-    prediction.rel_mse = stopped + own;
+    prediction.rel_mse = std::max(0.0, stopped + own);  // own is negative where it fills in what the bounces lack
     prediction.basis = fmt::format("{} bounce{} lack {:.3f}; {} {} adds {:.3f} {}", bounces, bounces == 1 ? "" : "s",
                                    stopped, method, preset, own, own_basis);
     if (leaks_through_thin_walls(analysis, method, preset)) {

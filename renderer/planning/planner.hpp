@@ -76,7 +76,10 @@ struct Plan {
 // meets a later budget saves a reference frame on every such request: the probes may take as long as
 // the reference plan itself. A preset compared without its error learned (the reference's noise
 // drowned it) is probed again beside a reference whose own frame of its bounce count is predicted
-// quiet enough to measure it. None when the chosen plan is not the reference.
+// quiet enough to measure it. Then, in what is left of the share, each preset's plan of fewest
+// bounces where that is not its first probe's, once per bounce count: an own error is carried to
+// fewer bounces as if it and the light they lack added apart. None when the chosen plan is not the
+// reference.
 // With the scene's analysis, the probes also hold companions, reference plans (method "reference"),
 // last: where a probe lacks bounces whose light, with the chosen reference's noise, would drown its
 // own error in the comparison, the cheapest reference of the probe's bounce count (at least 16

@@ -189,7 +189,7 @@ void record_spot_check(SceneMeasurements& measurements, const std::vector<double
     if (lacking > 0.5 * estimate.rel_mse) return;
     const double own = estimate.rel_mse + kSpotConfidence * estimate.standard_error - std::max(lacking, 0.0);
     measurements.record_own_error(method, preset, bounces, std::max(own, 0.0));
-    measurements.record_compared(method, preset);
+    measurements.record_compared(method, preset, bounces);
 }
 
 bool ruled_out_by_measurements(const SceneMeasurements& measured, const SceneAnalysis& analysis, const std::string& method,

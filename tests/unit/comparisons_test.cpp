@@ -75,7 +75,7 @@ TEST(OwnError, TheLargestOfTheLastComparisonsAtABounceCountElseAtThePresetsLarge
     measured.record_own_error("cssm", "low", 2, 0.05);
     measured.record_own_error("cssm", "low", 4, 0.02);
     measured.record_own_error("cssm", "low", 4, std::nan(""));  // ignored
-    measured.record_own_error("cssm", "low", 4, -1.0);          // ignored
+    measured.record_own_error("cssm", "low", 4, -0.01);  // kept: a frame that fills in light its bounces lack
     const auto at_2 = measured.own_error("cssm", "low", 2);
     ASSERT_TRUE(at_2);
     EXPECT_DOUBLE_EQ(at_2->rel_mse, 0.05);
@@ -83,15 +83,15 @@ TEST(OwnError, TheLargestOfTheLastComparisonsAtABounceCountElseAtThePresetsLarge
     EXPECT_TRUE(at_2->exact);
     const auto at_4 = measured.own_error("cssm", "low", 4);
     EXPECT_DOUBLE_EQ(at_4->rel_mse, 0.02);
-    EXPECT_EQ(at_4->frames, 1);
+    EXPECT_EQ(at_4->frames, 2);
     // Not measured: the largest at the preset's larger bounce counts (each bounce adds its error).
     const auto at_3 = measured.own_error("cssm", "low", 3);
     EXPECT_DOUBLE_EQ(at_3->rel_mse, 0.02);
-    EXPECT_EQ(at_3->frames, 1);
+    EXPECT_EQ(at_3->frames, 2);
     EXPECT_FALSE(at_3->exact);
     const auto at_1 = measured.own_error("cssm", "low", 1);
     EXPECT_DOUBLE_EQ(at_1->rel_mse, 0.05);
-    EXPECT_EQ(at_1->frames, 3);
+    EXPECT_EQ(at_1->frames, 4);
     EXPECT_FALSE(measured.own_error("cssm", "low", 5));  // fewer bounces do not tell more
     EXPECT_FALSE(measured.own_error("cssm", "high", 2));
     EXPECT_EQ(measured.own_errors("cssm"), (std::map<std::string, double>{{"low", 0.05}}));
@@ -434,6 +434,49 @@ TEST(FrameComparisons, AgainstABouncePrefixTheOwnErrorCountsWhereItMeetsTheLater
     EXPECT_NEAR(apart[0].own_error, 0.01 / 0.26 - noise, 1e-6);
 }
 
+// A frame brighter than its bounce prefix where the later bounces add light fills in part of what it
+// lacks: `direct` at 0.6 where the prefix is 0.5 and the whole 1.0 errs 0.16 / 1.01 against the
+// whole, less than the 0.25 / 1.01 its bounces lack. What it adds is negative, -0.09 / 1.01 less the
+// prefix's noise, and at its own bounce count the error model adds it to the analysis' missing light
+// (0.1 here); carried to fewer bounces, an own error is never below 0.
+TEST(FrameComparisons, AFrameThatFillsInTheLightItsBouncesLackAddsANegativeOwnError) {
+    const SceneAnalysis analysis = made_up_analysis();
+    SceneMeasurements measured;
+    FrameComparisons comparisons;
+    comparisons.add(5, frame("direct", "high", {}, 0.6f), &analysis, measured);
+    auto prefix = std::make_shared<RenderResult>(*reference(64, 0.0016, {{"bounces", 0}}));
+    for (std::size_t i = 0; i < prefix->frame.rgba.size(); i += 4) {
+        for (int c = 0; c < 3; ++c) prefix->frame.rgba[i + c] = 0.5f;
+    }
+    auto whole = std::make_shared<RenderResult>(*reference(64, 0.5));
+    whole->byproducts = {prefix};
+    const auto made = comparisons.add(5, whole, &analysis, measured);
+    ASSERT_EQ(made.size(), 1u);
+    const double noise = FrameComparisons::kUncalibratedNoiseScale * 0.0016 / 64.0;
+    EXPECT_NEAR(made[0].own_error, -0.09 / 1.01 - noise, 1e-6);
+    const auto own = measured.own_error("direct", "high", 0);
+    ASSERT_TRUE(own && own->exact);
+    EXPECT_NEAR(own->rel_mse, -0.09 / 1.01 - noise, 1e-6);
+    EXPECT_NEAR(predict_error(analysis, "direct", "high", {}, &measured).rel_mse, 0.1 - 0.09 / 1.01 - noise, 1e-6);
+    // Never below what the bounces lack: the error against every bounce is not negative.
+    SceneMeasurements far;
+    FrameComparisons other;
+    SceneAnalysis little_missing = analysis;
+    little_missing.bounces.stopped_error[0] = 0.01;
+    other.add(6, frame("direct", "high", {}, 0.6f), &little_missing, far);
+    const auto floored = other.add(6, whole, &little_missing, far);
+    ASSERT_EQ(floored.size(), 1u);
+    EXPECT_DOUBLE_EQ(floored[0].own_error, -0.01);
+    EXPECT_DOUBLE_EQ(predict_error(little_missing, "direct", "high", {}, &far).rel_mse, 0.0);
+    // Carried from 2 bounces to 1, a negative own error counts as 0.
+    SceneMeasurements carried;
+    carried.record_own_error("cssm", "low", 2, -0.02);
+    EXPECT_DOUBLE_EQ(carried.own_error("cssm", "low", 2)->rel_mse, -0.02);
+    const auto at_one = carried.own_error("cssm", "low", 1);
+    ASSERT_TRUE(at_one && !at_one->exact);
+    EXPECT_DOUBLE_EQ(at_one->rel_mse, 0.0);
+}
+
 // Past the deeper frame: the cross term is linear in the later light, so the part of it that the
 // deeper frame's last bounce brings (against 4 bounces less against 3) goes on as the analysis'
 // shares say each bounce's light does, here half the one before: x_4 (1/2) / (1 - 1/2) = x_4.
@@ -645,20 +688,72 @@ TEST(Probes, BesideAReferencePlanUnmeasuredPresetsCheapestFirstWithinItsTime) {
         candidate("reference", "medium", {{"spp", 4}}, 7.0),
     };
     const auto first = probes(all, chosen, nullptr);
-    ASSERT_EQ(first.size(), 3u);  // 10 + 30 + 50 ms; isr's 70 more would pass 100
+    // 10 + 30 + 50 ms; isr's 70 more would pass 100; then cssm low's plan of fewest bounces (5 ms).
+    ASSERT_EQ(first.size(), 4u);
     EXPECT_EQ(first[0].method, "vct");
     EXPECT_EQ(first[1].method, "cssm");
     EXPECT_EQ(first[1].knobs.at("bounces"), 2.0);
     EXPECT_EQ(first[2].method, "direct");
-    // cssm low compared with a reference frame once: no longer probed.
+    EXPECT_EQ(first[3].method, "cssm");
+    EXPECT_EQ(first[3].knobs.at("bounces"), 1.0);
+    // cssm low compared with a reference frame once at each count: no longer probed.
     SceneMeasurements measured;
-    measured.record_compared("cssm", "low");
+    measured.record_compared("cssm", "low", 2);
     const auto second = probes(all, chosen, &measured);
-    ASSERT_EQ(second.size(), 2u);
+    ASSERT_EQ(second.size(), 3u);
     EXPECT_EQ(second[0].method, "vct");
     EXPECT_EQ(second[1].method, "direct");
+    EXPECT_EQ(second[2].knobs.at("bounces"), 1.0);
+    measured.record_compared("cssm", "low", 1);
+    const auto third = probes(all, chosen, &measured);
+    ASSERT_EQ(third.size(), 2u);
+    EXPECT_EQ(third[0].method, "vct");
+    EXPECT_EQ(third[1].method, "direct");
     // A GPU plan chosen: no probes (no reference frame to compare with).
     EXPECT_TRUE(probes(all, all[4], nullptr).empty());
+}
+
+// The own error measured at a preset's most bounces is carried to its fewer as if the two parts
+// added apart (SceneMeasurements::own_error); a time budget takes the fewer, so they are probed too,
+// after every preset's first probe, until measured at their own count.
+TEST(Probes, APresetsFewestBouncesAreProbedAfterEveryPresetsFirst) {
+    const Candidate chosen = candidate("reference", "medium", {{"spp", 64}, {"bounces", 4}}, 100.0);
+    const std::vector<Candidate> all = {
+        chosen,
+        candidate("vct", "draft", {{"bounces", 1}}, 20.0, 0.2),
+        candidate("vct", "draft", {{"bounces", 2}}, 25.0, 0.1),
+        candidate("isr", "draft", {}, 40.0),
+        candidate("direct", "high", {}, 5.0),
+    };
+    const auto first = probes(all, chosen, nullptr);
+    ASSERT_EQ(first.size(), 4u);  // 5 + 25 + 40, then vct draft's one bounce (20)
+    EXPECT_EQ(first[0].method, "direct");
+    EXPECT_EQ(first[1].method, "vct");
+    EXPECT_EQ(first[1].knobs.at("bounces"), 2.0);
+    EXPECT_EQ(first[2].method, "isr");
+    EXPECT_EQ(first[3].method, "vct");
+    EXPECT_EQ(first[3].knobs.at("bounces"), 1.0);
+    // The share is spent on every preset's first probe before any preset's fewer bounces.
+    Candidate tight = chosen;
+    tight.predicted_ms = 75.0;
+    const auto first_tight = probes(all, tight, nullptr);
+    ASSERT_EQ(first_tight.size(), 3u);
+    EXPECT_TRUE(std::none_of(first_tight.begin(), first_tight.end(),
+                             [](const Candidate& c) { return c.knobs.count("bounces") && c.knobs.at("bounces") == 1.0; }));
+    // Measured at 2 bounces: the preset's first probe is done, its one bounce is not.
+    SceneMeasurements measured;
+    measured.record_compared("vct", "draft", 2);
+    measured.record_own_error("vct", "draft", 2, 0.1);
+    const auto second = probes(all, chosen, &measured);
+    ASSERT_EQ(second.size(), 3u);
+    EXPECT_EQ(second[2].method, "vct");
+    EXPECT_EQ(second[2].knobs.at("bounces"), 1.0);
+    // Measured at 1 bounce too: vct draft is no longer probed.
+    measured.record_compared("vct", "draft", 1);
+    measured.record_own_error("vct", "draft", 1, 0.05);
+    const auto third = probes(all, chosen, &measured);
+    ASSERT_EQ(third.size(), 2u);
+    EXPECT_TRUE(std::none_of(third.begin(), third.end(), [](const Candidate& c) { return c.method == "vct"; }));
 }
 
 // made_up_analysis: stopping at k bounces loses 0.1 / 2^k. Beside a four-bounce reference of noise
@@ -710,7 +805,7 @@ TEST(Probes, AProbeTheMissingLightWouldDrownGetsAReferenceOfItsOwnBounces) {
     // direct compared before without its error learned (noise drowned it): probed again beside this
     // reference, whose frame of no bounces measures it; once learned, not again.
     SceneMeasurements drowned;
-    drowned.record_compared("direct", "high");
+    drowned.record_compared("direct", "high", 0);
     const auto again = probes(all, chosen, &drowned, &analysis, 4);
     EXPECT_TRUE(std::any_of(again.begin(), again.end(), [](const Candidate& c) { return c.method == "direct"; }));
     const auto without_prefixes = probes(all, chosen, &drowned, &analysis, 0);
