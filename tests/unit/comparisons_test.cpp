@@ -397,6 +397,18 @@ TEST(FrameComparisons, AReferencesFramesOfFewerBouncesAreReferencesOfTheirOwnBou
     EXPECT_DOUBLE_EQ(*measured.noise_ratio(4), 1.0);
 }
 
+// A 64-sample reference of 4 bounces at 1.0 (noise 0.5 per sample) whose frame of no bounces (its
+// byproduct, noise 0.0016) is at 0.5: the later bounces bring as much light again.
+std::shared_ptr<RenderResult> whole_of_a_half_bright_prefix() {
+    auto prefix = std::make_shared<RenderResult>(*reference(64, 0.0016, {{"bounces", 0}}));
+    for (std::size_t i = 0; i < prefix->frame.rgba.size(); i += 4) {
+        for (int c = 0; c < 3; ++c) prefix->frame.rgba[i + c] = 0.5f;
+    }
+    auto whole = std::make_shared<RenderResult>(*reference(64, 0.5));
+    whole->byproducts = {prefix};
+    return whole;
+}
+
 // Against a bounce prefix, a frame's own error also counts where it meets the later bounces' light:
 // `direct` at 0.4 where the frame of no bounces is 0.5 and the later bounces bring it to 1.0 lacks
 // light where they add it, and its error against the whole (0.36 / 1.01) is more than the parts apart
@@ -408,12 +420,8 @@ TEST(FrameComparisons, AgainstABouncePrefixTheOwnErrorCountsWhereItMeetsTheLater
     SceneMeasurements measured;
     FrameComparisons comparisons;
     comparisons.add(5, frame("direct", "high", {}, 0.4f), &analysis, measured);
-    auto prefix = std::make_shared<RenderResult>(*reference(64, 0.0016, {{"bounces", 0}}));
-    for (std::size_t i = 0; i < prefix->frame.rgba.size(); i += 4) {
-        for (int c = 0; c < 3; ++c) prefix->frame.rgba[i + c] = 0.5f;
-    }
-    auto whole = std::make_shared<RenderResult>(*reference(64, 0.5));
-    whole->byproducts = {prefix};
+    const auto whole = whole_of_a_half_bright_prefix();
+    const auto prefix = whole->byproducts.front();
     const auto made = comparisons.add(5, whole, &analysis, measured);
     ASSERT_EQ(made.size(), 1u);
     const double noise = FrameComparisons::kUncalibratedNoiseScale * 0.0016 / 64.0;
@@ -444,12 +452,8 @@ TEST(FrameComparisons, AFrameThatFillsInTheLightItsBouncesLackAddsANegativeOwnEr
     SceneMeasurements measured;
     FrameComparisons comparisons;
     comparisons.add(5, frame("direct", "high", {}, 0.6f), &analysis, measured);
-    auto prefix = std::make_shared<RenderResult>(*reference(64, 0.0016, {{"bounces", 0}}));
-    for (std::size_t i = 0; i < prefix->frame.rgba.size(); i += 4) {
-        for (int c = 0; c < 3; ++c) prefix->frame.rgba[i + c] = 0.5f;
-    }
-    auto whole = std::make_shared<RenderResult>(*reference(64, 0.5));
-    whole->byproducts = {prefix};
+    const auto whole = whole_of_a_half_bright_prefix();
+    const auto prefix = whole->byproducts.front();
     const auto made = comparisons.add(5, whole, &analysis, measured);
     ASSERT_EQ(made.size(), 1u);
     const double noise = FrameComparisons::kUncalibratedNoiseScale * 0.0016 / 64.0;
