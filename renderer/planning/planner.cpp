@@ -621,6 +621,29 @@ std::optional<Checks> spot_checks(const std::vector<Candidate>& all, const Candi
     return checks;
 }
 
+namespace {
+
+// Of the full-size GPU plans within `share_ms` that `skip` does not leave out, one per method and
+// preset, the one `better` puts first; fastest first. The probes' two rounds differ in what they skip
+// and prefer.
+template <typename Skip, typename Better>
+std::vector<const Candidate*> one_plan_per_preset(const std::vector<Candidate>& all, double share_ms, Skip skip,
+                                                  Better better) {
+    std::vector<const Candidate*> plans;
+    for (const Candidate& c : all) {
+        if (c.method == "reference" || c.scale != 1.0 || c.predicted_ms > share_ms || skip(c)) continue;
+        const auto same = std::find_if(plans.begin(), plans.end(), [&](const Candidate* other) {
+            return other->method == c.method && other->preset == c.preset;
+        });
+        if (same == plans.end()) plans.push_back(&c);
+        else if (better(c, **same)) *same = &c;
+    }
+    std::sort(plans.begin(), plans.end(), [](const Candidate* a, const Candidate* b) { return faster(*a, *b); });
+    return plans;
+}
+
+}  // namespace
+
 std::vector<Candidate> probes(const std::vector<Candidate>& all, const Candidate& chosen, const SceneMeasurements* scene,
                               const SceneAnalysis* analysis, int prefix_bounces) {
     // Only full-size frames are compared: an upsampled one's error is not its method's.
@@ -666,53 +689,39 @@ std::vector<Candidate> probes(const std::vector<Candidate>& all, const Candidate
     };
     // Per preset, the most accurate plan that fits the share alone (for cssm and vct, the most bounces): a
     // comparison tells a frame's own error only where the bounces it lacks do not drown it.
-    std::vector<const Candidate*> cheapest;
-    for (const Candidate& c : all) {
-        if (c.method == "reference" || c.scale != 1.0 || c.predicted_ms > share_ms) continue;
-        // Probed, or compared otherwise; unless nothing was learned (the reference's noise drowned
-        // it) and this reference's own frame of its bounce count is quiet enough to measure it.
-        if (scene && scene->compared(c.method, c.preset) &&
-            (scene->own_errors(c.method).count(c.preset) > 0 || !prefix_measures(c))) {
-            continue;
-        }
-        const auto same = std::find_if(cheapest.begin(), cheapest.end(), [&](const Candidate* other) {
-            return other->method == c.method && other->preset == c.preset;
-        });
-        if (same == cheapest.end()) cheapest.push_back(&c);
-        else if (more_accurate(c, **same)) *same = &c;
-    }
-    std::sort(cheapest.begin(), cheapest.end(), [](const Candidate* a, const Candidate* b) { return faster(*a, *b); });
+    // Probed, or compared otherwise, it is left out; unless nothing was learned (the reference's noise
+    // drowned it) and this reference's own frame of its bounce count is quiet enough to measure it.
+    std::vector<const Candidate*> cheapest = one_plan_per_preset(
+        all, share_ms,
+        [&](const Candidate& c) {
+            return scene && scene->compared(c.method, c.preset) &&
+                   (scene->own_errors(c.method).count(c.preset) > 0 || !prefix_measures(c));
+        },
+        more_accurate);
     // Then, per preset, its plan of fewest bounces where that is not a first-round probe's: the own
     // error measured at one bounce count is carried to fewer (SceneMeasurements::own_error) as if the
     // frame's error and the light it lacks added apart, and they do not (the held-out atrium's vct
     // draft measured own 0.167 at 2 bounces, was promised 0.289 at 1 and measures 0.185 there: its
     // leaked light fills in what the bounce would bring). A time budget takes the fewer bounces.
     // Second, after every preset's first probe, in what is left of the share.
-    std::vector<const Candidate*> fewest;
-    for (const Candidate& c : all) {
-        if (c.method == "reference" || c.scale != 1.0 || c.predicted_ms > share_ms) continue;
-        const int bounces = modelled_bounces(c.method, c.knobs);
-        if (scene && scene->compared(c.method, c.preset, bounces)) {
+    std::vector<const Candidate*> fewest = one_plan_per_preset(
+        all, share_ms,
+        [&](const Candidate& c) {
+            const int bounces = modelled_bounces(c.method, c.knobs);
+            if (!scene || !scene->compared(c.method, c.preset, bounces)) return false;
             const auto own = scene->own_error(c.method, c.preset, bounces);
-            if ((own && own->exact) || !prefix_measures(c)) continue;
-        }
-        const auto same = std::find_if(fewest.begin(), fewest.end(), [&](const Candidate* other) {
-            return other->method == c.method && other->preset == c.preset;
-        });
-        const auto fewer = [&](const Candidate& a, const Candidate& b) {
+            return (own && own->exact) || !prefix_measures(c);
+        },
+        [](const Candidate& a, const Candidate& b) {
             const int a_bounces = modelled_bounces(a.method, a.knobs), b_bounces = modelled_bounces(b.method, b.knobs);
             return a_bounces != b_bounces ? a_bounces < b_bounces : more_accurate(a, b);
-        };
-        if (same == fewest.end()) fewest.push_back(&c);
-        else if (fewer(c, **same)) *same = &c;
-    }
+        });
     std::erase_if(fewest, [&](const Candidate* c) {
         return std::any_of(cheapest.begin(), cheapest.end(), [&](const Candidate* first) {
             return first->method == c->method && first->preset == c->preset &&
                    modelled_bounces(first->method, first->knobs) <= modelled_bounces(c->method, c->knobs);
         });
     });
-    std::sort(fewest.begin(), fewest.end(), [](const Candidate* a, const Candidate* b) { return faster(*a, *b); });
     cheapest.insert(cheapest.end(), fewest.begin(), fewest.end());
     std::vector<Candidate> chosen_probes, companions;
     std::set<int> accompanied;  // bounce counts with a companion
