@@ -638,7 +638,8 @@ std::vector<const Candidate*> one_plan_per_preset(const std::vector<Candidate>& 
         if (same == plans.end()) plans.push_back(&c);
         else if (better(c, **same)) *same = &c;
     }
-    std::sort(plans.begin(), plans.end(), [](const Candidate* a, const Candidate* b) { return faster(*a, *b); });
+    // Stable: plans of one price and error keep the candidates' order, whatever the list's length.
+    std::stable_sort(plans.begin(), plans.end(), [](const Candidate* a, const Candidate* b) { return faster(*a, *b); });
     return plans;
 }
 

@@ -95,7 +95,8 @@ TEST(Budget, AMethodWithABudgetPlansWithinItAndLearnsFromItsFrames) {
     EXPECT_EQ(first.body["plan"]["method"], "vct");
     EXPECT_NE(first.body["plan"]["why"].get<std::string>().find("measured on this scene"), std::string::npos)
         << first.body["plan"].dump();
-    // Two more frames: their median, not a first frame that built the octree, is the scene's cost.
+    // Two more frames through the daemon: still priced from the scene's frames. That their median,
+    // not one slow frame, sets the price is Costs.MeasuredFramesScaleTheDeviceLineAndOneSlowFrameDoesNot's.
     d.render({{"method", "vct"}, {"budget", {{"max_error", 0.5}}}});
     const auto third = d.render({{"method", "vct"}, {"budget", {{"max_error", 0.5}}}});
     EXPECT_NE(third.body["plan"]["why"].get<std::string>().find("measured on this scene"), std::string::npos)

@@ -647,7 +647,8 @@ TEST(FrameComparisons, ANoiseOverAQuarterOfTheRelMseRecordsNothing) {
 
 TEST(FrameComparisons, NoisyDenoisedOrUnlikeFramesAreNotCompared) {
     const SceneAnalysis analysis = made_up_analysis();
-    // The reference's noise over half of the relMSE: the own part would be mostly noise.
+    // The reference's noise over a quarter of the relMSE (0.54 x 0.006 = 0.0032 of 0.0099): the noise taken
+    // out is uncertain by about its size, and the own part would be mostly noise.
     {
         SceneMeasurements measured;
         FrameComparisons comparisons;
@@ -760,10 +761,51 @@ TEST(Probes, APresetsFewestBouncesAreProbedAfterEveryPresetsFirst) {
     EXPECT_TRUE(std::none_of(third.begin(), third.end(), [](const Candidate& c) { return c.method == "vct"; }));
 }
 
+// The second round takes a preset's fewest bounces, not its cheapest plan; and where the chosen
+// reference's own frames of fewer bounces measure a probe (made_up_analysis at 256 samples: noise
+// 0.001, under a third of the own errors here), an own error only carried from another bounce count
+// is probed again at its own count, while one measured there is not.
+TEST(Probes, TheSecondRoundTakesTheFewestBouncesAndReprobesOnlyCarriedErrors) {
+    const SceneAnalysis analysis = made_up_analysis();
+    const auto stopped = [](int k) { return 0.1 / std::pow(2.0, k); };
+    const Candidate chosen = candidate("reference", "medium", {{"spp", 256}, {"bounces", 4}}, 100.0, stopped(4) + 0.002);
+    const std::vector<Candidate> all = {
+        chosen,
+        candidate("cssm", "low", {{"bounces", 4}}, 40.0, stopped(4) + 0.02),  // the first round's
+        candidate("cssm", "low", {{"bounces", 2}}, 20.0, stopped(2) + 0.02),  // cheaper, but not the fewest
+        candidate("cssm", "low", {{"bounces", 1}}, 30.0, stopped(1) + 0.02),
+    };
+    const auto first = probes(all, chosen, nullptr, &analysis, 4);
+    ASSERT_EQ(first.size(), 2u);
+    EXPECT_EQ(first[0].knobs.at("bounces"), 4.0);
+    EXPECT_EQ(first[1].knobs.at("bounces"), 1.0);
+    // Compared at 4 and 1 bounces, its own error measured at 4 alone: at 1 it is carried, and probed again.
+    SceneMeasurements measured;
+    measured.record_compared("cssm", "low", 4);
+    measured.record_own_error("cssm", "low", 4, 0.02);
+    measured.record_compared("cssm", "low", 1);
+    ASSERT_TRUE(measured.own_error("cssm", "low", 1).has_value());
+    ASSERT_FALSE(measured.own_error("cssm", "low", 1)->exact);
+    const auto carried = probes(all, chosen, &measured, &analysis, 4);
+    ASSERT_EQ(carried.size(), 1u);
+    EXPECT_EQ(carried[0].knobs.at("bounces"), 1.0);
+    const auto at_one = [](const std::vector<Candidate>& chosen_probes) {
+        return std::any_of(chosen_probes.begin(), chosen_probes.end(),
+                           [](const Candidate& c) { return c.knobs.at("bounces") == 1.0; });
+    };
+    // Without the reference's own frames of fewer bounces nothing would measure it: not probed.
+    EXPECT_FALSE(at_one(probes(all, chosen, &measured, &analysis, 0)));
+    // Measured at 1 bounce itself: not probed again; the fewest count not yet compared (2) is next.
+    measured.record_own_error("cssm", "low", 1, 0.02);
+    const auto measured_at_one = probes(all, chosen, &measured, &analysis, 4);
+    ASSERT_EQ(measured_at_one.size(), 1u);
+    EXPECT_EQ(measured_at_one[0].knobs.at("bounces"), 2.0);
+}
+
 // made_up_analysis: stopping at k bounces loses 0.1 / 2^k. Beside a four-bounce reference of noise
 // 0.002, direct (own error 0.012) would be drowned by the 0.094 it lacks, and so would vct draft
 // (own 0.03, lacking 0.044); cssm at four bounces (own 0.02) would not. Companions: the cheapest
-// reference of no bounces, and of one, whose noise is under half the smallest own error there.
+// reference of no bounces, and of one, whose noise is at most a third of the smallest own error there.
 TEST(Probes, AProbeTheMissingLightWouldDrownGetsAReferenceOfItsOwnBounces) {
     const SceneAnalysis analysis = made_up_analysis();
     const auto stopped = [](int k) { return 0.1 / std::pow(2.0, k); };
@@ -885,8 +927,14 @@ TEST(Resolution, AHalfSizePlanIsTakenWhereOnlyItFitsAndPaysWhatUpsamplingLoses) 
     Candidate scaled_reference = candidate("reference", "medium", {{"spp", 64}}, 100.0);
     scaled_reference.scale = 0.5;
     EXPECT_TRUE(probes(all, scaled_reference, nullptr).empty());
+    // Beside a 20 ms reference only the half-size direct plans (10 ms) fit the share, and they are
+    // not probed; beside a 1000 ms one the full-size plans are, and only they.
+    const Candidate quick_reference = candidate("reference", "medium", {{"spp", 64}}, 20.0);
+    EXPECT_TRUE(probes(all, quick_reference, nullptr).empty());
     const Candidate reference = candidate("reference", "medium", {{"spp", 64}}, 1000.0);
-    for (const Candidate& probe : probes(all, reference, nullptr)) EXPECT_EQ(probe.scale, 1.0);
+    const auto full_size = probes(all, reference, nullptr);
+    ASSERT_FALSE(full_size.empty());
+    for (const Candidate& probe : full_size) EXPECT_EQ(probe.scale, 1.0);
 }
 
 }  // namespace

@@ -117,7 +117,10 @@ TEST(SpotCheck, AReferenceNoisierThanItsSizeTracesMoreSamplesWithinTheCap) {
     check.max_noise = noise / 2.0;
     const SpotReference doubled = trace_spot_reference(scene, frame, check);
     EXPECT_EQ(doubled.estimates.samples, 16);
-    EXPECT_LT(noise_of(doubled.estimates), 0.75 * noise);  // about half, for another draw of 16
+    // Noise falls as 1/samples: 16's is half of 8's in expectation. Each pixel's variance comes from
+    // 4 and 8 samples a half, whose spread rare bright paths widen; a bound of 0.75 still fails a
+    // check that traced no more (1.0), or fewer than 12 (0.67 expected).
+    EXPECT_LT(noise_of(doubled.estimates), 0.75 * noise);
     check.max_noise = noise / 100.0;
     EXPECT_EQ(trace_spot_reference(scene, frame, check).estimates.samples, kSpotMostSamples * 8);
 }
@@ -339,6 +342,7 @@ TEST(Planner, ATargetErrorTriesPlausibleGpuPlansWithASpotCheckBeforeTheReference
     measured.record_own_error(first.method, first.preset, modelled_bounces(first.method, first.knobs), 0.2);
     const PlanningInputs with_measured{analysis, device, &measured, 128, 128, std::nullopt};
     const Plan again = planning::plan(with_measured, {std::nullopt, 0.05});
+    ASSERT_FALSE(again.checks.empty()) << again.why;
     for (const Candidate& c : again.checks) EXPECT_FALSE(c.method == first.method && c.preset == first.preset && c.knobs == first.knobs);
     // Nor the preset at fewer bounces: its own error reads from the count measured above it.
     const int first_bounces = modelled_bounces(first.method, first.knobs);
