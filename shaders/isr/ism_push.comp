@@ -11,9 +11,12 @@ layout(std430, binding = ISR_BINDING_ISM_FILLED) buffer Pyramid { float depth_py
 
 uniform int u_level;  // the level written, from the one above it
 
-// A sample is replaced by a nearer surface's only from the levels this near (2x2 and 4x4 texels): a
-// coarse texel holds the nearest surface of a wide region, which is not what every texel of it sees.
-const int ISM_LOCAL_LEVELS = 2;
+// A sample is replaced by a nearer surface's only from the levels this near (at most 2: 2x2 and 4x4
+// texels): a coarse texel holds the nearest surface of a wide region, which is not what every texel
+// of it sees. The replacement dilates every near silhouette too: in the open Cornell boxes it is
+// most of isr's error with the maps, behind thin walls it is what keeps light from leaking
+// (docs/benchmarks.md, "The maps' hole filling"). 0: holes are filled, nothing else.
+uniform int u_dilation_levels;
 
 void main() {
     int side = u_ism_size >> u_level;
@@ -27,6 +30,6 @@ void main() {
     // An odd side's last row and column have no texel above of their own: they take the nearest.
     int side_above = u_ism_size >> (u_level + 1);
     float above = depth_pyramid[ism_pyramid_index(u_level + 1, map, min(texel / 2, ivec2(side_above - 1)))];
-    bool behind = own > above * (1.0 + ISM_SAME_SURFACE) && u_level + 1 <= ISM_LOCAL_LEVELS;
+    bool behind = own > above * (1.0 + ISM_SAME_SURFACE) && u_level + 1 <= u_dilation_levels;
     if (above < ISM_EMPTY && (own >= ISM_EMPTY || behind)) depth_pyramid[at] = above;
 }

@@ -161,6 +161,7 @@ bool ImperfectShadowMaps::build(const passes::PassContext& context, const VplTre
         tree.bind(*program);
         set_uniforms(*program);
     }
+    push.set("u_dilation_levels", settings.dilation_levels);
     const auto level_texels = [&](int level) {
         const auto side = static_cast<std::uint64_t>(settings.size >> level);
         return maps_ * side * side;

@@ -15,6 +15,9 @@ struct IsmSettings {
     int size = 0;              // texels per side of one map; 0: no visibility
     int points_per_map = 0;    // points splatted into each map
     int levels_below_top = 0;  // maps on the patches this many levels below the ISR_TOP_PATCHES^2 top patches
+    // Pyramid levels (2x2 texels, 4x4) from which the push lets a nearer surface replace a texel's own
+    // sample that lies behind it (shaders/isr/ism_push.comp): 0 fills empty texels alone.
+    int dilation_levels = 2;
     bool operator==(const IsmSettings&) const = default;
 };
 

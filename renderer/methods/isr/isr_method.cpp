@@ -60,7 +60,8 @@ public:
                                              static_cast<float>(frame.knob("normal_threshold"))});
         tree_lights_ = lights;
         finest_level_ = std::max(0, tree_.top_level() - frame.knob_int("max_depth"));
-        const IsmSettings ism{frame.knob_int("ism_size"), frame.knob_int("ism_points"), frame.knob_int("ism_levels_below_top")};
+        const IsmSettings ism{frame.knob_int("ism_size"), frame.knob_int("ism_points"), frame.knob_int("ism_levels_below_top"),
+                              frame.knob_int("ism_dilation")};
         visibility_ = makes_visibility_maps(ism.size, mode_);
         if (visibility_) ism_.build(frame, tree_, ism, [&frame] { frame.interruption_point(); });
         else if (ism_.bytes() > 0) ism_.release();
@@ -240,12 +241,17 @@ MethodInfo method_info() {
         {"ism_points", 16, 16384, true, "indirect visibility: points of the scene's point cloud splatted into each map"},
         {"ism_levels_below_top", 0, 3, true,
          "indirect visibility: maps on the VPL patches this many levels below the 16^2 top patches per view (each "
-         "level 4x the maps)"}};
+         "level 4x the maps)"},
+        {"ism_dilation", 0, 2, true,
+         "indirect visibility: pyramid levels (2x2, 4x4 texels) from which a map's hole filling lets a nearer "
+         "surface replace a sample behind it; 0: empty texels alone (less light taken in open rooms, more leaked "
+         "through thin walls)"}};
     auto preset = [](double rsm, double levels, double depth, double normal, double tau, double max_depth, double ism) {
         return KnobValues{{"rsm_size", rsm},     {"levels", levels}, {"depth_threshold", depth},
                           {"normal_threshold", normal}, {"mode", ISR_MODE_HIERARCHICAL}, {"tau", tau},
                           {"max_depth", max_depth}, {"shadow_map_size", 2048}, {"shadow_cascades", kPresetShadowCascades},
-                          {"ism_size", ism}, {"ism_points", ism > 0 ? 4096 : 1024}, {"ism_levels_below_top", 1}};
+                          {"ism_size", ism}, {"ism_points", ism > 0 ? 4096 : 1024}, {"ism_levels_below_top", 1},
+                          {"ism_dilation", 2}};
     };
     // A normal span of 0.2 at every preset to high: where a patch that gathers once spans normals
     // more apart (0.3 to 0.5 before), the furnished room's draft to medium erred 0.14 to 0.30 against
@@ -273,7 +279,8 @@ MethodInfo method_info() {
         estimate.push_back({"reflective_shadow_maps", passes::LightViewMaps::bytes_for(input.scene, rsm_size), "rsm_size"});
         estimate.push_back({"vpl_tree", VplTree::bytes_for(passes::light_views_with_power(input.scene), rsm_size), "rsm_size"});
         estimate.push_back({"multires_atlas", MultiresolutionBuffer::bytes_for(input.width, input.height), "frame size"});
-        const IsmSettings ism{input.knob_int("ism_size"), input.knob_int("ism_points"), input.knob_int("ism_levels_below_top")};
+        const IsmSettings ism{input.knob_int("ism_size"), input.knob_int("ism_points"), input.knob_int("ism_levels_below_top"),
+                              input.knob_int("ism_dilation")};
         if (makes_visibility_maps(ism.size, input.knob_int("mode"))) {
             estimate.push_back({"imperfect_shadow_maps",
                                 ImperfectShadowMaps::bytes_for(passes::light_views_with_power(input.scene), rsm_size, ism,
