@@ -39,6 +39,17 @@ TEST(MethodRegistry, FailsLoudlyNamingTheFault) {
               std::string::npos);
     EXPECT_NE(message_of([&] { registry.resolve("direct", "low", {{"shadow_map_size", std::nan("")}}); }).find("outside"),
               std::string::npos);
+    // isr's hole filling of its maps: the levels 0 to 2, whole, and every preset's 2.
+    for (const double dilation : {-1.0, 3.0, std::nan("")}) {
+        EXPECT_NE(message_of([&] { registry.resolve("isr", "low", {{"ism_dilation", dilation}}); }).find("outside"),
+                  std::string::npos)
+            << dilation;
+    }
+    EXPECT_NE(message_of([&] { registry.resolve("isr", "low", {{"ism_dilation", 1.5}}); }).find("integer"), std::string::npos);
+    for (const std::string preset : {"draft", "low", "medium", "high", "ultra"}) {
+        EXPECT_EQ(registry.resolve("isr", preset, {}).at("ism_dilation"), 2.0) << preset;
+    }
+    EXPECT_EQ(registry.resolve("isr", "low", {{"ism_dilation", 0}}).at("ism_dilation"), 0.0);
 }
 
 TEST(MethodRegistry, ReferenceIsACpuMethodWithValidatedKnobs) {
