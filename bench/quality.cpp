@@ -453,7 +453,7 @@ int main(int argc, char** argv) {
                 }
                 return *unoccluded;
             };
-            if (options.corpus) analysis_rows += analysis_row(bench_scene);
+            analysis_rows += analysis_row(bench_scene);
             // Where vct's voxels are wider than the scene's walls (the planner rules such presets out).
             const ThinWalls thin_walls = options.ladder_only && measured("vct")
                                              ? bench::thin_walls_of({bench_scene}).at(bench_scene.name)
@@ -616,17 +616,15 @@ int main(int argc, char** argv) {
                 rows.push_back(row);
             }
         }
-        if (options.corpus) {
-            details += "\n## What each scene needs (scene analysis)\n\n`bounce describe --analyze` on each scene "
-                       "(renderer/scene_analysis.hpp): the indirect bounces whose frame lacks at most 10%, 5% and 2% "
-                       "of the light, the vct presets with walls thinner than a voxel between two spaces, and the "
-                       "share of light-to-receiver pairs that are occluded (isr without imperfect shadow maps "
-                       "ignores it).\n\n"
-                       "| scene | triangles | bounces for 10% / 5% / 2% | vct leaks at | occluded | "
-                       "isr draft suitable |\n"
-                       "|---|---|---|---|---|---|\n" +
-                       analysis_rows;
-        }
+        details += "\n## What each scene needs (scene analysis)\n\n`bounce describe --analyze` on each scene "
+                   "(renderer/scene_analysis.hpp): the indirect bounces whose frame lacks at most 10%, 5% and 2% "
+                   "of the light, the vct presets with walls thinner than a voxel between two spaces, and the "
+                   "share of light-to-receiver pairs that are occluded (isr without imperfect shadow maps "
+                   "ignores it).\n\n"
+                   "| scene | triangles | bounces for 10% / 5% / 2% | vct leaks at | occluded | "
+                   "isr draft suitable |\n"
+                   "|---|---|---|---|---|---|\n" +
+                   analysis_rows;
         fs::create_directories(options.out);
         if (options.ladder_only) {  // never beside a quality.csv of other references
             write_ladder_csv(options.out / "ladder.csv", ladder);

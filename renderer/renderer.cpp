@@ -6,6 +6,7 @@
 #include "renderer/base/error.hpp"
 #include "renderer/base/log.hpp"
 #include "renderer/memory_admission.hpp"
+#include "renderer/scene_knobs.hpp"
 #include "renderer/passes/light_geometry.hpp"
 #include "renderer/passes/shadow_maps.hpp"
 
@@ -65,17 +66,12 @@ SceneResources::~SceneResources() {
 
 namespace {
 
-// Knobs a method leaves to the scene: `bounce_tolerance` above 0 sets `bounces` from the scene
-// analysis (the fewest whose frame lacks at most that share of the light, within the knob's range),
-// unless the request set `bounces` itself.
+// Knobs a method leaves to the scene (renderer/scene_knobs.hpp), from its analysis: made here, on
+// the calling thread, the first time a frame needs it.
 void resolve_scene_knobs(SceneResources& resources, const RenderRequest& request, const methods::MethodInfo& info,
                          methods::KnobValues& knobs) {
-    const auto tolerance = knobs.find("bounce_tolerance");
-    if (tolerance == knobs.end() || !(tolerance->second > 0.0) || request.knobs.contains("bounces")) return;
-    const auto range = std::find_if(info.knobs.begin(), info.knobs.end(), [](const auto& k) { return k.name == "bounces"; });
-    if (range == info.knobs.end()) return;
-    const int needed = resources.analysis().bounces.bounces_for(tolerance->second);
-    knobs["bounces"] = std::clamp(static_cast<double>(needed), range->min, range->max);
+    if (!leaves_knobs_to_scene(knobs, request.knobs)) return;
+    resolve_scene_knobs(resources.analysis(), info, request.knobs, knobs);
 }
 
 }  // namespace

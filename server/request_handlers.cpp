@@ -5,6 +5,7 @@
 #include "renderer/planning/calibration.hpp"
 #include "renderer/planning/error_model.hpp"
 #include "renderer/planning/resolution.hpp"
+#include "renderer/scene_knobs.hpp"
 #include "renderer/image/codec.hpp"
 #include "server/daemon.hpp"
 #include "server/scene_requests.hpp"
@@ -120,6 +121,11 @@ void RequestHandlers::execute(const std::shared_ptr<Request>& request, Renderer&
             }
             if (wait_for_analysis(request, render->scene, registry.get(render->scene))) return;
             plan_budgeted(*render, renderer, registry);  // before the visit: it changes the order
+        } else if (render && !render->budget && render->plan.site == FrameSite::gpu &&
+                   leaves_knobs_to_scene(render->plan.knobs, render->request.knobs)) {
+            // Knobs left to the scene (renderer/scene_knobs.hpp) read its analysis: made on the CPU
+            // pool, not on the render thread other clients' frames wait on.
+            if (wait_for_analysis(request, render->scene, registry.get(render->scene))) return;
         }
         const std::span<const std::uint8_t> attachment = request->message().attachment;
         const json reply = std::visit(

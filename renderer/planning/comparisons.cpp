@@ -4,6 +4,7 @@
 #include "renderer/image/metrics.hpp"
 #include "renderer/methods/registry.hpp"
 #include "renderer/planning/error_model.hpp"
+#include "renderer/scene_knobs.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -35,6 +36,7 @@ bool FrameComparisons::usable_gpu_frame(const FrameStats& stats) {
     if (preset == presets.end()) return false;
     for (const auto& [name, value] : stats.knobs) {
         if (name == "bounces") continue;  // the error model separates bounces from the rest
+        if (set_by_scene(preset->second, name)) continue;  // the preset's on this scene
         const auto own = preset->second.find(name);
         if (own == preset->second.end() || own->second != value) return false;
     }

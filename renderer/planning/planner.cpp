@@ -7,6 +7,7 @@
 #include "renderer/planning/error_model.hpp"
 #include "renderer/planning/plan_order.hpp"
 #include "renderer/planning/resolution.hpp"
+#include "renderer/scene_knobs.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -311,6 +312,9 @@ PlanningInputs::ChangeOf changes_on(const SceneResources& resources, const scene
         try {
             MethodState next = now;
             next.knobs = methods::MethodRegistry::builtin().resolve(method, preset, knobs);  // as plan_frame does
+            if (const SceneAnalysis* analysis = resources.analysis_if_made()) {  // and as the renderer then does
+                resolve_scene_knobs(*analysis, methods::MethodRegistry::builtin().find(method), knobs, next.knobs);
+            }
             const FitKey key{static_cast<int>(methods::knob_or(next.knobs, "shadow_map_size", 0.0)),
                              static_cast<int>(methods::knob_or(next.knobs, "shadow_cascades", 0.0)), width, height,
                              renders_occlusion(next.knobs)};

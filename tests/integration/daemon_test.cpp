@@ -287,6 +287,24 @@ TEST(Daemon, IsrRendersWithItsStatsAndRefusesBadKnobs) {
     EXPECT_EQ(render(client, body).width, 64) << "serving continues";
 }
 
+// isr's presets leave the maps' dilation to the scene (renderer/scene_knobs.hpp): the daemon
+// analyses the scene off the render thread before the first such frame, the open Cornell box
+// renders without it, and the reply's knobs say so; a request's own value wins.
+TEST(Daemon, IsrsPresetsTakeTheMapsDilationFromTheScene) {
+    DaemonProcess daemon;
+    Client client(daemon.endpoint());
+    const json body = {{"scene", "cornell"}, {"method", "isr"}, {"preset", "low"}, {"width", 32}, {"height", 32}};
+    EXPECT_EQ(client.request(MessageType::render, body).body["knobs"]["ism_dilation"], 0);
+    json asked = body;
+    asked["knobs"] = {{"ism_dilation", 2}};
+    EXPECT_EQ(client.request(MessageType::render, asked).body["knobs"]["ism_dilation"], 2);
+    json no_scene = body;
+    no_scene["knobs"] = {{"ism_open_below", 0}};
+    EXPECT_EQ(client.request(MessageType::render, no_scene).body["knobs"]["ism_dilation"], 2);
+    asked["knobs"] = {{"ism_open_below", 1.5}};
+    expect_error([&] { client.request(MessageType::render, asked); }, ErrorCode::bad_request);
+}
+
 // A directory for --cache-dir that outlives the daemons of one test.
 struct CacheDir {
     CacheDir() : path(std::filesystem::temp_directory_path() / ("bounce-cache-" + std::to_string(::getpid()) + "-" +

@@ -50,6 +50,18 @@ TEST(MethodRegistry, FailsLoudlyNamingTheFault) {
         EXPECT_EQ(registry.resolve("isr", preset, {}).at("ism_dilation"), 2.0) << preset;
     }
     EXPECT_EQ(registry.resolve("isr", "low", {{"ism_dilation", 0}}).at("ism_dilation"), 0.0);
+    // The share of occluded indirect light below which the scene turns it off: a share, 0 to 1.
+    for (const double share : {-0.1, 1.5, std::nan("")}) {
+        EXPECT_NE(message_of([&] { registry.resolve("isr", "low", {{"ism_open_below", share}}); }).find("outside"),
+                  std::string::npos)
+            << share;
+    }
+    EXPECT_EQ(registry.resolve("isr", "draft", {}).at("ism_open_below"), 0.0);  // no maps to dilate
+    for (const std::string preset : {"low", "medium", "high", "ultra"}) {
+        const double share = registry.resolve("isr", preset, {}).at("ism_open_below");
+        EXPECT_GT(share, 0.0) << preset;
+        EXPECT_LT(share, 0.5) << preset;  // under IndirectVisibility::kMostlyOccluded, where isr draft is ruled out
+    }
 }
 
 TEST(MethodRegistry, ReferenceIsACpuMethodWithValidatedKnobs) {

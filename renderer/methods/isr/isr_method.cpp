@@ -19,6 +19,14 @@
 namespace bounce::methods::isr {
 namespace {
 
+// The presets' `ism_open_below`: the maps' dilation (ism_dilation 2) where the scene analysis finds
+// at least this share of the indirect light occluded, none below it. The bench's scenes that err
+// less without it are the Cornell boxes with no wall inside (0.102 occluded; isr high 0.0148 to
+// 0.0030), those that err more the atrium (0.166; low 0.0136 to 0.0174), the street (0.318) and the
+// furnished room (0.389); the glossy gallery (0.149) and the foliage (0.079) move by 3% either way
+// (docs/benchmarks.md, "The maps' hole filling"). Halfway between the box and the atrium.
+constexpr double kIsmOpenBelow = 0.134;
+
 // Imperfect shadow maps are made on the VPL tree's patches: in hierarchical mode, and where they
 // have texels.
 bool makes_visibility_maps(int ism_size, int mode) { return ism_size > 0 && mode == ISR_MODE_HIERARCHICAL; }
@@ -245,13 +253,16 @@ MethodInfo method_info() {
         {"ism_dilation", 0, 2, true,
          "indirect visibility: pyramid levels (2x2, 4x4 texels) from which a map's hole filling lets a nearer "
          "surface replace a sample behind it; 0: empty texels alone (less light taken in open rooms, more leaked "
-         "through thin walls)"}};
+         "through thin walls)"},
+        {"ism_open_below", 0, 1, false,
+         "indirect visibility: above 0, ism_dilation is 0 where the scene analysis finds less than this share of the "
+         "indirect light occluded (an open room) unless the request sets it"}};
     auto preset = [](double rsm, double levels, double depth, double normal, double tau, double max_depth, double ism) {
         return KnobValues{{"rsm_size", rsm},     {"levels", levels}, {"depth_threshold", depth},
                           {"normal_threshold", normal}, {"mode", ISR_MODE_HIERARCHICAL}, {"tau", tau},
                           {"max_depth", max_depth}, {"shadow_map_size", 2048}, {"shadow_cascades", kPresetShadowCascades},
                           {"ism_size", ism}, {"ism_points", ism > 0 ? 4096 : 1024}, {"ism_levels_below_top", 1},
-                          {"ism_dilation", 2}};
+                          {"ism_dilation", 2}, {"ism_open_below", ism > 0 ? kIsmOpenBelow : 0.0}};
     };
     // A normal span of 0.2 at every preset to high: where a patch that gathers once spans normals
     // more apart (0.3 to 0.5 before), the furnished room's draft to medium erred 0.14 to 0.30 against
