@@ -12,7 +12,10 @@
 // scaled by what two reference frames of a view measured it to make (calibrate_noise). Left out: comparisons where those two
 // are over half of the relMSE (the own part would be mostly noise or missing light), references
 // that are denoised, without indirect visibility, with ambient occlusion or under 16 samples, and
-// GPU frames whose knobs are not their preset's (other than `bounces`).
+// GPU frames whose knobs are not their preset's (other than `bounces` and what the preset leaves to
+// the scene). Where the noise alone is too large a share, against a reference of the frame's own
+// bounce count, what is left once half the noise is taken out is recorded as a bound, not an
+// estimate (compare()).
 #pragma once
 
 #include "renderer/planning/costs.hpp"
@@ -50,6 +53,11 @@ struct Comparison {
     // What was recorded: rel_mse - reference_noise - bounce_gap + cross_term + cross_beyond; against a reference of
     // fewer bounces than the frame, (sqrt of that + sqrt of the light the reference lacks)^2.
     double own_error = 0.0;
+    // Where the reference's noise drowns the rest (over kMaxNoiseShare of rel_mse) and the reference
+    // has the frame's bounce count: own_error, half the noise taken out, recorded as a bound
+    // on the view's frame (SceneMeasurements::record_own_error), which a quieter reference's estimate
+    // supersedes.
+    bool noise_bound = false;
 };
 
 class FrameComparisons {
@@ -105,6 +113,8 @@ public:
     static constexpr double kUncalibratedNoiseScale = 0.54;
     // The most of a comparison's relMSE that the reference's expected noise may be (compare()).
     static constexpr double kMaxNoiseShare = 0.25;
+    // Of the noise expected, what a comparison it drowns takes out before it records a bound (compare()).
+    static constexpr double kBoundNoiseShare = 0.5;
 
 private:
     // The kept reference of the most bounces whose byproduct `reference` is; null if none.

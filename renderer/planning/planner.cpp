@@ -740,7 +740,12 @@ std::vector<Candidate> probes(const std::vector<Candidate>& all, const Candidate
         const bool needs_companion = analysis && bounces < chosen_bounces && !accompanied.contains(bounces) &&
                                      !(own_prefix && *own_prefix <= max_noise(own)) && !whole_measures;
         const Candidate* companion = needs_companion ? companion_for(bounces, own) : nullptr;
-        if (needs_companion && !companion) continue;
+        // Where no companion comes or fits, the reference's own prefix at the probe's bounce count
+        // still bounds its own error, noise and all (FrameComparisons::compare): a bound that can
+        // come in under the prediction where that noise is less than it.
+        const bool bound_tells = own_prefix && *own_prefix < own;
+        if (companion && total_ms + c->predicted_ms + companion->predicted_ms > share_ms && bound_tells) companion = nullptr;
+        if (needs_companion && !companion && !bound_tells) continue;
         const double ms = c->predicted_ms + (companion ? companion->predicted_ms : 0.0);
         if (total_ms + ms > share_ms) continue;
         total_ms += ms;

@@ -628,21 +628,37 @@ TEST(FrameComparisons, APairIsReadByTheNeighbourhoodsMedianForPredictions) {
 }
 
 // The noise taken out is uncertain by about its size: where it would be over a quarter of the
-// relMSE, nothing is recorded (1.25 against 1.0: relMSE 0.0619; noise 0.54 x 2.2 / 64 = 0.0186,
-// 0.30 of it), though the preset counts as compared.
-TEST(FrameComparisons, ANoiseOverAQuarterOfTheRelMseRecordsNothing) {
+// relMSE (1.25 against 1.0: relMSE 0.0619; noise 0.54 x 2.2 / 64 = 0.0186, 0.30 of it) no estimate
+// is made; against a reference of the frame's own bounce count, what is left once half that noise
+// is taken out is recorded as a bound on the view's frame, which a lesser bound of it and any
+// estimate of it supersede. Without a view, nothing is recorded.
+TEST(FrameComparisons, ANoiseOverAQuarterOfTheRelMseLeavesABoundNotAnEstimate) {
     const SceneAnalysis analysis = made_up_analysis();
     SceneMeasurements measured;
     FrameComparisons comparisons;
     comparisons.add(4, frame("cssm", "low", {{"bounces", 4}}, 1.25f), &analysis, measured);
-    EXPECT_TRUE(comparisons.add(4, reference(64, 2.2), &analysis, measured).empty());
-    EXPECT_FALSE(measured.own_error("cssm", "low", 4));
+    const auto made = comparisons.add(4, reference(64, 2.2), &analysis, measured);
+    ASSERT_EQ(made.size(), 1u);
+    EXPECT_TRUE(made[0].noise_bound);
+    EXPECT_GT(made[0].reference_noise, FrameComparisons::kMaxNoiseShare * made[0].rel_mse);
+    // No bounce gap, no deeper frame: the relMSE less half the noise.
+    EXPECT_DOUBLE_EQ(made[0].own_error, made[0].rel_mse - FrameComparisons::kBoundNoiseShare * made[0].reference_noise);
+    ASSERT_TRUE(measured.own_error("cssm", "low", 4));
+    EXPECT_DOUBLE_EQ(measured.own_error("cssm", "low", 4)->rel_mse, made[0].own_error);
     EXPECT_TRUE(measured.compared("cssm", "low"));
-    // At 0.20 of it (noise statistic 1.5), recorded.
+    // Without a view there is no frame to bound: nothing recorded.
+    SceneMeasurements viewless;
+    EXPECT_FALSE(FrameComparisons::compare(*frame("cssm", "low", {{"bounces", 4}}, 1.25f), *reference(64, 2.2), &analysis,
+                                           viewless));
+    EXPECT_FALSE(viewless.own_error("cssm", "low", 4));
+    // At 0.20 of it (noise statistic 1.5), an estimate, the noise taken out.
     FrameComparisons quieter;
-    quieter.add(5, frame("cssm", "low", {{"bounces", 4}}, 1.25f), &analysis, measured);
-    EXPECT_EQ(quieter.add(5, reference(64, 1.5), &analysis, measured).size(), 1u);
-    EXPECT_TRUE(measured.own_error("cssm", "low", 4));
+    SceneMeasurements estimated;
+    quieter.add(5, frame("cssm", "low", {{"bounces", 4}}, 1.25f), &analysis, estimated);
+    const auto estimate = quieter.add(5, reference(64, 1.5), &analysis, estimated);
+    ASSERT_EQ(estimate.size(), 1u);
+    EXPECT_FALSE(estimate[0].noise_bound);
+    EXPECT_NEAR(estimated.own_error("cssm", "low", 4)->rel_mse, estimate[0].rel_mse - estimate[0].reference_noise, 1e-12);
 }
 
 TEST(FrameComparisons, NoisyDenoisedOrUnlikeFramesAreNotCompared) {
@@ -874,6 +890,41 @@ TEST(Probes, AProbeTheMissingLightWouldDrownGetsAReferenceOfItsOwnBounces) {
     const auto zero_only = probes(all, chosen, nullptr, &analysis, 1);
     ASSERT_EQ(zero_only.size(), 4u);
     EXPECT_EQ(zero_only[3].knobs.at("bounces"), 1.0);
+}
+
+// Where no companion fits, a probe goes alone beside the reference's own prefix of its bounce count
+// if that prefix's noise is under the probe's predicted own error: noise and all, the comparison
+// bounds the own error under the prediction (FrameComparisons::compare). Within 40 ms no companion
+// (64 ms) fits: direct (own 0.012) goes alone where the prefix's noise is 2 / 256 = 0.0078, not
+// where it is 4 / 256 = 0.016; vct (its prefix quiet, 0.002) goes either way, cssm no longer fits.
+TEST(Probes, WithoutACompanionAProbeGoesAloneWhereItsPrefixCanBoundIt) {
+    const SceneAnalysis analysis = made_up_analysis();
+    const auto stopped = [](int k) { return 0.1 / std::pow(2.0, k); };
+    Candidate chosen = candidate("reference", "medium", {{"spp", 256}, {"bounces", 4}}, 40.0, stopped(4) + 0.002);
+    const std::vector<Candidate> all = {
+        chosen,
+        candidate("direct", "high", {}, 5.0, stopped(0) + 0.012),
+        candidate("vct", "draft", {}, 20.0, stopped(1) + 0.03),
+        candidate("cssm", "low", {{"bounces", 4}}, 30.0, stopped(4) + 0.02),
+        candidate("reference", "medium", {{"spp", 32}, {"bounces", 0}}, 64.0, stopped(0) + 0.0025),
+    };
+    SceneAnalysis bounding = analysis;
+    bounding.bounces.noise_per_sample[0] = 2.0;
+    const auto alone = probes(all, chosen, nullptr, &bounding, 4);
+    ASSERT_EQ(alone.size(), 2u);
+    EXPECT_EQ(alone[0].method, "direct");
+    EXPECT_EQ(alone[1].method, "vct");
+    SceneAnalysis drowning = analysis;
+    drowning.bounces.noise_per_sample[0] = 4.0;
+    const auto without = probes(all, chosen, nullptr, &drowning, 4);
+    ASSERT_EQ(without.size(), 1u);
+    EXPECT_EQ(without[0].method, "vct");
+    // Where the companion fits, it still goes with the probe: a quieter reference measures, not bounds.
+    chosen.predicted_ms = 100.0;
+    const auto accompanied = probes(all, chosen, nullptr, &bounding, 4);
+    EXPECT_TRUE(std::any_of(accompanied.begin(), accompanied.end(), [](const Candidate& c) {
+        return c.method == "reference" && c.knobs.at("bounces") == 0.0;
+    }));
 }
 
 TEST(Resolution, BilinearUpsamplingBetweenPixelCentres) {
