@@ -66,12 +66,12 @@ SceneResources::~SceneResources() {
 
 namespace {
 
-// Knobs a method leaves to the scene (renderer/scene_knobs.hpp), from its analysis: made here, on
-// the calling thread, the first time a frame needs it.
+// Knobs a method leaves to the scene (renderer/scene_knobs.hpp), from its analysis as last made:
+// made here, on the calling thread, the first time a frame needs it.
 void resolve_scene_knobs(SceneResources& resources, const RenderRequest& request, const methods::MethodInfo& info,
                          methods::KnobValues& knobs) {
     if (!leaves_knobs_to_scene(knobs, request.knobs)) return;
-    resolve_scene_knobs(resources.analysis(), info, request.knobs, knobs);
+    resolve_scene_knobs(resources.latest_analysis(), info, request.knobs, knobs);
 }
 
 }  // namespace

@@ -123,6 +123,10 @@ public:
     const SceneAnalysis& analysis();
     // The analysis if a frame or a plan made it, without making it.
     const SceneAnalysis* analysis_if_made() const { return analysis_ ? &*analysis_ : nullptr; }
+    // The analysis as last made, whatever lights it was made for; made now if none was. What knobs
+    // left to the scene read (renderer/scene_knobs.hpp): a frame right after a light's change does
+    // not wait for the scene to be analysed again (the daemon makes it anew on the CPU pool).
+    const SceneAnalysis& latest_analysis() { return analysis_ ? *analysis_ : analysis(); }
     // Whether analysis() would answer without analysing: made, for the lights the scene has now.
     bool analysis_current() const;
     // Installs an analysis made elsewhere (on CPU threads, from a copy of the scene) for the lights

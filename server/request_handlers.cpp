@@ -123,9 +123,12 @@ void RequestHandlers::execute(const std::shared_ptr<Request>& request, Renderer&
             plan_budgeted(*render, renderer, registry);  // before the visit: it changes the order
         } else if (render && !render->budget && render->plan.site == FrameSite::gpu &&
                    leaves_knobs_to_scene(render->plan.knobs, render->request.knobs)) {
-            // Knobs left to the scene (renderer/scene_knobs.hpp) read its analysis: made on the CPU
-            // pool, not on the render thread other clients' frames wait on.
-            if (wait_for_analysis(request, render->scene, registry.get(render->scene))) return;
+            // Knobs left to the scene (renderer/scene_knobs.hpp) read its analysis: the first made on
+            // the CPU pool, not on the render thread other clients' frames wait on. After a light
+            // changes, the frame reads the analysis as last made while the CPU pool makes it again: a
+            // lighting preview's frames do not wait tenths of a second on each move of a light.
+            SceneEntry& entry = registry.get(render->scene);
+            if (wait_for_analysis(entry.resources->analysis_if_made() ? nullptr : request, render->scene, entry)) return;
         }
         const std::span<const std::uint8_t> attachment = request->message().attachment;
         const json reply = std::visit(
@@ -647,6 +650,7 @@ bool RequestHandlers::wait_for_analysis(const std::shared_ptr<Request>& request,
     const std::uint64_t resources_id = entry.resources->id;
     const std::string key = fmt::format("{}/analysis", resources_id);
     if (const auto running = running_work_.find(key); running != running_work_.end()) {
+        if (!request) return false;
         running->second->add(request);
         return true;
     }
@@ -654,7 +658,7 @@ bool RequestHandlers::wait_for_analysis(const std::shared_ptr<Request>& request,
     if (!daemon_.try_start_cpu_job()) return false;
     auto slot = std::make_shared<CpuSlot>(daemon_);
     auto shared = std::make_shared<SharedWork>();
-    shared->add(request);
+    if (request) shared->add(request);
     running_work_[key] = shared;
     auto snapshot = std::make_shared<const scene::Scene>(*entry.scene);
     boost::asio::post(daemon_.cpu_pool(), [this, shared, key, resources_id, scene_name, snapshot, slot] {
@@ -688,7 +692,7 @@ bool RequestHandlers::wait_for_analysis(const std::shared_ptr<Request>& request,
             }
         }
     });
-    return true;
+    return request != nullptr;
 }
 
 void RequestHandlers::wait_for_calibration(const std::shared_ptr<Request>& request, Renderer& renderer) {

@@ -73,6 +73,8 @@ private:
     // of the scene (tenths of a second on the bench scenes, more on larger ones) while the render
     // thread serves others; the requests that need it wait and run again once it is installed.
     // False when it is current, or when every CPU slot is taken (the caller then analyses here).
+    // With no request, the analysis is started (if it is not current, runs nowhere and a CPU slot is
+    // free) and nothing waits for it: false.
     bool wait_for_analysis(const std::shared_ptr<Request>& request, const std::string& scene_name, SceneEntry& entry);
     // Renders the order's probes whose structures are built (a probe never waits for a bake) and
     // compares each with the reference frame of its view when there is one.

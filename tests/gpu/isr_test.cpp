@@ -480,6 +480,23 @@ TEST(Isr, ThePresetsDilateTheMapsBehindWallsAndNotInTheOpen) {
     EXPECT_EQ(render_isr(sealed, "low", {{"ism_dilation", 0}}).stats.knobs.at("ism_dilation"), 0.0);
 }
 
+// What the presets leave to the scene reads its analysis as last made: a frame right after a light
+// moves does not analyse the scene again on the render thread (tenths of a second, where a GPU
+// renders the frame in milliseconds); the daemon makes it anew on its CPU pool.
+TEST(Isr, AFrameAfterALightMovesReadsTheAnalysisAsLastMade) {
+    scene::Scene scene = scene::make_cornell_box();
+    auto resources = shared_renderer().upload(scene);
+    const RenderRequest request = isr_request("low", {});
+    EXPECT_EQ(resources->analysis_if_made(), nullptr);
+    const auto first = shared_renderer().render(*resources, request);
+    ASSERT_TRUE(resources->analysis_current());  // made for the first frame
+    EXPECT_EQ(first.stats.knobs.at("ism_dilation"), 0.0);
+    scene.lights[0].position += glm::vec3(0.02f, 0.0f, 0.0f);
+    const auto moved = shared_renderer().render(*resources, request);
+    EXPECT_FALSE(resources->analysis_current());
+    EXPECT_EQ(moved.stats.knobs.at("ism_dilation"), 0.0);
+}
+
 // The Cornell box against the reference with indirect visibility: CornellAgainstReferencePerPreset
 // shows that nearly all of isr's error there is the visibility it lacks (relMSE 0.108 to 0.111 at
 // every preset). With the maps at least three quarters of it must go, and the mean come nearer the
