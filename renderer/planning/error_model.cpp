@@ -1,6 +1,7 @@
 #include "renderer/planning/error_model.hpp"
 
 #include "renderer/methods/registry.hpp"
+#include "renderer/scene_knobs.hpp"
 
 #include <fmt/format.h>
 
@@ -164,6 +165,16 @@ ErrorPrediction predict_error(const SceneAnalysis& analysis, const std::string& 
         } else {
             prediction.ruled_out = thin + ", and no scene where it leaks has measured it";
         }
+    }
+    // What the preset leaves to the scene, as the frame will resolve it (renderer/scene_knobs.hpp).
+    const methods::MethodRegistry& knob_registry = methods::MethodRegistry::builtin();
+    if (const methods::KnobValues resolved = knob_registry.resolve(method, preset, knobs);
+        set_by_scene(resolved, "ism_dilation") && !knobs.contains("ism_dilation") && analysis.visibility.pairs > 0) {
+        const double below = resolved.at("ism_open_below");
+        const bool open = analysis.visibility.occluded_fraction < below;
+        prediction.basis += fmt::format("; its maps {} ({:.0f}% of the indirect light occluded, {} {:.1f}%)",
+                                        open ? "undilated" : "dilated", 100.0 * analysis.visibility.occluded_fraction,
+                                        open ? "under" : "at least", 100.0 * below);
     }
     // A method that lets indirect light through what occludes it (isr without imperfect shadow maps)
     // is ruled out where most of that light is occluded.

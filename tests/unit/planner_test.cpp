@@ -246,6 +246,27 @@ TEST(ErrorModel, AGpuMethodAddsItsBenchPriorToTheBouncesItLacks) {
     EXPECT_DOUBLE_EQ(predict_error(analysis, "direct", "ultra", {}).rel_mse, 0.1 + *own_error_prior("direct", "ultra"));
 }
 
+// The plan's basis says how the frame will resolve what isr's presets leave to the scene: its maps
+// undilated in an open scene, dilated behind walls, as the request set them where it did.
+TEST(ErrorModel, TheBasisSaysWhetherIsrsMapsAreDilatedAndWhy) {
+    SceneAnalysis analysis = made_up_analysis();
+    analysis.visibility.pairs = 1000;
+    analysis.visibility.occluded_fraction = 0.05;
+    const double below = 100.0 * methods::MethodRegistry::builtin().resolve("isr", "low", {}).at("ism_open_below");
+    const std::string open = predict_error(analysis, "isr", "low", {}).basis;
+    EXPECT_NE(open.find(fmt::format("its maps undilated (5% of the indirect light occluded, under {:.1f}%)", below)),
+              std::string::npos)
+        << open;
+    analysis.visibility.occluded_fraction = 0.3;
+    const std::string walled = predict_error(analysis, "isr", "low", {}).basis;
+    EXPECT_NE(walled.find(fmt::format("its maps dilated (30% of the indirect light occluded, at least {:.1f}%)", below)),
+              std::string::npos)
+        << walled;
+    EXPECT_EQ(predict_error(analysis, "isr", "low", {{"ism_dilation", 0}}).basis.find("its maps"), std::string::npos);
+    EXPECT_EQ(predict_error(analysis, "isr", "draft", {}).basis.find("its maps"), std::string::npos);  // none
+    EXPECT_EQ(predict_error(analysis, "cssm", "low", {}).basis.find("its maps"), std::string::npos);
+}
+
 TEST(ErrorModel, OccludedIsrIsRuledOutAndLeakingVctPromisedWhatLeakingScenesMeasured) {
     SceneAnalysis analysis = made_up_analysis();
     analysis.thin_walls.presets["draft"].leaking_area = 0.2;
