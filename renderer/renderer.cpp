@@ -280,8 +280,8 @@ std::optional<std::string> Renderer::memory_refusal(const SceneResources& resour
     const FramePlan plan = plan_frame(request);
     if (plan.site != FrameSite::gpu) return std::nullopt;
     const auto& info = methods::MethodRegistry::builtin().find(request.method);
-    // The knobs unresolved by the scene's analysis: that resolves `bounces` alone, which sizes no
-    // structure, and asking for the analysis here could make it in the middle of a plan.
+    // The knobs unresolved by the scene's analysis: that resolves `bounces` and isr's `ism_dilation`,
+    // which size no structure, and asking for the analysis here could make it in the middle of a plan.
     try {
         check_frame_memory(resources, request, info, plan.knobs);
     } catch (const ResourceExhausted& refused) {

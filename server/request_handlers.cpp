@@ -319,6 +319,11 @@ void RequestHandlers::deliver(const std::shared_ptr<Request>& request, const Ren
 json RequestHandlers::bake(const std::shared_ptr<Request>& request, const BakeOrder& order, Renderer& renderer,
                            SceneRegistry& registry) {
     SceneEntry& entry = registry.get(order.frame.scene);
+    // As a render's (execute()): the scene's first analysis off the render thread, a stale one renewed there.
+    if (leaves_knobs_to_scene(order.frame.plan.knobs, order.frame.request.knobs) &&
+        wait_for_analysis(entry.resources->analysis_if_made() ? nullptr : request, order.frame.scene, entry)) {
+        return nullptr;
+    }
     if (wait_for_pending_work(request, order.frame.scene, entry, order.frame.request, renderer)) return nullptr;
     const auto started = Clock::now();
     auto last_sent = started - std::chrono::seconds(1);

@@ -29,16 +29,20 @@ bool FrameComparisons::usable_reference(const FrameStats& stats) {
            stats.method_statistics.count("noise_per_sample") > 0;
 }
 
-bool FrameComparisons::usable_gpu_frame(const FrameStats& stats) {
+bool FrameComparisons::usable_gpu_frame(const FrameStats& stats, const SceneAnalysis* analysis) {
     if (stats.method == "reference" || !own_error_prior(stats.method, stats.preset)) return false;
-    const auto& presets = methods::MethodRegistry::builtin().find(stats.method).presets;
-    const auto preset = presets.find(stats.preset);
-    if (preset == presets.end()) return false;
+    const methods::MethodInfo& info = methods::MethodRegistry::builtin().find(stats.method);
+    const auto preset = info.presets.find(stats.preset);
+    if (preset == info.presets.end()) return false;
+    // What the preset leaves to the scene, as this scene resolves it: a frame whose request set such
+    // a knob otherwise is not the preset's. Without the analysis, whatever the scene could set.
+    methods::KnobValues own_knobs = preset->second;
+    if (analysis) resolve_scene_knobs(*analysis, info, {}, own_knobs);
     for (const auto& [name, value] : stats.knobs) {
         if (name == "bounces") continue;  // the error model separates bounces from the rest
-        if (set_by_scene(preset->second, name)) continue;  // the preset's on this scene
-        const auto own = preset->second.find(name);
-        if (own == preset->second.end() || own->second != value) return false;
+        if (!analysis && set_by_scene(preset->second, name)) continue;
+        const auto own = own_knobs.find(name);
+        if (own == own_knobs.end() || own->second != value) return false;
     }
     return true;
 }
@@ -107,7 +111,8 @@ std::optional<Comparison> FrameComparisons::compare(const RenderResult& gpu_fram
     // 16-sample reference of its one bounce reads 0.032 where 0.0086 is expected of the noise and its
     // own error is 0.0016 (0.012 before the cross term): the bound, about 0.018, is under the prior
     // (0.028) that otherwise stands until a quieter reference comes.
-    c.noise_bound = drowned && view && c.rel_mse >= 0.0 && c.bounce_gap == 0.0 && extra_light == 0.0;
+    c.noise_bound = drowned && view && c.rel_mse >= 0.0 && c.bounce_gap == 0.0 && extra_light == 0.0 &&
+                    modelled_bounces("reference", reference.stats.knobs) == c.bounces;
     if (drowned && !c.noise_bound) {
         if (!(c.bounce_gap > c.reference_noise)) measurements.record_compared(c.method, c.preset, c.bounces);
         return std::nullopt;
@@ -164,6 +169,15 @@ std::optional<Comparison> FrameComparisons::compare(const RenderResult& gpu_fram
     // missing in the same places (relMSE is a weighted squared norm: the triangle inequality). That
     // bound is recorded: in the furnished room cssm draft at 8 bounces read 0.041 against 6 bounces
     // (lacking 0.005) and measures 0.052 against the whole; the bound says 0.075.
+    // A noise bound is kept only where the relMSE is more than the noise taken out (else the noise
+    // expected is more than this draw's, and the rest says nothing), never below 0, and only where
+    // it says more than the prior, which it would otherwise replace.
+    if (c.noise_bound) {
+        if (c.rel_mse <= kBoundNoiseShare * c.reference_noise) return std::nullopt;
+        c.own_error = std::max(0.0, c.own_error);
+        const std::optional<double> prior = own_error_prior(c.method, c.preset, c.bounces);
+        if (!prior || c.own_error >= *prior) return std::nullopt;
+    }
     const bool bound = extra_light > 0.0 || c.noise_bound;
     if (extra_light > 0.0) c.own_error = std::pow(std::sqrt(std::max(c.own_error, 0.0)) + std::sqrt(extra_light), 2.0);
     if (view && !bound) {
@@ -253,7 +267,7 @@ std::vector<Comparison> FrameComparisons::add(std::uint64_t view, std::shared_pt
                                               const SceneAnalysis* analysis, SceneMeasurements& measurements) {
     const FrameStats& stats = frame->stats;
     const bool is_reference = usable_reference(stats);
-    if (!is_reference && !usable_gpu_frame(stats)) return {};
+    if (!is_reference && !usable_gpu_frame(stats, analysis)) return {};
     // A reference arrives with its frames of fewer bounces: each a reference of its own bounce count.
     std::vector<std::shared_ptr<const RenderResult>> incoming;
     if (is_reference) {

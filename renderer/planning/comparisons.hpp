@@ -54,9 +54,9 @@ struct Comparison {
     // fewer bounces than the frame, (sqrt of that + sqrt of the light the reference lacks)^2.
     double own_error = 0.0;
     // Where the reference's noise drowns the rest (over kMaxNoiseShare of rel_mse) and the reference
-    // has the frame's bounce count: own_error, half the noise taken out, recorded as a bound
-    // on the view's frame (SceneMeasurements::record_own_error), which a quieter reference's estimate
-    // supersedes.
+    // has the frame's bounce count: own_error, half the noise taken out and never below 0, recorded as
+    // a bound on the view's frame (SceneMeasurements::record_own_error) where it is under the
+    // preset's prior; a quieter reference's estimate of the view supersedes it.
     bool noise_bound = false;
 };
 
@@ -80,7 +80,8 @@ public:
 
     // Whether a frame's stats make it a reference to compare with, or a GPU frame to compare.
     static bool usable_reference(const FrameStats& stats);
-    static bool usable_gpu_frame(const FrameStats& stats);
+    // `analysis`: the scene's, for the knobs its presets leave to it (renderer/scene_knobs.hpp).
+    static bool usable_gpu_frame(const FrameStats& stats, const SceneAnalysis* analysis = nullptr);
 
     // One comparison, made and recorded (add() calls it; public for tests). `view` is the frames'
     // view, where known: against a reference lacking light the frame has, what is recorded is a

@@ -287,9 +287,9 @@ TEST(Daemon, IsrRendersWithItsStatsAndRefusesBadKnobs) {
     EXPECT_EQ(render(client, body).width, 64) << "serving continues";
 }
 
-// isr's presets leave the maps' dilation to the scene (renderer/scene_knobs.hpp): the daemon
-// analyses the scene off the render thread before the first such frame, the open Cornell box
-// renders without it, and the reply's knobs say so; a request's own value wins.
+// isr's presets leave the maps' dilation to the scene (renderer/scene_knobs.hpp; the daemon makes
+// the analysis on its CPU pool, docs/architecture.md): the open Cornell box renders without it, and
+// the reply's knobs say so; a request's own value wins, and a threshold out of range is refused.
 TEST(Daemon, IsrsPresetsTakeTheMapsDilationFromTheScene) {
     DaemonProcess daemon;
     Client client(daemon.endpoint());

@@ -628,30 +628,41 @@ TEST(FrameComparisons, APairIsReadByTheNeighbourhoodsMedianForPredictions) {
 }
 
 // The noise taken out is uncertain by about its size: where it would be over a quarter of the
-// relMSE (1.25 against 1.0: relMSE 0.0619; noise 0.54 x 2.2 / 64 = 0.0186, 0.30 of it) no estimate
-// is made; against a reference of the frame's own bounce count, what is left once half that noise
-// is taken out is recorded as a bound on the view's frame, which a lesser bound of it and any
-// estimate of it supersede. Without a view, nothing is recorded.
+// relMSE no estimate is made. Against a reference of the frame's own bounce count, what is left once
+// half that noise (0.54 x 2.2 / 64 = 0.0186) is taken out is recorded as a bound on the view's frame
+// where it is under the preset's prior (cssm low's 0.0231): 1.1 against 1.0 reads 0.0099, a bound
+// of 0.0006. At 1.25 (0.0619, a bound of 0.053) it would say less than the prior, and at 1.05
+// (0.0025, under the noise taken out) nothing: neither is recorded. Without a view, nothing is.
 TEST(FrameComparisons, ANoiseOverAQuarterOfTheRelMseLeavesABoundNotAnEstimate) {
     const SceneAnalysis analysis = made_up_analysis();
+    const auto drowned = [&](float value, SceneMeasurements& measured) {
+        FrameComparisons comparisons;
+        comparisons.add(4, frame("cssm", "low", {{"bounces", 4}}, value), &analysis, measured);
+        return comparisons.add(4, reference(64, 2.2), &analysis, measured);
+    };
     SceneMeasurements measured;
-    FrameComparisons comparisons;
-    comparisons.add(4, frame("cssm", "low", {{"bounces", 4}}, 1.25f), &analysis, measured);
-    const auto made = comparisons.add(4, reference(64, 2.2), &analysis, measured);
+    const auto made = drowned(1.1f, measured);
     ASSERT_EQ(made.size(), 1u);
     EXPECT_TRUE(made[0].noise_bound);
     EXPECT_GT(made[0].reference_noise, FrameComparisons::kMaxNoiseShare * made[0].rel_mse);
     // No bounce gap, no deeper frame: the relMSE less half the noise.
     EXPECT_DOUBLE_EQ(made[0].own_error, made[0].rel_mse - FrameComparisons::kBoundNoiseShare * made[0].reference_noise);
+    EXPECT_LT(made[0].own_error, *own_error_prior("cssm", "low", 4));
     ASSERT_TRUE(measured.own_error("cssm", "low", 4));
     EXPECT_DOUBLE_EQ(measured.own_error("cssm", "low", 4)->rel_mse, made[0].own_error);
     EXPECT_TRUE(measured.compared("cssm", "low"));
+    for (const float value : {1.25f, 1.05f}) {
+        SceneMeasurements nothing;
+        EXPECT_TRUE(drowned(value, nothing).empty()) << value;
+        EXPECT_FALSE(nothing.own_error("cssm", "low", 4)) << value;
+        EXPECT_TRUE(nothing.compared("cssm", "low")) << value;
+    }
     // Without a view there is no frame to bound: nothing recorded.
     SceneMeasurements viewless;
-    EXPECT_FALSE(FrameComparisons::compare(*frame("cssm", "low", {{"bounces", 4}}, 1.25f), *reference(64, 2.2), &analysis,
+    EXPECT_FALSE(FrameComparisons::compare(*frame("cssm", "low", {{"bounces", 4}}, 1.1f), *reference(64, 2.2), &analysis,
                                            viewless));
     EXPECT_FALSE(viewless.own_error("cssm", "low", 4));
-    // At 0.20 of it (noise statistic 1.5), an estimate, the noise taken out.
+    // At 0.20 of the relMSE (1.25 against a noise statistic of 1.5), an estimate, the noise taken out.
     FrameComparisons quieter;
     SceneMeasurements estimated;
     quieter.add(5, frame("cssm", "low", {{"bounces", 4}}, 1.25f), &analysis, estimated);
@@ -690,6 +701,22 @@ TEST(FrameComparisons, NoisyDenoisedOrUnlikeFramesAreNotCompared) {
     tuned->stats.knobs[changed] += 1.0;
     EXPECT_FALSE(FrameComparisons::usable_gpu_frame(tuned->stats)) << changed;
     EXPECT_FALSE(FrameComparisons::usable_gpu_frame(reference(64, 0.1)->stats));
+    // What a preset leaves to the scene (isr's ism_dilation) counts as the preset's where it is what
+    // the scene resolves, not where the request set it otherwise.
+    SceneAnalysis open, walled;
+    open.visibility = {1000, 0.05};
+    walled.visibility = {1000, 0.6};
+    const auto isr_low = [&](double dilation) {
+        auto made = std::make_shared<RenderResult>(*frame("isr", "low", {}, 1.0f));
+        made->stats.knobs = methods::MethodRegistry::builtin().resolve("isr", "low", {{"ism_dilation", dilation}});
+        return made;
+    };
+    EXPECT_TRUE(FrameComparisons::usable_gpu_frame(isr_low(0)->stats, &open));
+    EXPECT_FALSE(FrameComparisons::usable_gpu_frame(isr_low(2)->stats, &open));
+    EXPECT_FALSE(FrameComparisons::usable_gpu_frame(isr_low(1)->stats, &open));
+    EXPECT_TRUE(FrameComparisons::usable_gpu_frame(isr_low(2)->stats, &walled));
+    EXPECT_FALSE(FrameComparisons::usable_gpu_frame(isr_low(0)->stats, &walled));
+    EXPECT_TRUE(FrameComparisons::usable_gpu_frame(isr_low(1)->stats));  // no analysis: whatever the scene could set
 }
 
 Candidate candidate(std::string method, std::string preset, methods::KnobValues knobs, double ms, double error = 0.1) {
