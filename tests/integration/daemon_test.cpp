@@ -305,6 +305,19 @@ TEST(Daemon, IsrsPresetsTakeTheMapsDilationFromTheScene) {
     expect_error([&] { client.request(MessageType::render, asked); }, ErrorCode::bad_request);
 }
 
+// The same through a bake, and after a light moves, where the frame goes on with the analysis as
+// last made while the daemon makes it again with no request waiting on it: each reply comes, with
+// the scene's setting (where the analysis is made, this test does not see).
+TEST(Daemon, IsrsSceneKnobsAfterABakeAndALightMove) {
+    DaemonProcess daemon;
+    Client client(daemon.endpoint());
+    const json body = {{"scene", "cornell"}, {"method", "isr"}, {"preset", "low"}, {"width", 32}, {"height", 32}};
+    EXPECT_EQ(client.request(MessageType::bake, body).body["knobs"]["ism_dilation"], 0);
+    client.request(MessageType::light_set, {{"scene", "cornell"}, {"light", "ceiling_light"}, {"position", {0.27, 0.44, 0.28}}});
+    EXPECT_EQ(client.request(MessageType::render, body).body["knobs"]["ism_dilation"], 0);
+    EXPECT_EQ(client.request(MessageType::render, body).body["knobs"]["ism_dilation"], 0);
+}
+
 // A directory for --cache-dir that outlives the daemons of one test.
 struct CacheDir {
     CacheDir() : path(std::filesystem::temp_directory_path() / ("bounce-cache-" + std::to_string(::getpid()) + "-" +
