@@ -100,6 +100,42 @@ double rel_mse_difference_noise(const Frame& a, const Frame& b, const Frame& ref
     return 2.0 * std::sqrt(variance) / (static_cast<double>(counted) * 3.0);
 }
 
+CrossEstimate cross_rel_mse(const Frame& test, const Frame& a, const Frame& b, const Frame& weights) {
+    const std::size_t pixels = static_cast<std::size_t>(test.width) * static_cast<std::size_t>(test.height);
+    const auto same_size = [&](const Frame& frame) {
+        return frame.width == test.width && frame.height == test.height && frame.rgba.size() == pixels * 4;
+    };
+    BOUNCE_CHECK(test.rgba.size() == pixels * 4 && same_size(a) && same_size(b) && same_size(weights),
+                 "cannot estimate the error of a {}x{} frame from {}x{} and {}x{} draws weighed by a {}x{} frame", test.width,
+                 test.height, a.width, a.height, b.width, b.height, weights.width, weights.height);
+    CrossEstimate estimate;
+    double sum = 0.0, sum_of_squares = 0.0;
+    for (std::size_t i = 0; i < pixels; ++i) {
+        const float *t = &test.rgba[i * 4], *pa = &a.rgba[i * 4], *pb = &b.rgba[i * 4], *w = &weights.rgba[i * 4];
+        if (!finite_rgb(t) || !finite_rgb(pa) || !finite_rgb(pb) || !finite_rgb(w)) continue;
+        const int x = static_cast<int>(i % static_cast<std::size_t>(test.width));
+        const int y = static_cast<int>(i / static_cast<std::size_t>(test.width));
+        double pixel = 0.0;
+        for (int c = 0; c < 3; ++c) {
+            const double weight = neighbourhood_median(weights, x, y, c);
+            pixel += (static_cast<double>(t[c]) - pa[c]) * (static_cast<double>(t[c]) - pb[c]) / (weight * weight + 0.01);
+        }
+        pixel /= 3.0;
+        sum += pixel;
+        sum_of_squares += pixel * pixel;
+        ++estimate.pixels;
+    }
+    if (estimate.pixels == 0) {
+        estimate.standard_error = std::numeric_limits<double>::infinity();
+        return estimate;
+    }
+    const double n = static_cast<double>(estimate.pixels);
+    estimate.rel_mse = sum / n;
+    const double variance = estimate.pixels > 1 ? std::max(0.0, sum_of_squares - sum * sum / n) / (n - 1.0) : 0.0;
+    estimate.standard_error = std::sqrt(variance / n);
+    return estimate;
+}
+
 Leak leak(const Frame& test, const Frame& reference) {
     BOUNCE_CHECK(test.width == reference.width && test.height == reference.height &&
                      test.rgba.size() == reference.rgba.size(),

@@ -42,6 +42,27 @@ ErrorMetrics compare(const Frame& test, const Frame& reference, Weight weight = 
 double rel_mse_difference_noise(const Frame& a, const Frame& b, const Frame& reference,
                                 const std::vector<float>& luminance_variance);
 
+// The relMSE of `test` against the expected image of two independent noisy draws of it, `a` and
+// `b` (reference frames of other seeds, or the disjoint samples of one seed: planning::
+// FrameComparisons), without their noise: the mean over values of (t - a)(t - b) / (w^2 + 0.01).
+// Where the draws are unbiased and independent, (t - a)(t - b) has the expectation (t - r)^2 for the
+// image r they both estimate: the noise of each multiplies only the other's or the test's
+// difference, which average to 0. Subtracting a modelled noise from relMSE(test, a) instead is only
+// as good as the model (on the bench corpus the noise added 0.6 to 2.5 times its statistic by scene).
+// The weight w is the median of `weights` over the value's 3x3 neighbourhood (Weight::
+// neighbourhood_median), a frame of the draws (their union): a pixel's own noisy value would correlate
+// with the products it weighs. `standard_error` is the spread of the pixels' means over the
+// three channels (one value each: the same paths carry them) over the square root of their count:
+// how far the estimate may be from its expectation by the draws' noise and the test's error's
+// own unevenness. Pixels non-finite in any frame are left out; none left gives 0 and an infinite
+// standard error. Throws Error on a size mismatch.
+struct CrossEstimate {
+    double rel_mse = 0.0;
+    double standard_error = 0.0;
+    std::size_t pixels = 0;  // counted
+};
+CrossEstimate cross_rel_mse(const Frame& test, const Frame& a, const Frame& b, const Frame& weights);
+
 // Light leaking into regions the reference proves dark: the test's mean RGB radiance over the
 // pixels where the reference has geometry (alpha > 0) and exactly zero radiance, relative to the
 // reference's mean over its lit pixels. 0 when either set is empty. Throws Error on a size mismatch.

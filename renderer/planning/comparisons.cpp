@@ -23,10 +23,44 @@ double stopped_at(const SceneAnalysis* analysis, int bounces) {
 
 }  // namespace
 
-bool FrameComparisons::usable_reference(const FrameStats& stats) {
-    return stats.method == "reference" && knob(stats, "spp", 0.0) >= kMinReferenceSpp && knob(stats, "denoise", 0.0) == 0.0 &&
+bool FrameComparisons::usable_draw(const FrameStats& stats) {
+    return stats.method == "reference" && knob(stats, "spp", 0.0) >= 1.0 && knob(stats, "denoise", 0.0) == 0.0 &&
            knob(stats, "indirect_visibility", 1.0) != 0.0 && knob(stats, "ao", 0.0) == 0.0 &&
            stats.method_statistics.count("noise_per_sample") > 0;
+}
+
+bool FrameComparisons::usable_reference(const FrameStats& stats) {
+    return usable_draw(stats) && knob(stats, "spp", 0.0) >= kMinReferenceSpp;
+}
+
+namespace {
+
+// Whether two draws estimate one image independently, or one holds the other's samples and the rest.
+bool pairable(const RenderResult& fewer, const RenderResult& more) {
+    if (!FrameComparisons::usable_draw(fewer.stats) || !FrameComparisons::usable_draw(more.stats)) return false;
+    if (fewer.frame.width != more.frame.width || fewer.frame.height != more.frame.height ||
+        fewer.frame.rgba.size() != more.frame.rgba.size()) {
+        return false;
+    }
+    if (modelled_bounces("reference", fewer.stats.knobs) != modelled_bounces("reference", more.stats.knobs)) return false;
+    if (knob(fewer.stats, "pixel_jitter", 1.0) != knob(more.stats, "pixel_jitter", 1.0)) return false;
+    const bool same_seed = knob(fewer.stats, "seed", 1.0) == knob(more.stats, "seed", 1.0);
+    return !same_seed || knob(more.stats, "spp", 0.0) > knob(fewer.stats, "spp", 0.0);
+}
+
+}  // namespace
+
+std::optional<std::pair<image::Frame, image::Frame>> FrameComparisons::independent_draws(const RenderResult& fewer,
+                                                                                        const RenderResult& more) {
+    if (!pairable(fewer, more)) return std::nullopt;
+    if (knob(fewer.stats, "seed", 1.0) != knob(more.stats, "seed", 1.0)) return std::pair{fewer.frame, more.frame};
+    const double f = knob(fewer.stats, "spp", 0.0), m = knob(more.stats, "spp", 0.0);
+    image::Frame later = more.frame;
+    for (std::size_t i = 0; i < later.rgba.size(); ++i) {
+        if (i % 4 == 3) continue;
+        later.rgba[i] = static_cast<float>((m * more.frame.rgba[i] - f * fewer.frame.rgba[i]) / (m - f));
+    }
+    return std::pair{fewer.frame, std::move(later)};
 }
 
 bool FrameComparisons::usable_gpu_frame(const FrameStats& stats, const SceneAnalysis* analysis) {
@@ -79,8 +113,11 @@ std::pair<double, double> expected_parts(const FrameStats& gpu_frame, const Fram
 
 std::optional<Comparison> FrameComparisons::compare(const RenderResult& gpu_frame, const RenderResult& reference,
                                                     const SceneAnalysis* analysis, SceneMeasurements& measurements,
-                                                    const RenderResult* deeper, std::optional<std::uint64_t> view) {
+                                                    const RenderResult* deeper, std::optional<std::uint64_t> view,
+                                                    const RenderResult* partner) {
     if (gpu_frame.frame.width != reference.frame.width || gpu_frame.frame.height != reference.frame.height) return std::nullopt;
+    const bool quiet = usable_reference(reference.stats);
+    if (!quiet && !partner) return std::nullopt;
     Comparison c;
     c.method = gpu_frame.stats.method;
     c.preset = gpu_frame.stats.preset;
@@ -111,13 +148,44 @@ std::optional<Comparison> FrameComparisons::compare(const RenderResult& gpu_fram
     // 16-sample reference of its one bounce reads 0.032 where 0.0086 is expected of the noise and its
     // own error is 0.0016 (0.012 before the cross term): the bound, about 0.018, is under the prior
     // (0.028) that otherwise stands until a quieter reference comes.
-    c.noise_bound = drowned && view && c.rel_mse >= 0.0 && c.bounce_gap == 0.0 && extra_light == 0.0 &&
-                    modelled_bounces("reference", reference.stats.knobs) == c.bounces;
-    if (drowned && !c.noise_bound) {
+    const bool own_count = view && c.rel_mse >= 0.0 && c.bounce_gap == 0.0 && extra_light == 0.0 &&
+                           modelled_bounces("reference", reference.stats.knobs) == c.bounces;
+    // Drowned, or of too few samples for the noise model, and with a second draw of the reference's
+    // bounce count: what the two draws estimate, without their noise (Comparison::cross_estimate).
+    // In the street the noise added 2.5 times what its statistic said to isr draft's relMSE against
+    // a 16-sample reference of its one bounce (0.032, where its own error is 0.0104); against the
+    // 6 samples before it and the 10 after them, the estimate reads 0.0107 +- 0.0013.
+    if ((drowned || !quiet) && own_count && partner && partner != &reference) {
+        const bool reference_first = knob(reference.stats, "spp", 0.0) < knob(partner->stats, "spp", 0.0);
+        const RenderResult& fewer = reference_first ? reference : *partner;
+        const RenderResult& more = reference_first ? *partner : reference;
+        if (const auto draws = independent_draws(fewer, more)) {
+            image::Frame both = more.frame;  // the draws' union weighs the differences
+            if (knob(fewer.stats, "seed", 1.0) != knob(more.stats, "seed", 1.0)) {
+                const double f = knob(fewer.stats, "spp", 0.0), m = knob(more.stats, "spp", 0.0);
+                for (std::size_t i = 0; i < both.rgba.size(); ++i) {
+                    if (i % 4 != 3) both.rgba[i] = static_cast<float>((f * fewer.frame.rgba[i] + m * more.frame.rgba[i]) / (f + m));
+                }
+            }
+            const image::CrossEstimate estimate = image::cross_rel_mse(gpu_frame.frame, draws->first, draws->second, both);
+            if (estimate.pixels > 0 && 2.0 * estimate.standard_error <= kMaxCrossSpread * estimate.rel_mse) {
+                c.cross_estimate = true;
+                c.cross_rel_mse = estimate.rel_mse;
+                c.cross_standard_error = estimate.standard_error;
+            }
+        }
+    }
+    if (!quiet && !c.cross_estimate) return std::nullopt;  // nothing known: the preset may be probed again
+    c.noise_bound = drowned && !c.cross_estimate && own_count;
+    if (drowned && !c.noise_bound && !c.cross_estimate) {
         if (!(c.bounce_gap > c.reference_noise)) measurements.record_compared(c.method, c.preset, c.bounces);
         return std::nullopt;
     }
-    const double noise_taken = c.noise_bound ? kBoundNoiseShare * c.reference_noise : c.reference_noise;
+    // What is taken out of the relMSE: the noise expected, half of it for a bound, or for a cross
+    // estimate all but the estimate plus one standard error.
+    const double noise_taken = c.cross_estimate ? c.rel_mse - (c.cross_rel_mse + c.cross_standard_error)
+                               : c.noise_bound  ? kBoundNoiseShare * c.reference_noise
+                                                : c.reference_noise;
     measurements.record_compared(c.method, c.preset, c.bounces);
     // Against the frame of more bounces that the reference is a prefix of (the same paths, gone on),
     // the part of the frame's error that lies where the later bounces' light is. The error model adds
@@ -181,8 +249,10 @@ std::optional<Comparison> FrameComparisons::compare(const RenderResult& gpu_fram
     const bool bound = extra_light > 0.0 || c.noise_bound;
     if (extra_light > 0.0) c.own_error = std::pow(std::sqrt(std::max(c.own_error, 0.0)) + std::sqrt(extra_light), 2.0);
     if (view && !bound) {
+        // What is uncertain of it: the noise taken out, or a cross estimate's two standard errors.
+        const double uncertain = c.cross_estimate ? 2.0 * c.cross_standard_error : c.reference_noise;
         measurements.record_own_estimate(c.method, c.preset, c.bounces, c.own_error, *view,
-                                         c.reference_noise + c.bounce_gap + c.cross_beyond);
+                                         uncertain + c.bounce_gap + c.cross_beyond);
     } else {
         measurements.record_own_error(c.method, c.preset, c.bounces, c.own_error, bound ? view : std::nullopt);
     }
@@ -266,19 +336,19 @@ std::shared_ptr<const RenderResult> FrameComparisons::best_reference(const Frame
 std::vector<Comparison> FrameComparisons::add(std::uint64_t view, std::shared_ptr<const RenderResult> frame,
                                               const SceneAnalysis* analysis, SceneMeasurements& measurements) {
     const FrameStats& stats = frame->stats;
-    const bool is_reference = usable_reference(stats);
+    const bool is_reference = usable_draw(stats);
     if (!is_reference && !usable_gpu_frame(stats, analysis)) return {};
     // A reference arrives with its frames of fewer bounces: each a reference of its own bounce count.
     std::vector<std::shared_ptr<const RenderResult>> incoming;
     if (is_reference) {
         for (const auto& byproduct : frame->byproducts) {
-            if (usable_reference(byproduct->stats)) incoming.push_back(byproduct);
+            if (usable_draw(byproduct->stats)) incoming.push_back(byproduct);
         }
     }
     incoming.push_back(frame);
     std::vector<std::pair<std::shared_ptr<const RenderResult>, std::shared_ptr<const RenderResult>>> calibrations;
     struct Pending {
-        std::shared_ptr<const RenderResult> gpu_frame, reference, deeper;
+        std::shared_ptr<const RenderResult> gpu_frame, reference, deeper, partner;
     };
     std::vector<Pending> to_compare;
     {
@@ -286,12 +356,30 @@ std::vector<Comparison> FrameComparisons::add(std::uint64_t view, std::shared_pt
         if (view_ != view) {
             view_ = view;
             references_.clear();
+            draws_.clear();
             gpu_frames_.clear();
         }
         if (is_reference) {
             std::vector<std::shared_ptr<const RenderResult>> kept_now;
             for (const auto& reference : incoming) {
                 const int bounces = modelled_bounces("reference", reference->stats.knobs);
+                auto& draws = draws_[bounces];
+                draws.push_back(reference);
+                std::stable_sort(draws.begin(), draws.end(), [](const auto& a, const auto& b) {
+                    return knob(a->stats, "spp", 0.0) > knob(b->stats, "spp", 0.0);
+                });
+                if (draws.size() > kMaxDraws) draws.pop_back();
+                if (!usable_reference(reference->stats)) {
+                    // Too few samples to be a reference alone: with a second draw, a cross estimate
+                    // of the GPU frames of its bounce count.
+                    if (std::find(draws.begin(), draws.end(), reference) == draws.end()) continue;
+                    if (const auto partner = partner_of(*reference)) {
+                        for (const auto& [key, kept] : gpu_frames_) {
+                            if (std::get<2>(key) == bounces) to_compare.push_back({kept.frame, reference, deeper_than(*reference), partner});
+                        }
+                    }
+                    continue;
+                }
                 // The noise calibration's partner: a kept reference of the same bounce count pairs best
                 // (no bounce gap, and of one seed, nested); else the one with the most samples.
                 std::shared_ptr<const RenderResult> partner;
@@ -316,22 +404,28 @@ std::vector<Comparison> FrameComparisons::add(std::uint64_t view, std::shared_pt
                 const auto& gpu_frame = kept.frame;
                 const auto best = best_reference(gpu_frame->stats, analysis, measurements);
                 if (std::find(kept_now.begin(), kept_now.end(), best) != kept_now.end()) {
-                    to_compare.push_back({gpu_frame, best, deeper_than(*best)});
+                    to_compare.push_back({gpu_frame, best, deeper_than(*best), partner_of(*best)});
                 }
             }
         } else {
             const std::tuple key{stats.method, stats.preset, modelled_bounces(stats.method, stats.knobs)};
             if (gpu_frames_.size() >= kMaxFrames && !gpu_frames_.count(key)) drop_a_gpu_frame();
             gpu_frames_[key] = {frame, ++added_};
-            if (auto reference = best_reference(stats, analysis, measurements)) {
-                to_compare.push_back({frame, reference, deeper_than(*reference)});
+            const auto reference = best_reference(stats, analysis, measurements);
+            if (reference) to_compare.push_back({frame, reference, deeper_than(*reference), partner_of(*reference)});
+            // Draws of its own bounce count too few samples to be references: their cross estimate.
+            const int bounces = std::get<2>(key);
+            if (const auto draws = draws_.find(bounces); draws != draws_.end() && !draws->second.empty() &&
+                                                         !usable_reference(draws->second.front()->stats)) {
+                const auto& draw = draws->second.front();
+                if (const auto partner = partner_of(*draw)) to_compare.push_back({frame, draw, deeper_than(*draw), partner});
             }
         }
     }
     for (const auto& [fewer, more] : calibrations) calibrate_noise(*fewer, *more, analysis, measurements);
     std::vector<Comparison> made;
-    for (const auto& [gpu_frame, reference, deeper] : to_compare) {
-        if (auto c = compare(*gpu_frame, *reference, analysis, measurements, deeper.get(), view)) {
+    for (const auto& [gpu_frame, reference, deeper, partner] : to_compare) {
+        if (auto c = compare(*gpu_frame, *reference, analysis, measurements, deeper.get(), view, partner.get())) {
             log::info("planner", "{} {} at {} bounces against this view's {}-bounce reference: relMSE {:.4f}, {}own error {:.4f}{}",
                       c->method, c->preset, c->bounces, modelled_bounces("reference", reference->stats.knobs), c->rel_mse,
                       deeper ? fmt::format("against the {}-bounce frame it was traced with (which adds {:.4f}) {:+.4f} "
@@ -341,7 +435,11 @@ std::vector<Comparison> FrameComparisons::add(std::uint64_t view, std::shared_pt
                              : "",
                       c->own_error,
                       c->noise_bound ? fmt::format(" at most (the reference's noise, {:.4f}, over a quarter of the relMSE: half of it taken out)",
-                                                   c->reference_noise) : "");
+                                                   c->reference_noise)
+                      : c->cross_estimate ? fmt::format(" (from two draws of {} and {} samples: {:.4f} +- {:.4f} without their noise)",
+                                                        knob(partner->stats, "spp", 0.0), knob(reference->stats, "spp", 0.0),
+                                                        c->cross_rel_mse, c->cross_standard_error)
+                                          : "");
             made.push_back(std::move(*c));
         }
     }
@@ -366,6 +464,25 @@ std::shared_ptr<const RenderResult> FrameComparisons::deeper_than(const RenderRe
         for (const auto& byproduct : kept->second->byproducts) {
             if (byproduct.get() == &reference) return kept->second;
         }
+    }
+    // A draw of too few samples to be kept as a reference came from a trace of its own.
+    for (auto kept = draws_.rbegin(); kept != draws_.rend() && kept->first > bounces; ++kept) {
+        for (const auto& draw : kept->second) {
+            for (const auto& byproduct : draw->byproducts) {
+                if (byproduct.get() == &reference) return draw;
+            }
+        }
+    }
+    return nullptr;
+}
+
+std::shared_ptr<const RenderResult> FrameComparisons::partner_of(const RenderResult& reference) const {
+    const auto draws = draws_.find(modelled_bounces("reference", reference.stats.knobs));
+    if (draws == draws_.end()) return nullptr;
+    for (const auto& draw : draws->second) {  // the most samples first
+        if (draw.get() == &reference) continue;
+        const bool fewer = knob(draw->stats, "spp", 0.0) < knob(reference.stats, "spp", 0.0);
+        if (fewer ? pairable(*draw, reference) : pairable(reference, *draw)) return draw;
     }
     return nullptr;
 }

@@ -15,7 +15,11 @@
 // GPU frames whose knobs are not their preset's (other than `bounces` and what the preset leaves to
 // the scene). Where the noise alone is too large a share, against a reference of the frame's own
 // bounce count, what is left once half the noise is taken out is recorded as a bound, not an
-// estimate (compare()).
+// estimate (compare()); where the view holds a second, independent draw of that reference's bounce
+// count (another seed's frame, or the seed's frame of fewer samples, whose later samples the first
+// holds apart), the two draws' cross estimate (image::cross_rel_mse) measures the frame without
+// their noise, and is recorded as an estimate where its standard error is small beside it. Draws of
+// under 16 samples measure a frame only so, as a pair.
 #pragma once
 
 #include "renderer/planning/costs.hpp"
@@ -29,6 +33,7 @@
 #include <optional>
 #include <string>
 #include <tuple>
+#include <utility>
 #include <vector>
 
 namespace bounce::planning {
@@ -58,6 +63,15 @@ struct Comparison {
     // a bound on the view's frame (SceneMeasurements::record_own_error) where it is under the
     // preset's prior; a quieter reference's estimate of the view supersedes it.
     bool noise_bound = false;
+    // Where the reference's noise drowns the rest (or the reference has under kMinReferenceSpp
+    // samples) and the view holds a second, independent draw of the reference's bounce count
+    // (independent_draws()): the frame's relMSE against what the two estimate, without their noise
+    // (image::cross_rel_mse), and its standard error. Taken where twice that error is at most
+    // kMaxCrossSpread of the estimate: the estimate plus one standard error stands in for the relMSE
+    // less the noise, and what is recorded is an estimate, not a bound.
+    bool cross_estimate = false;
+    double cross_rel_mse = 0.0;
+    double cross_standard_error = 0.0;
 };
 
 class FrameComparisons {
@@ -80,6 +94,18 @@ public:
 
     // Whether a frame's stats make it a reference to compare with, or a GPU frame to compare.
     static bool usable_reference(const FrameStats& stats);
+    // A reference frame that, with another draw of its view and bounce count, may measure a GPU frame
+    // by the two draws' cross estimate (Comparison::cross_estimate): usable_reference's conditions
+    // but any number of samples. The planner's reference plans for loose targets trace a few samples
+    // (3 and 6 in the street for 0.1 and 0.05); a pair of them measures a GPU frame probed beside them.
+    static bool usable_draw(const FrameStats& stats);
+    // Two independent draws of the image `fewer` and `more` estimate (reference frames of one size,
+    // bounce count and pixel positions), `fewer`'s first: of two seeds, the frames themselves; of one
+    // seed, `more` holds `fewer`'s samples (a sample draws from the seed, the pixel and its index
+    // alone), and its later samples alone are (m more - f fewer) / (m - f). nullopt where they are not
+    // such a pair.
+    static std::optional<std::pair<image::Frame, image::Frame>> independent_draws(const RenderResult& fewer,
+                                                                                 const RenderResult& more);
     // `analysis`: the scene's, for the knobs its presets leave to it (renderer/scene_knobs.hpp).
     static bool usable_gpu_frame(const FrameStats& stats, const SceneAnalysis* analysis = nullptr);
 
@@ -87,10 +113,15 @@ public:
     // view, where known: against a reference lacking light the frame has, what is recorded is a
     // bound on that view's frame, and of several bounds of one view the least holds
     // (SceneMeasurements::record_own_error).
+    // `partner`: another draw of the reference's view and bounce count (usable_draw()), for the
+    // cross estimate where the reference's noise drowns the comparison or the reference has under
+    // kMinReferenceSpp samples (then it is the only way to compare: without it, or where its spread
+    // is too wide, nothing is recorded).
     static std::optional<Comparison> compare(const RenderResult& gpu_frame, const RenderResult& reference,
                                              const SceneAnalysis* analysis, SceneMeasurements& measurements,
                                              const RenderResult* deeper = nullptr,
-                                             std::optional<std::uint64_t> view = std::nullopt);
+                                             std::optional<std::uint64_t> view = std::nullopt,
+                                             const RenderResult* partner = nullptr);
 
     // Two reference frames of one view, the second with at least kCalibrationSpan times the samples:
     // relMSE between them, less the light of the bounces one has beyond the other, over what their noise
@@ -116,6 +147,14 @@ public:
     static constexpr double kMaxNoiseShare = 0.25;
     // Of the noise expected, what a comparison it drowns takes out before it records a bound (compare()).
     static constexpr double kBoundNoiseShare = 0.5;
+    // The widest a cross estimate is taken: twice its standard error over the estimate. On the bench
+    // corpus (bench/cross_estimate, bench/results/corpus/cross_estimate.csv), of the comparisons the
+    // noise drowns, the estimates within this spread read 0.86 to 2.4 times the truth; the glossy
+    // gallery's (highlights a few samples miss, where the neighbourhood's median weighs them as dark)
+    // spread to 2 to 4 times the estimate and are left out.
+    static constexpr double kMaxCrossSpread = 0.5;
+    // Draws kept per bounce count, the most samples first.
+    static constexpr std::size_t kMaxDraws = 3;
 
 private:
     // The kept reference of the most bounces whose byproduct `reference` is; null if none.
@@ -130,6 +169,10 @@ private:
     std::mutex mutex_;
     std::optional<std::uint64_t> view_;
     std::map<int, std::shared_ptr<const RenderResult>> references_;  // by bounce count
+    std::map<int, std::vector<std::shared_ptr<const RenderResult>>> draws_;  // usable_draw(), by bounce count
+    // Of the view's draws of `reference`'s bounce count, the one of most samples that is independent
+    // of it or that it holds (independent_draws()); null if none.
+    std::shared_ptr<const RenderResult> partner_of(const RenderResult& reference) const;
     // Where the view's GPU frames are full, the one to drop for a new one: the oldest whose bounces a
     // kept reference has (its own error is measured), else the oldest. A frame of more bounces than
     // any reference so far has only a bound on its own error, which a deeper reference can tighten:

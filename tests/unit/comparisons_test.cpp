@@ -14,6 +14,7 @@
 #include <gtest/gtest.h>
 
 #include <limits>
+#include <random>
 
 #include <algorithm>
 #include <cmath>
@@ -670,6 +671,144 @@ TEST(FrameComparisons, ANoiseOverAQuarterOfTheRelMseLeavesABoundNotAnEstimate) {
     ASSERT_EQ(estimate.size(), 1u);
     EXPECT_FALSE(estimate[0].noise_bound);
     EXPECT_NEAR(estimated.own_error("cssm", "low", 4)->rel_mse, estimate[0].rel_mse - estimate[0].reference_noise, 1e-12);
+}
+
+// A 48x48 frame of `value` plus noise uniform in [-spread, spread] per pixel (on every channel
+// alike), drawn from `seed`; no noise where `spread` is 0.
+image::Frame noisy_image(float value, float spread, unsigned seed) {
+    image::Frame image;
+    image.width = image.height = 48;
+    image.rgba.assign(48 * 48 * 4, value);
+    std::mt19937 draw(seed);
+    std::uniform_real_distribution<float> noise(-spread, spread);
+    for (std::size_t i = 0; i < image.rgba.size(); i += 4) {
+        const float n = spread > 0.0f ? noise(draw) : 0.0f;
+        for (int c = 0; c < 3; ++c) image.rgba[i + c] += n;
+        image.rgba[i + 3] = 1.0f;
+    }
+    return image;
+}
+
+// `made` with `image` in place of its frame.
+std::shared_ptr<const RenderResult> with_image(std::shared_ptr<const RenderResult> made, const image::Frame& image) {
+    auto result = std::make_shared<RenderResult>(*made);
+    result->frame = image;
+    return result;
+}
+
+// Draws of an image of 1.0 whose samples have variance 0.5 per value (the statistic says so too): of
+// `spp` samples, noise of variance 0.5 / spp, uniform in +-sqrt(1.5 / spp).
+image::Frame samples_of(double spp, unsigned seed) { return noisy_image(1.0f, static_cast<float>(std::sqrt(1.5 / spp)), seed); }
+
+// A seed's frame of 16 samples holds its frame of 6: the first 6 samples' mean and the next 10's.
+image::Frame sixteen_holding(const image::Frame& six, const image::Frame& ten) {
+    image::Frame sixteen = six;
+    for (std::size_t i = 0; i < sixteen.rgba.size(); ++i) {
+        if (i % 4 != 3) sixteen.rgba[i] = (6.0f * six.rgba[i] + 10.0f * ten.rgba[i]) / 16.0f;
+    }
+    return sixteen;
+}
+
+TEST(FrameComparisons, IndependentDrawsAreTheFramesOfTwoSeedsOrTheLaterSamplesOfOne) {
+    const image::Frame six = samples_of(6, 1), ten = samples_of(10, 2);
+    const auto fewer = with_image(reference(6, 0.5, {{"seed", 1}}), six);
+    const auto more = with_image(reference(16, 0.5, {{"seed", 1}}), sixteen_holding(six, ten));
+    const auto draws = FrameComparisons::independent_draws(*fewer, *more);
+    ASSERT_TRUE(draws);
+    for (std::size_t i = 0; i < ten.rgba.size(); ++i) {
+        if (i % 4 != 3) ASSERT_NEAR(draws->second.rgba[i], ten.rgba[i], 1e-5) << i;
+    }
+    EXPECT_EQ(draws->first.rgba, six.rgba);
+    const auto other_seed = with_image(reference(16, 0.5, {{"seed", 7}}), ten);
+    const auto apart = FrameComparisons::independent_draws(*fewer, *other_seed);
+    ASSERT_TRUE(apart);
+    EXPECT_EQ(apart->second.rgba, ten.rgba);
+    // Not a pair: one seed's frames of one count of samples (the same frame), other bounce counts,
+    // pixel positions or sizes, a frame that is not a reference's, or denoised.
+    EXPECT_FALSE(FrameComparisons::independent_draws(*fewer, *with_image(reference(6, 0.5, {{"seed", 1}}), six)));
+    EXPECT_FALSE(FrameComparisons::independent_draws(*fewer, *with_image(reference(16, 0.5, {{"seed", 7}, {"bounces", 2}}), ten)));
+    auto jittered = std::make_shared<RenderResult>(*other_seed);
+    jittered->stats.knobs["pixel_jitter"] = 1;
+    EXPECT_FALSE(FrameComparisons::independent_draws(*fewer, *jittered));
+    EXPECT_FALSE(FrameComparisons::independent_draws(*fewer, *reference(16, 0.5, {{"seed", 7}})));
+    EXPECT_FALSE(FrameComparisons::independent_draws(*fewer, *with_image(frame("cssm", "low", {}, 1.0f), ten)));
+    EXPECT_FALSE(FrameComparisons::independent_draws(*fewer, *with_image(reference(16, 0.5, {{"seed", 7}, {"denoise", 1}}), ten)));
+    EXPECT_TRUE(FrameComparisons::usable_draw(fewer->stats));
+    EXPECT_FALSE(FrameComparisons::usable_reference(fewer->stats));
+}
+
+// cssm low's frame of 1.1 at 4 bounces against draws of 1.0 at 4 bounces: its own error is 0.01 / 1.01.
+// Against the 16-sample frame the noise adds about 0.5 / 16 = 0.031 (the statistic expects 0.54 x that
+// before a pair has measured it): drowned. With the seed's 6-sample frame beside it, the two draws'
+// cross estimate reads the own error: within four standard errors and the 5% the union's noisy weights add
+// (Metrics.TheCrossEstimateOfTwoIndependentDrawsLeavesTheirNoiseOut), and recorded as an estimate of
+// it plus one standard error, not a bound. Without the second draw, no cross estimate.
+TEST(FrameComparisons, ADrownedComparisonWithASecondDrawOfItsSeedTakesTheirCrossEstimate) {
+    const SceneAnalysis analysis = made_up_analysis();
+    const double truth = 0.01 / 1.01;
+    const auto gpu_frame = with_image(frame("cssm", "low", {{"bounces", 4}}, 1.1f), noisy_image(1.1f, 0.0f, 0));
+    const image::Frame six = samples_of(6, 11), ten = samples_of(10, 12);
+    const auto sixteen = with_image(reference(16, 0.5, {{"seed", 1}}), sixteen_holding(six, ten));
+    {
+        SceneMeasurements measured;
+        FrameComparisons comparisons;
+        comparisons.add(3, gpu_frame, &analysis, measured);
+        // (a bound here would be over cssm low's prior: nothing is recorded)
+        for (const Comparison& c : comparisons.add(3, sixteen, &analysis, measured)) EXPECT_FALSE(c.cross_estimate);
+    }
+    SceneMeasurements measured;
+    FrameComparisons comparisons;
+    comparisons.add(3, gpu_frame, &analysis, measured);
+    EXPECT_TRUE(comparisons.add(3, with_image(reference(6, 0.5, {{"seed", 1}}), six), &analysis, measured).empty());
+    EXPECT_FALSE(measured.compared("cssm", "low"));
+    const auto made = comparisons.add(3, sixteen, &analysis, measured);
+    ASSERT_EQ(made.size(), 1u);
+    const Comparison& c = made[0];
+    EXPECT_GT(c.rel_mse, 3.0 * truth);
+    EXPECT_GT(c.reference_noise, FrameComparisons::kMaxNoiseShare * c.rel_mse);
+    EXPECT_TRUE(c.cross_estimate);
+    EXPECT_FALSE(c.noise_bound);
+    EXPECT_NEAR(c.cross_rel_mse, truth, 0.05 * truth + 4.0 * c.cross_standard_error);
+    EXPECT_LE(2.0 * c.cross_standard_error, FrameComparisons::kMaxCrossSpread * c.cross_rel_mse);
+    EXPECT_NEAR(c.own_error, c.cross_rel_mse + c.cross_standard_error, 1e-12);
+    ASSERT_TRUE(measured.own_error("cssm", "low", 4));
+    EXPECT_DOUBLE_EQ(measured.own_error("cssm", "low", 4)->rel_mse, c.own_error);
+    EXPECT_TRUE(measured.compared("cssm", "low"));
+    // An estimate: a bound of the view later does not replace it.
+    measured.record_own_error("cssm", "low", 4, 0.001, 3);
+    EXPECT_DOUBLE_EQ(measured.own_error("cssm", "low", 4)->rel_mse, c.own_error);
+}
+
+// Reference plans of loose targets trace few samples (the street's 3 and 6 for 0.1 and 0.05): one such
+// draw alone measures nothing, and leaves the frame's preset to be probed again; two of one seed
+// measure the frame by their cross estimate. Where that spreads too widely (a frame of next to no
+// error, the estimate 0 +- its noise), nothing is recorded either.
+TEST(FrameComparisons, DrawsOfTooFewSamplesToBeReferencesMeasureAFrameOnlyAsAPair) {
+    const SceneAnalysis analysis = made_up_analysis();
+    const image::Frame three = samples_of(3, 21), later_three = samples_of(3, 22);
+    image::Frame six = three;
+    for (std::size_t i = 0; i < six.rgba.size(); ++i) {
+        if (i % 4 != 3) six.rgba[i] = 0.5f * (three.rgba[i] + later_three.rgba[i]);
+    }
+    const auto measure = [&](float value, SceneMeasurements& measured) {
+        FrameComparisons comparisons;
+        comparisons.add(9, with_image(reference(3, 0.5, {{"seed", 1}}), three), &analysis, measured);
+        EXPECT_TRUE(comparisons.add(9, with_image(frame("cssm", "low", {{"bounces", 4}}, value), noisy_image(value, 0.0f, 0)),
+                                    &analysis, measured).empty());
+        EXPECT_FALSE(measured.compared("cssm", "low"));
+        return comparisons.add(9, with_image(reference(6, 0.5, {{"seed", 1}}), six), &analysis, measured);
+    };
+    SceneMeasurements measured;
+    const auto made = measure(1.3f, measured);  // own error 0.09 / 1.01
+    ASSERT_EQ(made.size(), 1u);
+    EXPECT_TRUE(made[0].cross_estimate);
+    EXPECT_NEAR(made[0].cross_rel_mse, 0.09 / 1.01, 0.05 * 0.09 / 1.01 + 4.0 * made[0].cross_standard_error);
+    EXPECT_TRUE(measured.own_error("cssm", "low", 4));
+    EXPECT_TRUE(measured.compared("cssm", "low"));
+    SceneMeasurements unmeasured;
+    EXPECT_TRUE(measure(1.0f, unmeasured).empty());
+    EXPECT_FALSE(unmeasured.own_error("cssm", "low", 4));
+    EXPECT_FALSE(unmeasured.compared("cssm", "low"));
 }
 
 TEST(FrameComparisons, NoisyDenoisedOrUnlikeFramesAreNotCompared) {

@@ -186,5 +186,69 @@ TEST(Metrics, TheNoiseOfADifferenceLeavesOutWhatIsNotFinite) {
     EXPECT_TRUE(std::isfinite(black) && black > 0.0);
 }
 
+
+// A frame of `value` plus noise uniform in [-spread, spread] per value (the same on each channel of
+// a pixel, as one path carries all three), drawn from `seed`.
+Frame noisy(int size, float value, float spread, unsigned seed) {
+    Frame frame = constant(size, size, value);
+    std::mt19937 draw(seed);
+    std::uniform_real_distribution<float> noise(-spread, spread);
+    for (std::size_t i = 0; i < frame.rgba.size(); i += 4) {
+        const float n = noise(draw);
+        for (int c = 0; c < 3; ++c) frame.rgba[i + c] += n;
+    }
+    return frame;
+}
+
+// Test 1.2 against an image of 1.0: relMSE 0.04 / 1.01. Two draws of the image with noise of
+// variance 0.6^2 / 3 = 0.12 per value: against either, the relMSE holds the noise too (about 0.16
+// more, four times the frame's own), and the products of the two differences average the noise out.
+// Weighed by the image itself the estimate's expectation is the relMSE exactly: within four standard
+// errors. Weighed by the draws' union (its neighbourhood's median, noisy itself), 1 / (w^2 + 0.01)
+// averages above its value at the mean (its curvature times the median's variance, about 0.011 here:
+// +3%): within 5% and four standard errors. Over twenty pairs of draws the estimates spread as their
+// standard errors say, within 30% (the spread of twenty draws is itself uncertain by about 16%).
+TEST(Metrics, TheCrossEstimateOfTwoIndependentDrawsLeavesTheirNoiseOut) {
+    const Frame image = constant(48, 48, 1.0f), test = constant(48, 48, 1.2f);
+    const double truth = 0.04 / 1.01;
+    std::vector<double> estimates;
+    double standard_errors = 0.0;
+    for (unsigned pair = 0; pair < 20; ++pair) {
+        const Frame a = noisy(48, 1.0f, 0.6f, 2 * pair + 1), b = noisy(48, 1.0f, 0.6f, 2 * pair + 2);
+        EXPECT_GT(compare(test, a).rel_mse, 3.0 * truth);
+        const CrossEstimate exact_weights = cross_rel_mse(test, a, b, image);
+        EXPECT_EQ(exact_weights.pixels, 48u * 48u);
+        EXPECT_NEAR(exact_weights.rel_mse, truth, 4.0 * exact_weights.standard_error) << pair;
+        EXPECT_LT(exact_weights.standard_error, 0.15 * truth);
+        Frame both = a;
+        for (std::size_t i = 0; i < both.rgba.size(); ++i) both.rgba[i] = 0.5f * (a.rgba[i] + b.rgba[i]);
+        const CrossEstimate estimate = cross_rel_mse(test, a, b, both);
+        EXPECT_NEAR(estimate.rel_mse, truth, 0.05 * truth + 4.0 * estimate.standard_error) << pair;
+        estimates.push_back(exact_weights.rel_mse);
+        standard_errors += exact_weights.standard_error / 20.0;
+    }
+    double mean = 0.0, spread = 0.0;
+    for (const double e : estimates) mean += e / 20.0;
+    for (const double e : estimates) spread += (e - mean) * (e - mean) / 19.0;
+    EXPECT_NEAR(std::sqrt(spread), standard_errors, 0.3 * standard_errors);
+}
+
+TEST(Metrics, TheCrossEstimateLeavesOutWhatIsNotFiniteAndRefusesOtherSizes) {
+    Frame a = constant(4, 4, 1.0f), b = a, test = constant(4, 4, 1.1f);
+    a.rgba[0] = std::numeric_limits<float>::quiet_NaN();
+    b.rgba[4 * 5 + 1] = std::numeric_limits<float>::infinity();
+    const CrossEstimate estimate = cross_rel_mse(test, a, b, constant(4, 4, 1.0f));
+    EXPECT_EQ(estimate.pixels, 14u);
+    EXPECT_NEAR(estimate.rel_mse, 0.01 / 1.01, 1e-6);
+    EXPECT_NEAR(estimate.standard_error, 0.0, 1e-9);
+    Frame nothing = constant(1, 1, 1.0f);
+    nothing.rgba[2] = std::numeric_limits<float>::quiet_NaN();
+    const CrossEstimate none = cross_rel_mse(constant(1, 1, 1.0f), nothing, nothing, nothing);
+    EXPECT_EQ(none.pixels, 0u);
+    EXPECT_TRUE(std::isinf(none.standard_error));
+    EXPECT_THROW(cross_rel_mse(test, a, constant(4, 3, 1.0f), a), Error);
+    EXPECT_THROW(cross_rel_mse(test, a, b, constant(3, 4, 1.0f)), Error);
+}
+
 }  // namespace
 }  // namespace bounce::image
