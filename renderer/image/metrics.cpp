@@ -125,13 +125,13 @@ CrossEstimate cross_rel_mse(const Frame& test, const Frame& a, const Frame& b, c
         sum_of_squares += pixel * pixel;
         ++estimate.pixels;
     }
-    if (estimate.pixels == 0) {
+    const double n = static_cast<double>(estimate.pixels);
+    estimate.rel_mse = estimate.pixels > 0 ? sum / n : 0.0;
+    if (estimate.pixels < 2) {  // one value or none has no spread to tell the estimate's error by
         estimate.standard_error = std::numeric_limits<double>::infinity();
         return estimate;
     }
-    const double n = static_cast<double>(estimate.pixels);
-    estimate.rel_mse = sum / n;
-    const double variance = estimate.pixels > 1 ? std::max(0.0, sum_of_squares - sum * sum / n) / (n - 1.0) : 0.0;
+    const double variance = std::max(0.0, sum_of_squares - sum * sum / n) / (n - 1.0);
     estimate.standard_error = std::sqrt(variance / n);
     return estimate;
 }

@@ -51,11 +51,12 @@ double rel_mse_difference_noise(const Frame& a, const Frame& b, const Frame& ref
 // as good as the model (on the bench corpus the noise added 0.6 to 2.5 times its statistic by scene).
 // The weight w is the median of `weights` over the value's 3x3 neighbourhood (Weight::
 // neighbourhood_median), a frame of the draws (their union): a pixel's own noisy value would correlate
-// with the products it weighs. `standard_error` is the spread of the pixels' means over the
+// with the products it weighs, and the median of nine values, the pixel's among them, follows it far
+// less (it still weighs a highlight the draws mostly miss as dark: bench/cross_estimate). `standard_error` is the spread of the pixels' means over the
 // three channels (one value each: the same paths carry them) over the square root of their count:
 // how far the estimate may be from its expectation by the draws' noise and the test's error's
-// own unevenness. Pixels non-finite in any frame are left out; none left gives 0 and an infinite
-// standard error. Throws Error on a size mismatch.
+// own unevenness. Pixels non-finite in any frame are left out; with fewer than two left, the
+// standard error is infinite (none: the estimate is 0). Throws Error on a size mismatch.
 struct CrossEstimate {
     double rel_mse = 0.0;
     double standard_error = 0.0;

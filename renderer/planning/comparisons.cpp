@@ -114,7 +114,7 @@ std::pair<double, double> expected_parts(const FrameStats& gpu_frame, const Fram
 std::optional<Comparison> FrameComparisons::compare(const RenderResult& gpu_frame, const RenderResult& reference,
                                                     const SceneAnalysis* analysis, SceneMeasurements& measurements,
                                                     const RenderResult* deeper, std::optional<std::uint64_t> view,
-                                                    const RenderResult* partner) {
+                                                    const RenderResult* partner, bool cross_only) {
     if (gpu_frame.frame.width != reference.frame.width || gpu_frame.frame.height != reference.frame.height) return std::nullopt;
     const bool quiet = usable_reference(reference.stats);
     if (!quiet && !partner) return std::nullopt;
@@ -175,7 +175,7 @@ std::optional<Comparison> FrameComparisons::compare(const RenderResult& gpu_fram
             }
         }
     }
-    if (!quiet && !c.cross_estimate) return std::nullopt;  // nothing known: the preset may be probed again
+    if ((!quiet || cross_only) && !c.cross_estimate) return std::nullopt;  // nothing new: the preset may be probed again
     c.noise_bound = drowned && !c.cross_estimate && own_count;
     if (drowned && !c.noise_bound && !c.cross_estimate) {
         if (!(c.bounce_gap > c.reference_noise)) measurements.record_compared(c.method, c.preset, c.bounces);
@@ -250,7 +250,10 @@ std::optional<Comparison> FrameComparisons::compare(const RenderResult& gpu_fram
     if (extra_light > 0.0) c.own_error = std::pow(std::sqrt(std::max(c.own_error, 0.0)) + std::sqrt(extra_light), 2.0);
     if (view && !bound) {
         // What is uncertain of it: the noise taken out, or a cross estimate's two standard errors.
-        const double uncertain = c.cross_estimate ? 2.0 * c.cross_standard_error : c.reference_noise;
+        // A cross estimate's cross term still comes from the one reference and the deeper frame it
+        // was traced with, whose noise is correlated and about the reference's: that is uncertain too.
+        const double uncertain = c.cross_estimate ? 2.0 * c.cross_standard_error + (deeper ? c.reference_noise : 0.0)
+                                                  : c.reference_noise;
         measurements.record_own_estimate(c.method, c.preset, c.bounces, c.own_error, *view,
                                          uncertain + c.bounce_gap + c.cross_beyond);
     } else {
@@ -349,6 +352,7 @@ std::vector<Comparison> FrameComparisons::add(std::uint64_t view, std::shared_pt
     std::vector<std::pair<std::shared_ptr<const RenderResult>, std::shared_ptr<const RenderResult>>> calibrations;
     struct Pending {
         std::shared_ptr<const RenderResult> gpu_frame, reference, deeper, partner;
+        bool cross_only = false;
     };
     std::vector<Pending> to_compare;
     {
@@ -360,15 +364,20 @@ std::vector<Comparison> FrameComparisons::add(std::uint64_t view, std::shared_pt
             gpu_frames_.clear();
         }
         if (is_reference) {
-            std::vector<std::shared_ptr<const RenderResult>> kept_now;
+            // Every draw first: a byproduct's comparison finds the trace it came from among them
+            // (deeper_than()).
             for (const auto& reference : incoming) {
-                const int bounces = modelled_bounces("reference", reference->stats.knobs);
-                auto& draws = draws_[bounces];
+                auto& draws = draws_[modelled_bounces("reference", reference->stats.knobs)];
                 draws.push_back(reference);
                 std::stable_sort(draws.begin(), draws.end(), [](const auto& a, const auto& b) {
                     return knob(a->stats, "spp", 0.0) > knob(b->stats, "spp", 0.0);
                 });
                 if (draws.size() > kMaxDraws) draws.pop_back();
+            }
+            std::vector<std::shared_ptr<const RenderResult>> kept_now;
+            for (const auto& reference : incoming) {
+                const int bounces = modelled_bounces("reference", reference->stats.knobs);
+                const auto& draws = draws_[bounces];
                 if (!usable_reference(reference->stats)) {
                     // Too few samples to be a reference alone: with a second draw, a cross estimate
                     // of the GPU frames of its bounce count.
@@ -396,6 +405,13 @@ std::vector<Comparison> FrameComparisons::add(std::uint64_t view, std::shared_pt
                 if (!kept || knob(kept->stats, "spp", 0.0) < knob(reference->stats, "spp", 0.0)) {
                     kept = reference;
                     kept_now.push_back(reference);
+                } else if (std::find(draws.begin(), draws.end(), reference) != draws.end() && partner_of(*kept) == reference) {
+                    // Not kept, but the kept one's partner now: the frames it measures, again, by the pair.
+                    for (const auto& [key, gpu] : gpu_frames_) {
+                        if (best_reference(gpu.frame->stats, analysis, measurements) == kept) {
+                            to_compare.push_back({gpu.frame, kept, deeper_than(*kept), reference, true});
+                        }
+                    }
                 }
             }
             // Each GPU frame is compared with the reference that leaves the least of its relMSE not
@@ -424,8 +440,8 @@ std::vector<Comparison> FrameComparisons::add(std::uint64_t view, std::shared_pt
     }
     for (const auto& [fewer, more] : calibrations) calibrate_noise(*fewer, *more, analysis, measurements);
     std::vector<Comparison> made;
-    for (const auto& [gpu_frame, reference, deeper, partner] : to_compare) {
-        if (auto c = compare(*gpu_frame, *reference, analysis, measurements, deeper.get(), view, partner.get())) {
+    for (const auto& [gpu_frame, reference, deeper, partner, cross_only] : to_compare) {
+        if (auto c = compare(*gpu_frame, *reference, analysis, measurements, deeper.get(), view, partner.get(), cross_only)) {
             log::info("planner", "{} {} at {} bounces against this view's {}-bounce reference: relMSE {:.4f}, {}own error {:.4f}{}",
                       c->method, c->preset, c->bounces, modelled_bounces("reference", reference->stats.knobs), c->rel_mse,
                       deeper ? fmt::format("against the {}-bounce frame it was traced with (which adds {:.4f}) {:+.4f} "

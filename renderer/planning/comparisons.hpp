@@ -116,12 +116,13 @@ public:
     // `partner`: another draw of the reference's view and bounce count (usable_draw()), for the
     // cross estimate where the reference's noise drowns the comparison or the reference has under
     // kMinReferenceSpp samples (then it is the only way to compare: without it, or where its spread
-    // is too wide, nothing is recorded).
+    // is too wide, nothing is recorded). `cross_only`: nothing but a cross estimate is recorded or
+    // returned (a frame measured before, compared again because its reference has a new partner).
     static std::optional<Comparison> compare(const RenderResult& gpu_frame, const RenderResult& reference,
                                              const SceneAnalysis* analysis, SceneMeasurements& measurements,
                                              const RenderResult* deeper = nullptr,
                                              std::optional<std::uint64_t> view = std::nullopt,
-                                             const RenderResult* partner = nullptr);
+                                             const RenderResult* partner = nullptr, bool cross_only = false);
 
     // Two reference frames of one view, the second with at least kCalibrationSpan times the samples:
     // relMSE between them, less the light of the bounces one has beyond the other, over what their noise

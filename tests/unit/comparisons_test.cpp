@@ -777,6 +777,17 @@ TEST(FrameComparisons, ADrownedComparisonWithASecondDrawOfItsSeedTakesTheirCross
     // An estimate: a bound of the view later does not replace it.
     measured.record_own_error("cssm", "low", 4, 0.001, 3);
     EXPECT_DOUBLE_EQ(measured.own_error("cssm", "low", 4)->rel_mse, c.own_error);
+    // The 16-sample frame first and another seed's 16 after it (not kept: no more samples): the
+    // kept one's partner, two draws as they are, and the frame is measured again by the pair.
+    SceneMeasurements apart;
+    FrameComparisons seeds;
+    seeds.add(4, gpu_frame, &analysis, apart);
+    for (const Comparison& bound : seeds.add(4, sixteen, &analysis, apart)) EXPECT_FALSE(bound.cross_estimate);
+    const auto again = seeds.add(4, with_image(reference(16, 0.5, {{"seed", 7}}), samples_of(16, 13)), &analysis, apart);
+    ASSERT_EQ(again.size(), 1u);
+    EXPECT_TRUE(again[0].cross_estimate);
+    EXPECT_NEAR(again[0].cross_rel_mse, truth, 0.05 * truth + 4.0 * again[0].cross_standard_error);
+    EXPECT_TRUE(apart.own_error("cssm", "low", 4));
 }
 
 // Reference plans of loose targets trace few samples (the street's 3 and 6 for 0.1 and 0.05): one such
@@ -805,6 +816,16 @@ TEST(FrameComparisons, DrawsOfTooFewSamplesToBeReferencesMeasureAFrameOnlyAsAPai
     EXPECT_NEAR(made[0].cross_rel_mse, 0.09 / 1.01, 0.05 * 0.09 / 1.01 + 4.0 * made[0].cross_standard_error);
     EXPECT_TRUE(measured.own_error("cssm", "low", 4));
     EXPECT_TRUE(measured.compared("cssm", "low"));
+    // A frame that comes after the pair is measured by it as it comes.
+    FrameComparisons after;
+    SceneMeasurements later;
+    after.add(10, with_image(reference(3, 0.5, {{"seed", 1}}), three), &analysis, later);
+    after.add(10, with_image(reference(6, 0.5, {{"seed", 1}}), six), &analysis, later);
+    const auto came = after.add(10, with_image(frame("cssm", "low", {{"bounces", 4}}, 1.3f), noisy_image(1.3f, 0.0f, 0)),
+                                &analysis, later);
+    ASSERT_EQ(came.size(), 1u);
+    EXPECT_TRUE(came[0].cross_estimate);
+    EXPECT_DOUBLE_EQ(came[0].cross_rel_mse, made[0].cross_rel_mse);
     SceneMeasurements unmeasured;
     EXPECT_TRUE(measure(1.0f, unmeasured).empty());
     EXPECT_FALSE(unmeasured.own_error("cssm", "low", 4));

@@ -207,7 +207,8 @@ Frame noisy(int size, float value, float spread, unsigned seed) {
 // errors. Weighed by the draws' union (its neighbourhood's median, noisy itself), 1 / (w^2 + 0.01)
 // averages above its value at the mean (its curvature times the median's variance, about 0.011 here:
 // +3%): within 5% and four standard errors. Over twenty pairs of draws the estimates spread as their
-// standard errors say, within 30% (the spread of twenty draws is itself uncertain by about 16%).
+// standard errors say, within 50% (the spread of twenty draws is itself uncertain by about 16%: three
+// times that).
 TEST(Metrics, TheCrossEstimateOfTwoIndependentDrawsLeavesTheirNoiseOut) {
     const Frame image = constant(48, 48, 1.0f), test = constant(48, 48, 1.2f);
     const double truth = 0.04 / 1.01;
@@ -230,7 +231,7 @@ TEST(Metrics, TheCrossEstimateOfTwoIndependentDrawsLeavesTheirNoiseOut) {
     double mean = 0.0, spread = 0.0;
     for (const double e : estimates) mean += e / 20.0;
     for (const double e : estimates) spread += (e - mean) * (e - mean) / 19.0;
-    EXPECT_NEAR(std::sqrt(spread), standard_errors, 0.3 * standard_errors);
+    EXPECT_NEAR(std::sqrt(spread), standard_errors, 0.5 * standard_errors);
 }
 
 TEST(Metrics, TheCrossEstimateLeavesOutWhatIsNotFiniteAndRefusesOtherSizes) {
@@ -246,6 +247,10 @@ TEST(Metrics, TheCrossEstimateLeavesOutWhatIsNotFiniteAndRefusesOtherSizes) {
     const CrossEstimate none = cross_rel_mse(constant(1, 1, 1.0f), nothing, nothing, nothing);
     EXPECT_EQ(none.pixels, 0u);
     EXPECT_TRUE(std::isinf(none.standard_error));
+    const CrossEstimate one = cross_rel_mse(constant(1, 1, 1.1f), constant(1, 1, 1.0f), constant(1, 1, 1.0f), constant(1, 1, 1.0f));
+    EXPECT_EQ(one.pixels, 1u);
+    EXPECT_NEAR(one.rel_mse, 0.01 / 1.01, 1e-6);
+    EXPECT_TRUE(std::isinf(one.standard_error));
     EXPECT_THROW(cross_rel_mse(test, a, constant(4, 3, 1.0f), a), Error);
     EXPECT_THROW(cross_rel_mse(test, a, b, constant(3, 4, 1.0f)), Error);
 }
