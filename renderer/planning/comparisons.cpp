@@ -374,6 +374,7 @@ std::vector<Comparison> FrameComparisons::add(std::uint64_t view, std::shared_pt
                 });
                 if (draws.size() > kMaxDraws) draws.pop_back();
             }
+            trim_draws();
             std::vector<std::shared_ptr<const RenderResult>> kept_now;
             for (const auto& reference : incoming) {
                 const int bounces = modelled_bounces("reference", reference->stats.knobs);
@@ -490,6 +491,36 @@ std::shared_ptr<const RenderResult> FrameComparisons::deeper_than(const RenderRe
         }
     }
     return nullptr;
+}
+
+void FrameComparisons::trim_draws() {
+    for (;;) {
+        // Every draw but each count's first usable reference (the count's reference, kept as such).
+        std::vector<std::pair<int, std::size_t>> extra;
+        for (const auto& [bounces, draws] : draws_) {
+            bool reference_seen = false;
+            for (std::size_t i = 0; i < draws.size(); ++i) {
+                if (!reference_seen && usable_reference(draws[i]->stats)) {
+                    reference_seen = true;
+                    continue;
+                }
+                extra.emplace_back(bounces, i);
+            }
+        }
+        if (extra.size() <= kMaxExtraDraws) return;
+        const auto fewest = std::min_element(extra.begin(), extra.end(), [&](const auto& a, const auto& b) {
+            return knob(draws_[a.first][a.second]->stats, "spp", 0.0) < knob(draws_[b.first][b.second]->stats, "spp", 0.0);
+        });
+        auto& draws = draws_[fewest->first];
+        draws.erase(draws.begin() + static_cast<std::ptrdiff_t>(fewest->second));
+    }
+}
+
+std::size_t FrameComparisons::draws_held() const {
+    const std::lock_guard lock(mutex_);
+    std::size_t held = 0;
+    for (const auto& [bounces, draws] : draws_) held += draws.size();
+    return held;
 }
 
 std::shared_ptr<const RenderResult> FrameComparisons::partner_of(const RenderResult& reference) const {

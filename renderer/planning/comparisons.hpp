@@ -156,6 +156,13 @@ public:
     static constexpr double kMaxCrossSpread = 0.5;
     // Draws kept per bounce count, the most samples first.
     static constexpr std::size_t kMaxDraws = 3;
+    // Draws kept over the view besides each bounce count's reference (the one of most samples, at
+    // least kMinReferenceSpp), the fewest samples dropped first: a client's reference frames of one
+    // sample at every bounce count would otherwise hold three frames a count (a 4096x4096 frame is
+    // 268 MB).
+    static constexpr std::size_t kMaxExtraDraws = 4;
+    // The reference frames the view holds (tests).
+    std::size_t draws_held() const;
 
 private:
     // The kept reference of the most bounces whose byproduct `reference` is; null if none.
@@ -167,13 +174,14 @@ private:
     std::shared_ptr<const RenderResult> best_reference(const FrameStats& gpu_frame, const SceneAnalysis* analysis,
                                                        const SceneMeasurements& measurements) const;
 
-    std::mutex mutex_;
+    mutable std::mutex mutex_;
     std::optional<std::uint64_t> view_;
     std::map<int, std::shared_ptr<const RenderResult>> references_;  // by bounce count
     std::map<int, std::vector<std::shared_ptr<const RenderResult>>> draws_;  // usable_draw(), by bounce count
     // Of the view's draws of `reference`'s bounce count, the one of most samples that is independent
     // of it or that it holds (independent_draws()); null if none.
     std::shared_ptr<const RenderResult> partner_of(const RenderResult& reference) const;
+    void trim_draws();  // to kMaxExtraDraws
     // Where the view's GPU frames are full, the one to drop for a new one: the oldest whose bounces a
     // kept reference has (its own error is measured), else the oldest. A frame of more bounces than
     // any reference so far has only a bound on its own error, which a deeper reference can tighten:

@@ -832,6 +832,35 @@ TEST(FrameComparisons, DrawsOfTooFewSamplesToBeReferencesMeasureAFrameOnlyAsAPai
     EXPECT_FALSE(unmeasured.compared("cssm", "low"));
 }
 
+// A client that sends reference frames of one sample at every bounce count holds at most
+// kMaxExtraDraws of them beside each count's reference, the fewest samples dropped first, and a
+// frame after them is still measured.
+TEST(FrameComparisons, ManyDrawsOfFewSamplesHoldABoundedNumberOfFrames) {
+    const SceneAnalysis analysis = made_up_analysis();
+    SceneMeasurements measured;
+    FrameComparisons comparisons;
+    for (int bounces = 0; bounces <= 12; ++bounces) {
+        for (const unsigned seed : {1u, 2u, 3u}) {
+            comparisons.add(6, with_image(reference(1, 0.5, {{"seed", seed}, {"bounces", bounces}}), samples_of(1, seed)),
+                            &analysis, measured);
+        }
+        comparisons.add(6, with_image(reference(64, 0.5, {{"seed", 9}, {"bounces", bounces}}), samples_of(64, 9)), &analysis,
+                        measured);
+    }
+    // Each count's 64-sample reference and at most kMaxExtraDraws others (a count's own limit may
+    // drop one more: kMaxDraws).
+    EXPECT_LE(comparisons.draws_held(), 13u + FrameComparisons::kMaxExtraDraws);
+    EXPECT_GE(comparisons.draws_held(), 13u + 1u);
+    // Draws of more samples displace those of one.
+    comparisons.add(6, with_image(reference(8, 0.5, {{"seed", 1}}), samples_of(8, 31)), &analysis, measured);
+    comparisons.add(6, with_image(reference(12, 0.5, {{"seed", 2}}), samples_of(12, 32)), &analysis, measured);
+    EXPECT_LE(comparisons.draws_held(), 13u + FrameComparisons::kMaxExtraDraws);
+    // The frame of a count is still measured: against its reference, or the pair of 8 and 12 samples.
+    const auto made = comparisons.add(6, with_image(frame("cssm", "low", {{"bounces", 4}}, 1.3f), noisy_image(1.3f, 0.0f, 0)),
+                                      &analysis, measured);
+    EXPECT_FALSE(made.empty());
+}
+
 TEST(FrameComparisons, NoisyDenoisedOrUnlikeFramesAreNotCompared) {
     const SceneAnalysis analysis = made_up_analysis();
     // The reference's noise over a quarter of the relMSE (0.54 x 0.006 = 0.0032 of 0.0099): the noise taken
