@@ -89,10 +89,7 @@ int main(int argc, char** argv) {
                         const int fewer = spps[i], more = spps[i + 1];
                         const image::Frame& a = draws[reference_bounces][fewer];
                         const image::Frame& m = draws[reference_bounces][more];
-                        image::Frame later = m;  // the samples after the first `fewer`
-                        for (std::size_t v = 0; v < later.rgba.size(); ++v) {
-                            if (v % 4 != 3) later.rgba[v] = static_cast<float>((more * m.rgba[v] - fewer * a.rgba[v]) / (more - fewer));
-                        }
+                        const image::Frame later = planning::FrameComparisons::later_samples(a, fewer, m, more);
                         const image::CrossEstimate cross = image::cross_rel_mse(gpu.frame, a, later, m);
                         const double naive = image::compare(gpu.frame, m).rel_mse;
                         const bool taken = 2.0 * cross.standard_error <= planning::FrameComparisons::kMaxCrossSpread * cross.rel_mse;

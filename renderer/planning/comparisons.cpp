@@ -54,13 +54,15 @@ std::optional<std::pair<image::Frame, image::Frame>> FrameComparisons::independe
                                                                                         const RenderResult& more) {
     if (!pairable(fewer, more)) return std::nullopt;
     if (knob(fewer.stats, "seed", 1.0) != knob(more.stats, "seed", 1.0)) return std::pair{fewer.frame, more.frame};
-    const double f = knob(fewer.stats, "spp", 0.0), m = knob(more.stats, "spp", 0.0);
-    image::Frame later = more.frame;
-    for (std::size_t i = 0; i < later.rgba.size(); ++i) {
-        if (i % 4 == 3) continue;
-        later.rgba[i] = static_cast<float>((m * more.frame.rgba[i] - f * fewer.frame.rgba[i]) / (m - f));
+    return std::pair{fewer.frame, later_samples(fewer.frame, knob(fewer.stats, "spp", 0.0), more.frame, knob(more.stats, "spp", 0.0))};
+}
+
+image::Frame FrameComparisons::later_samples(const image::Frame& fewer, double f, const image::Frame& more, double m) {
+    image::Frame later = more;
+    for (std::size_t i = 0; i < later.rgba.size() && i < fewer.rgba.size(); ++i) {
+        if (i % 4 != 3) later.rgba[i] = static_cast<float>((m * more.rgba[i] - f * fewer.rgba[i]) / (m - f));
     }
-    return std::pair{fewer.frame, std::move(later)};
+    return later;
 }
 
 bool FrameComparisons::usable_gpu_frame(const FrameStats& stats, const SceneAnalysis* analysis) {
@@ -454,7 +456,8 @@ std::vector<Comparison> FrameComparisons::add(std::uint64_t view, std::shared_pt
                       c->noise_bound ? fmt::format(" at most (the reference's noise, {:.4f}, over a quarter of the relMSE: half of it taken out)",
                                                    c->reference_noise)
                       : c->cross_estimate ? fmt::format(" (from two draws of {} and {} samples: {:.4f} +- {:.4f} without their noise)",
-                                                        knob(partner->stats, "spp", 0.0), knob(reference->stats, "spp", 0.0),
+                                                        std::min(knob(partner->stats, "spp", 0.0), knob(reference->stats, "spp", 0.0)),
+                                                        std::max(knob(partner->stats, "spp", 0.0), knob(reference->stats, "spp", 0.0)),
                                                         c->cross_rel_mse, c->cross_standard_error)
                                           : "");
             made.push_back(std::move(*c));
