@@ -1,5 +1,6 @@
 #include "renderer/planning/comparisons.hpp"
 
+#include "renderer/base/error.hpp"
 #include "renderer/base/log.hpp"
 #include "renderer/image/metrics.hpp"
 #include "renderer/methods/registry.hpp"
@@ -58,8 +59,11 @@ std::optional<std::pair<image::Frame, image::Frame>> FrameComparisons::independe
 }
 
 image::Frame FrameComparisons::later_samples(const image::Frame& fewer, double f, const image::Frame& more, double m) {
+    BOUNCE_CHECK(fewer.width == more.width && fewer.height == more.height && fewer.rgba.size() == more.rgba.size(),
+                 "cannot take a {}x{} frame's samples out of a {}x{} frame", fewer.width, fewer.height, more.width, more.height);
+    BOUNCE_CHECK(f >= 0.0 && m > f, "a frame of {} samples cannot hold one of {}", m, f);
     image::Frame later = more;
-    for (std::size_t i = 0; i < later.rgba.size() && i < fewer.rgba.size(); ++i) {
+    for (std::size_t i = 0; i < later.rgba.size(); ++i) {
         if (i % 4 != 3) later.rgba[i] = static_cast<float>((m * more.rgba[i] - f * fewer.rgba[i]) / (m - f));
     }
     return later;

@@ -107,6 +107,7 @@ public:
     static std::optional<std::pair<image::Frame, image::Frame>> independent_draws(const RenderResult& fewer,
                                                                                  const RenderResult& more);
     // Of one seed's frames of f and m > f samples, the mean of the m - f samples after the first f.
+    // Throws Error for frames of two sizes or m <= f.
     static image::Frame later_samples(const image::Frame& fewer, double f, const image::Frame& more, double m);
     // `analysis`: the scene's, for the knobs its presets leave to it (renderer/scene_knobs.hpp).
     static bool usable_gpu_frame(const FrameStats& stats, const SceneAnalysis* analysis = nullptr);

@@ -719,6 +719,11 @@ TEST(FrameComparisons, IndependentDrawsAreTheFramesOfTwoSeedsOrTheLaterSamplesOf
         if (i % 4 != 3) ASSERT_NEAR(draws->second.rgba[i], ten.rgba[i], 1e-5) << i;
     }
     EXPECT_EQ(draws->first.rgba, six.rgba);
+    image::Frame smaller = six;
+    smaller.width = smaller.height = 24;
+    smaller.rgba.resize(24 * 24 * 4);
+    EXPECT_THROW(FrameComparisons::later_samples(smaller, 6, ten, 16), Error);
+    EXPECT_THROW(FrameComparisons::later_samples(six, 16, ten, 16), Error);
     const auto other_seed = with_image(reference(16, 0.5, {{"seed", 7}}), ten);
     const auto apart = FrameComparisons::independent_draws(*fewer, *other_seed);
     ASSERT_TRUE(apart);
