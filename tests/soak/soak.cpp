@@ -392,7 +392,11 @@ private:
                 return make(MessageType::cancel, {{"id", 1}}, "cancel of an unknown id", {"ok"});
             // Invalid.
             case 11:
-                return make(static_cast<MessageType>(pick(0, 1) ? pick(9, 15) : pick(29, 65535)), {{"x", 1}},
+                // Between cancel (8) and scene.load (16), or past stream.update (29), the highest the
+                // protocol defines.
+                return make(static_cast<MessageType>(pick(0, 1) ? pick(9, 15)
+                                                                : pick(static_cast<int>(MessageType::stream_update) + 1, 65535)),
+                            {{"x", 1}},
                             "unknown message type", {"unsupported"});
             case 12:
                 return make(MessageType::render, {{"scene", "cornell"}, {"width", 0}, {"height", 8}}, "render width 0",
