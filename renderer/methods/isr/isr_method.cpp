@@ -257,11 +257,12 @@ MethodInfo method_info() {
         {"ism_open_below", 0, 1, false,
          "indirect visibility: above 0, ism_dilation is 0 where the scene analysis finds less than this share of the "
          "indirect light occluded (an open room) unless the request sets it"}};
-    auto preset = [](double rsm, double levels, double depth, double normal, double tau, double max_depth, double ism) {
+    auto preset = [](double rsm, double levels, double depth, double normal, double tau, double max_depth, double ism,
+                     double ism_points) {
         return KnobValues{{"rsm_size", rsm},     {"levels", levels}, {"depth_threshold", depth},
                           {"normal_threshold", normal}, {"mode", ISR_MODE_HIERARCHICAL}, {"tau", tau},
                           {"max_depth", max_depth}, {"shadow_map_size", 2048}, {"shadow_cascades", kPresetShadowCascades},
-                          {"ism_size", ism}, {"ism_points", ism > 0 ? 4096 : 1024}, {"ism_levels_below_top", 1},
+                          {"ism_size", ism}, {"ism_points", ism_points}, {"ism_levels_below_top", 1},
                           {"ism_dilation", 2}, {"ism_open_below", ism > 0 ? kIsmOpenBelow : 0.0}};
     };
     // A normal span of 0.2 at every preset to high: where a patch that gathers once spans normals
@@ -278,11 +279,20 @@ MethodInfo method_info() {
     // to 0.031, the box 0.117 to 0.023), at 1.75 to 2.1 times the time; 32^2 maps of 1024 points
     // did better on the three boxes with no wall inside (0.018 on the plain one) and worse on the
     // other seven scenes (docs/benchmarks.md, "isr's presets with visibility").
-    info.presets = {{"draft", preset(64, 5, 0.1, 0.2, 0.05, 2, 0)},
-                    {"low", preset(128, 5, 0.05, 0.2, 0.02, 3, 64)},
-                    {"medium", preset(128, 4, 0.03, 0.2, 0.01, 3, 64)},
-                    {"high", preset(256, 4, 0.02, 0.2, 0.005, 4, 64)},
-                    {"ultra", preset(256, 3, 0.01, 0.1, 0.002, 4, 64)}};
+    // The finer presets' clustering moves isr's error by under 10% on every bench scene; what moves it
+    // is how densely the maps sample occluders. So from medium up the maps splat more of the point
+    // cloud: 8192 points at medium, 16384 at high and ultra. Behind walls that takes up to half the
+    // error away (the doorway's ultra 0.0208 to 0.0107, the furnished room's high 0.0234 to 0.0166,
+    // the street's 0.0097 to 0.0072); it adds up to 9% in the open glossy box and 7% in the atrium,
+    // where a denser cloud occludes more than is there. The maps are kept across warm frames, so a
+    // warm frame costs the same (within 5%, 11% once); a frame that redraws them costs more on
+    // llvmpipe: after a light change 1.1 to 2.1 times as long, a cold one up to 2.5 times
+    // (docs/benchmarks.md, "Denser point clouds from medium up").
+    info.presets = {{"draft", preset(64, 5, 0.1, 0.2, 0.05, 2, 0, 1024)},
+                    {"low", preset(128, 5, 0.05, 0.2, 0.02, 3, 64, 4096)},
+                    {"medium", preset(128, 4, 0.03, 0.2, 0.01, 3, 64, 8192)},
+                    {"high", preset(256, 4, 0.02, 0.2, 0.005, 4, 64, 16384)},
+                    {"ultra", preset(256, 3, 0.01, 0.1, 0.002, 4, 64, 16384)}};
     info.create = [] { return std::make_unique<IsrMethod>(); };
     info.estimate = [](const EstimateInput& input) {
         MemoryEstimate estimate = direct_light_estimate(input);
