@@ -69,13 +69,16 @@ const MostChangeCost* most_change_cost(const std::string& method, const std::str
 // up: the calibration scene is the lightest, and heavier scenes redo more of their warm frame. On
 // llvmpipe (bench/change_margins.py on bench/results/corpus/frame_changes.csv and
 // cost_model_llvmpipe.json, both runs; vct high in the furnished room sets vct's). Much of it is the
-// noise of single frames on two cores.
+// noise of single frames on two cores. isr's against cost_model_llvmpipe_v12.json, the first
+// calibration whose isr frames splat imperfect shadow maps (2026-12-07): a scene's maps follow its
+// lights' views, not its pixels, and the furnished room's lamps make the most (isr medium there sets
+// it; before, against frames without maps, 0.6 to 0.7).
 struct ChangeMargin {
     const char* method;
     double lights, knobs, light_power;
 };
 constexpr ChangeMargin kChangeMargin[] = {
-    {"cssm", 0.6, 0.8, 0.6}, {"direct", 0.9, 1.3, 0.6}, {"isr", 0.6, 0.6, 0.7}, {"vct", 1.4, 1.4, 1.7}};
+    {"cssm", 0.6, 0.8, 0.6}, {"direct", 0.9, 1.3, 0.6}, {"isr", 4.0, 4.1, 4.1}, {"vct", 1.4, 1.4, 1.7}};
 
 }  // namespace
 
