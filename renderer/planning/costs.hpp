@@ -60,8 +60,9 @@ public:
     // samples each texel's direct light at 16 points, and double-sided surfaces have texels on both sides.
     // 10: cssm's nodes send light by their lobes, so nodes that face away in the mean gather too.
     // 11: isr low to ultra make imperfect shadow maps. 12: isr's maps splat 8192 points at medium,
-    // 16384 at high and ultra (its frames after a change cost more).
-    static constexpr int kVersion = 12;
+    // 16384 at high and ultra (its frames after a change cost more). 13: isr keeps its imperfect
+    // shadow maps where only the lights' intensities changed.
+    static constexpr int kVersion = 13;
 
     DeviceCosts() = default;
     explicit DeviceCosts(std::string renderer) : renderer_(std::move(renderer)) {}

@@ -86,11 +86,11 @@ void ImperfectShadowMaps::make_cloud(const scene::Scene& scene) {
 }
 
 bool ImperfectShadowMaps::build(const passes::PassContext& context, const VplTree& tree, const IsmSettings& settings,
-                                const std::function<void()>& interruption) {
-    if (tree.builds() == tree_builds_ && settings == settings_ && filled_) return false;
+                                std::uint64_t patches, const std::function<void()>& interruption) {
+    if (patches == patches_ && settings == settings_ && filled_) return false;
     gpu::GpuTimers::Scope timing(context.timers, "isr_imperfect_shadow_maps");
     settings_ = settings;
-    tree_builds_ = tree.builds();
+    patches_ = patches;
     ++builds_;
     if (!cloud_) make_cloud(context.scene);
     level_ = map_level(tree.top_level(), settings);

@@ -31,11 +31,11 @@ public:
     // The tree level whose patches carry maps.
     static int map_level(int tree_top_level, const IsmSettings& settings);
 
-    // Splats and fills the maps when the tree was rebuilt since they were, or the settings changed;
-    // returns whether it did. Between batches of maps it calls `interruption` (which throws for a
-    // cancelled frame).
+    // Splats and fills the maps when `patches` (the content hash of what the tree's patch centres and
+    // poles depend on, IsrMethod's) changed since they were, or the settings did; returns whether it
+    // did. Between batches of maps it calls `interruption` (which throws for a cancelled frame).
     bool build(const passes::PassContext& context, const VplTree& tree, const IsmSettings& settings,
-               const std::function<void()>& interruption);
+               std::uint64_t patches, const std::function<void()>& interruption);
     // Binds the filled maps and sets isr/ism.glsl's uniforms (the tree's are VplTree::bind's).
     void bind(const gpu::ShaderProgram& program) const;
     // Frees the maps (a frame without visibility holds none); the next build() makes them again.
@@ -53,7 +53,7 @@ private:
     void set_uniforms(const gpu::ShaderProgram& program) const;
 
     IsmSettings settings_;
-    std::size_t tree_builds_ = 0;  // the tree's build count the maps were made from
+    std::uint64_t patches_ = 0;  // build()'s `patches` the maps were made for
     int level_ = 0;
     std::uint64_t maps_ = 0;
     float scene_radius_ = 1.0f;

@@ -1,5 +1,6 @@
 #include "renderer/methods/isr/isr_method.hpp"
 
+#include "renderer/base/hash.hpp"
 #include "renderer/gpu/counter_buffer.hpp"
 #include "renderer/methods/isr/imperfect_shadow_maps.hpp"
 #include "renderer/methods/isr/multires_buffer.hpp"
@@ -59,6 +60,7 @@ public:
         mode_ = frame.knob_int("mode");
         const int rsm_size = power_of_two_floor(frame.knob_int("rsm_size"));
         const bool maps_drawn = light_views_.render(frame, rsm_size);
+        if (maps_drawn) ++light_view_draws_;
         // The maps hold places, normals and albedo; each VPL takes its flux from its light as the
         // tree is built. So a change of the lights' colour or intensity alone rebuilds the tree over
         // the kept maps, without drawing them again.
@@ -71,7 +73,9 @@ public:
         const IsmSettings ism{frame.knob_int("ism_size"), frame.knob_int("ism_points"), frame.knob_int("ism_levels_below_top"),
                               frame.knob_int("ism_dilation")};
         visibility_ = makes_visibility_maps(ism.size, mode_);
-        if (visibility_) ism_.build(frame, tree_, ism, [&frame] { frame.interruption_point(); });
+        if (visibility_) {
+            ism_.build(frame, tree_, ism, patch_fingerprint(frame, rsm_size), [&frame] { frame.interruption_point(); });
+        }
         else if (ism_.bytes() > 0) ism_.release();
         if (mode_ != ISR_MODE_HIERARCHICAL && (tree_built || mode_ != cache_mode_ || finest_level_ != cache_level_)) {
             tree_.select(frame, mode_, finest_level_);
@@ -138,6 +142,22 @@ public:
     }
 
 private:
+    // What the tree's patch centres and poles, which the imperfect shadow maps are made at, depend on.
+    // They are flux-weighted means over each light's own view, so a change of a light's intensity
+    // alone scales every weight of its view alike and moves none of them (beyond float rounding): the
+    // maps are kept, as the light-view maps are. A change of colour reweighs texels of different
+    // albedo, and a light turned on or off changes which views there are: both make the maps again,
+    // as does anything that draws the light-view maps (lights or objects moved) or splits patches
+    // differently (the thresholds).
+    std::uint64_t patch_fingerprint(const FrameContext& frame, int rsm_size) const {
+        Hasher hash;
+        hash.add(passes::light_view_fingerprint(frame.scene, rsm_size, /*with_power=*/false));
+        hash.add(light_view_draws_);
+        for (const scene::Light& light : frame.scene.lights) hash.add(light.color);
+        hash.add(frame.knob("depth_threshold")).add(frame.knob("normal_threshold"));
+        return hash.value();
+    }
+
     // The gather, in draws of bounded work per fragment (GPU watchdogs, and software rasterizers'
     // loop limits, cut long draws short): VPL-cache ranges, or ranges of top patches whose whole
     // subtrees fit the same budget.
@@ -206,6 +226,7 @@ private:
     passes::LightViewMaps light_views_;
     VplTree tree_;
     std::uint64_t tree_lights_ = 0;  // light_view_fingerprint() with power, as the tree was last built
+    std::uint64_t light_view_draws_ = 0;  // how many times the light-view maps were drawn
     MultiresolutionBuffer multires_;
     ImperfectShadowMaps ism_;
     bool visibility_ = false;
