@@ -75,8 +75,9 @@ public:
         visibility_ = makes_visibility_maps(ism.size, mode_);
         if (visibility_) {
             ism_.build(frame, tree_, ism, patch_fingerprint(frame, rsm_size), [&frame] { frame.interruption_point(); });
+        } else if (ism_.bytes() > 0) {
+            ism_.release();
         }
-        else if (ism_.bytes() > 0) ism_.release();
         if (mode_ != ISR_MODE_HIERARCHICAL && (tree_built || mode_ != cache_mode_ || finest_level_ != cache_level_)) {
             tree_.select(frame, mode_, finest_level_);
             cache_mode_ = mode_;
@@ -300,8 +301,8 @@ MethodInfo method_info() {
     // to 0.031, the box 0.117 to 0.023), at 1.75 to 2.1 times the time; 32^2 maps of 1024 points
     // did better on the three boxes with no wall inside (0.018 on the plain one) and worse on the
     // other seven scenes (docs/benchmarks.md, "isr's presets with visibility").
-    // The finer presets' clustering moves isr's error by under 10% on every bench scene; what moves it
-    // is how densely the maps sample occluders. So from medium up the maps splat more of the point
+    // At 4096 points the finer presets' clustering moved isr's error by under 10% on every bench
+    // scene; what moves it most is how densely the maps sample occluders. So from medium up the maps splat more of the point
     // cloud: 8192 points at medium, 16384 at high and ultra. Behind walls that takes up to half the
     // error away (the doorway's ultra 0.0208 to 0.0107, the furnished room's high 0.0234 to 0.0166,
     // the street's 0.0097 to 0.0072); it adds up to 9% in the open glossy box and 7% in the atrium,
