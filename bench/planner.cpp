@@ -85,9 +85,23 @@ struct Options {
     // placement files (bench/results/*_placement.csv) are read from beside `corpus_results`.
     bool held_out = false;
     fs::path corpus_results = "bench/results/corpus";
+    // With --cornell, the bench's Cornell variants (bench/quality's scenes: the closed box, its glossy
+    // and indirectly lit versions, the thin wall and the doorway) in place of the corpus. None of them
+    // is in the corpus tables the priors come from, so every plan there is held out, but for isr
+    // where most indirect light is occluded (OwnErrorPriors::isr_occluded_largest, the variants' own).
+    bool cornell = false;
 };
 
+// The scenes a run plans: the corpus, or with --cornell the Cornell variants.
+std::vector<bench::BenchScene> planned_scenes(const Options& options) {
+    return options.cornell ? bench::quality_scenes() : bench::corpus_scenes();
+}
+
 constexpr std::string_view kBegin = "<!-- planner: bench/planner writes it -->";
+
+// The key the planned frames and the spot checks file the scene's view by (FrameComparisons::add,
+// record_spot_check): every compared frame here is of the scene's own camera at one size.
+constexpr std::uint64_t kView = 1;
 constexpr std::string_view kEnd = "<!-- end of planner -->";
 
 // A GPU idles at a fraction of its clock and raises it only after a while under load (an H200: 345
@@ -203,7 +217,7 @@ Measured render_plan(Renderer& renderer, SceneResources& resources, const scene:
     measured.scale = scale;
     if (kept_frame) *kept_frame = result.frame;
     if (comparisons && scale == 1.0) {
-        comparisons->add(1, std::make_shared<const RenderResult>(std::move(result)), &analysis, costs);
+        comparisons->add(kView, std::make_shared<const RenderResult>(std::move(result)), &analysis, costs);
     }
     return measured;
 }
@@ -326,10 +340,11 @@ int main(int argc, char** argv) {
         else if (flag == "--camera-as-warm") options.camera_as_warm = true;
         else if (flag == "--held-out") options.held_out = true;
         else if (flag == "--corpus-results") options.corpus_results = arguments.value();
+        else if (flag == "--cornell") options.cornell = true;
         else {
             std::fprintf(stderr,
                          "usage: bounce_bench_planner [--size N] [--reference-spp N] [--reference-bounces N] [--cache DIR] "
-                         "[--scene NAME]... [--errors E,E] [--budgets-ms T,T] [--passes N] [--no-relit] "
+                         "[--cornell] [--scene NAME]... [--errors E,E] [--budgets-ms T,T] [--passes N] [--no-relit] "
                          "[--no-moved | --camera-as-warm] "
                          "[--held-out [--corpus-results DIR]] [--out DIR] [--markdown FILE] "
                          "[--analysis-only [--analysis-spp N] [--analysis-size N] | --references-only]\n");
@@ -341,9 +356,15 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "bounce_bench_planner: --held-out needs an --out and a --markdown of its own\n");
         return 2;
     }
+    if (options.cornell && (options.held_out || options.out == Options{}.out || options.markdown == Options{}.markdown)) {
+        // The committed run is the corpus'; the Cornell variants are held out from its priors already.
+        std::fprintf(stderr, "bounce_bench_planner: --cornell needs an --out and a --markdown of its own, and no "
+                             "--held-out (no Cornell variant is in the corpus tables)\n");
+        return 2;
+    }
     try {
         if (options.analysis_only) {
-            for (const bench::BenchScene& bench_scene : bench::corpus_scenes()) {
+            for (const bench::BenchScene& bench_scene : planned_scenes(options)) {
                 AnalysisSettings settings;
                 settings.bounce_spp = options.analysis_spp;
                 settings.bounce_image_size = options.analysis_size;
@@ -361,7 +382,7 @@ int main(int argc, char** argv) {
             return 0;
         }
         if (options.references_only) {
-            for (const bench::BenchScene& bench_scene : bench::corpus_scenes()) {
+            for (const bench::BenchScene& bench_scene : planned_scenes(options)) {
                 if (!options.scenes.empty() &&
                     std::find(options.scenes.begin(), options.scenes.end(), bench_scene.name) == options.scenes.end()) {
                     continue;
@@ -385,7 +406,7 @@ int main(int argc, char** argv) {
         std::string analysis_md =
             "| scene | analysis ms | stopped error at 0 / 1 / 2 / 4 bounces | reference noise per sample (4 bounces) | "
             "occluded (weighted) | vct leaks at |\n|---|---|---|---|---|---|\n";
-        for (const bench::BenchScene& bench_scene : bench::corpus_scenes()) {
+        for (const bench::BenchScene& bench_scene : planned_scenes(options)) {
             if (!options.scenes.empty() &&
                 std::find(options.scenes.begin(), options.scenes.end(), bench_scene.name) == options.scenes.end()) {
                 continue;
@@ -486,7 +507,8 @@ int main(int argc, char** argv) {
                         }
                         const planning::SpotEstimate pixels_alone = planning::estimate(frame, at_truth);
                         planning::record_spot_check(costs, analysis.bounces.stopped_error, candidate.method,
-                                                    candidate.preset, candidate.knobs, *plan.spot_check, estimate);
+                                                    candidate.preset, candidate.knobs, *plan.spot_check, estimate,
+                                                    kView);
                         log::info("bench", "{} pass {}, {}: {} ({:.1f} ms): {}; measures {:.4f} ({:.4f} +- {:.4f} at "
                                   "the check's pixels against the truth)", bench_scene.name, pass, text, tried.label,
                                   tried.ms, planning::describe(*plan.spot_check, estimate), tried.rel_mse,
@@ -715,7 +737,8 @@ int main(int argc, char** argv) {
                                 holds, count, strictly);
         }
         std::ostringstream md;
-        md << kBegin << "\n\n## Budgets on the bench corpus (bench/planner)\n\n"
+        md << kBegin << "\n\n## Budgets on the " << (options.cornell ? "Cornell variants" : "bench corpus")
+           << " (bench/planner)\n\n"
            << "Written by `" << arguments.command() << "` on " << bench::today() << ".\n\n"
            << "- Machine: " << bench::machine_description() << "\n- GPU: " << renderer.gpu_info().summary() << "\n"
            << fmt::format("- Frames {0}x{0}, against the reference at {1} spp and {2} bounces through pixel centres; "

@@ -572,7 +572,8 @@ void RequestHandlers::try_checked_plans(const std::shared_ptr<Request>& request,
                 planning::estimate(result->frame, spot->estimates, order.spot_check->stopped_error);
             if (analysis) {
                 planning::record_spot_check(*entry.resources->measurements, analysis->bounces.stopped_error, frame.method,
-                                            frame.preset, frame.knobs, *order.spot_check, estimate);
+                                            frame.preset, frame.knobs, *order.spot_check, estimate,
+                                            view_key(entry.version, frame));
             }
             const bool passes = estimate.passes(order.checks_target);
             tried.push_back({{"method", frame.method},

@@ -179,7 +179,7 @@ double noise_of(const methods::reference::PixelEstimates& reference) {
 
 void record_spot_check(SceneMeasurements& measurements, const std::vector<double>& stopped_error, const std::string& method,
                        const std::string& preset, const methods::KnobValues& knobs, const SpotCheck& check,
-                       const SpotEstimate& estimate) {
+                       const SpotEstimate& estimate, std::optional<std::uint64_t> view) {
     const int bounces = modelled_bounces(method, knobs);
     if (bounces > check.bounces || estimate.non_finite > 0 || estimate.pixels == 0) return;
     const double lacking = BounceEnergy::at(stopped_error, bounces) - BounceEnergy::at(stopped_error, check.bounces);
@@ -188,7 +188,12 @@ void record_spot_check(SceneMeasurements& measurements, const std::vector<double
     // do not add.
     if (lacking > 0.5 * estimate.rel_mse) return;
     const double own = estimate.rel_mse + kSpotConfidence * estimate.standard_error - std::max(lacking, 0.0);
-    measurements.record_own_error(method, preset, bounces, std::max(own, 0.0));
+    if (view) {
+        measurements.record_own_estimate(method, preset, bounces, std::max(own, 0.0), *view,
+                                         kSpotConfidence * estimate.standard_error + std::max(lacking, 0.0));
+    } else {
+        measurements.record_own_error(method, preset, bounces, std::max(own, 0.0));
+    }
     measurements.record_compared(method, preset, bounces);
 }
 

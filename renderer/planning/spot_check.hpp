@@ -105,14 +105,20 @@ struct SpotReference {
 SpotReference trace_spot_reference(const scene::Scene& scene, const RenderRequest& frame, const SpotCheck& check,
                                    const std::atomic<bool>* cancelled = nullptr);
 
-// Records what a check read of a GPU plan as its own error on the scene (SceneMeasurements::
-// record_own_error), as a comparison with a reference frame would: the estimate plus
-// kSpotConfidence standard errors (the safe side of what it read), less the light of the bounces the
-// check's reference has beyond the plan's (the analysis'). Nothing where the plan models more
-// bounces than the check, whose reference then lacks light the plan has.
+// Records what a check read of a GPU plan as its own error on the scene, as a comparison with a
+// reference frame would: the estimate plus kSpotConfidence standard errors (the safe side of what it
+// read), less the light of the bounces the check's reference has beyond the plan's (the analysis').
+// Nothing where the plan models more bounces than the check, whose reference then lacks light the
+// plan has. With the `view` its frame was of (the key FrameComparisons files that view's frames by),
+// it is an estimate of that view's frame (SceneMeasurements::record_own_estimate, uncertain by the
+// standard errors added and the light taken out), which the view's bounds do not then raise: in the
+// indirectly lit Cornell box cssm draft at 8 bounces passed no check at 0.02 but read 0.038 of its
+// own, and a later comparison of the same view with a one-bounce reference, lacking 0.14 of light
+// the frame has, bounded it at 0.89; kept beside the check's, the bound priced it out of every time
+// budget after it (cssm draft measures 0.027 there). Without one, a figure of no view.
 void record_spot_check(SceneMeasurements& measurements, const std::vector<double>& stopped_error, const std::string& method,
                        const std::string& preset, const methods::KnobValues& knobs, const SpotCheck& check,
-                       const SpotEstimate& estimate);
+                       const SpotEstimate& estimate, std::optional<std::uint64_t> view = std::nullopt);
 
 // Whether a plan to try has been ruled out since the check was planned: the frames tried before it
 // recorded own errors (record_spot_check), and the scene now has one for the plan (at its bounce

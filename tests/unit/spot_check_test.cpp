@@ -261,6 +261,31 @@ TEST(SpotCheck, WhatACheckReadsIsRecordedAsThePlansOwnError) {
     EXPECT_FALSE(measured.own_error("cssm", "high", 6).has_value());
 }
 
+// A check of a view's frame is an estimate of that frame: a later bound on the same view, from a
+// reference lacking light the frame has, does not raise it (the indirectly lit Cornell box: cssm
+// draft at 8 bounces checked at 0.038, then bounded at 0.89 against a one-bounce reference, and the
+// bound priced it out of every time budget). A bound of another view still counts, and so does one
+// where the check was filed under no view.
+TEST(SpotCheck, ACheckOfAViewIsNotRaisedByThatViewsBounds) {
+    const std::vector<double> stopped = {0.5, 0.14, 0.035, 0.004, 0.0005, 0.0};
+    SpotCheck check;
+    check.bounces = 5;
+    const SpotEstimate read = reading(0.02, 0.004);
+    const double checked = 0.02 + kSpotConfidence * 0.004;  // the plan and the check both lack nothing to speak of
+    SceneMeasurements measured;
+    record_spot_check(measured, stopped, "cssm", "draft", {{"bounces", 5}}, check, read, /*view=*/7);
+    ASSERT_TRUE(measured.own_error("cssm", "draft", 5).has_value());
+    EXPECT_NEAR(measured.own_error("cssm", "draft", 5)->rel_mse, checked, 1e-12);
+    measured.record_own_error("cssm", "draft", 5, 0.89, /*bound_of_view=*/7);
+    EXPECT_NEAR(measured.own_error("cssm", "draft", 5)->rel_mse, checked, 1e-12);
+    measured.record_own_error("cssm", "draft", 5, 0.3, /*bound_of_view=*/8);
+    EXPECT_NEAR(measured.own_error("cssm", "draft", 5)->rel_mse, 0.3, 1e-12);
+
+    SceneMeasurements unfiled;
+    record_spot_check(unfiled, stopped, "cssm", "draft", {{"bounces", 5}}, check, read);
+    unfiled.record_own_error("cssm", "draft", 5, 0.89, /*bound_of_view=*/7);
+    EXPECT_NEAR(unfiled.own_error("cssm", "draft", 5)->rel_mse, 0.89, 1e-12);
+}
 // What a failed try recorded rules out the plans the planner would no longer offer: the preset at
 // fewer bounces (its own error read from the count measured above it), not another preset, and not
 // where what was read leaves room under the target.
