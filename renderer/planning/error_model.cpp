@@ -25,23 +25,23 @@ namespace {
 //     medium measured 0.18 of its prior, and low, promised as much, measures 0.062 where 0.011 was
 //     predicted: its coarser atlas misses the sun's patches);
 //   - else the prior.
-// Where the analysis finds most of the scene's indirect light occluded, isr's priors are those of
-// the Cornell variants (OwnErrorPriors::isr_occluded_largest); where vct's preset leaks
+// Where the analysis finds most of the scene's indirect light occluded, isr's and cssm's priors are
+// those of the Cornell variants (OwnErrorPriors::occluded_largest); where vct's preset leaks
 // (leaks_through_thin_walls), its priors are those of the bench's scenes where it leaks.
 std::pair<double, std::string> own_error(const SceneAnalysis& analysis, const std::string& method,
                                          const std::string& preset, int bounces, const SceneMeasurements* measured,
                                          const OwnErrorPriors& priors) {
-    const bool occluded_isr = analysis.visibility.mostly_occluded() && method == "isr";
+    const std::map<std::string, double>* occluded_table =
+        analysis.visibility.mostly_occluded() ? priors.occluded_largest(method) : nullptr;
+    const bool occluded = occluded_table && occluded_table->count(preset);
     const auto prior_of = [&](const std::string& name) {
-        if (occluded_isr) {
-            if (const auto it = priors.isr_occluded_largest.find(name); it != priors.isr_occluded_largest.end()) {
-                return it->second;
-            }
+        if (occluded_table) {
+            if (const auto it = occluded_table->find(name); it != occluded_table->end()) return it->second;
         }
         return priors.largest_of(method, name, bounces, leaks_through_thin_walls(analysis, method, name)).value_or(0.0);
     };
     const std::string bench =
-        "on " + (occluded_isr ? priors.occluded_source
+        "on " + (occluded ? priors.occluded_source
                  : leaks_through_thin_walls(analysis, method, preset) ? priors.leaking_source
                                                                       : priors.source_of(method, preset, bounces));
     const double prior = prior_of(preset);

@@ -100,21 +100,28 @@ TEST(PlannerPriors, VctsSecondBounceIsItsTwoBounceCorpusTable) {
     }
 }
 
-// Where most of a scene's indirect light is occluded, isr's presets with maps are promised the largest
-// error the Cornell variants measured of them (no corpus scene is that occluded), and the error model
-// says so.
-TEST(PlannerPriors, IsrWhereMostLightIsOccludedIsPromisedTheCornellVariantsLargest) {
+// Where most of a scene's indirect light is occluded, isr's presets with maps and cssm's presets are
+// promised the largest error the Cornell variants measured of them (no corpus scene is that
+// occluded), and the error model says so.
+TEST(PlannerPriors, WhereMostLightIsOccludedTheCornellVariantsLargestIsPromised) {
     const bench::CorpusErrors cornell = bench::read_corpus_errors(BOUNCE_SOURCE_DIR "/bench/results/quality.csv");
     const planning::OwnErrorPriors& committed = planning::OwnErrorPriors::bench();
     EXPECT_EQ(committed.isr_occluded_largest.size(), 4u);
-    for (const std::string preset : {"low", "medium", "high", "ultra"}) {
-        SCOPED_TRACE(preset);
-        const auto& by_scene = cornell.at({"isr", preset});
-        EXPECT_EQ(by_scene.size(), 5u);
-        double largest = 0.0;
-        for (const auto& [scene, error] : by_scene) largest = std::max(largest, error);
-        EXPECT_NEAR(committed.isr_occluded_largest.at(preset), largest, kRounding);
+    EXPECT_EQ(committed.cssm_occluded_largest.size(), 5u);
+    for (const std::string method : {"isr", "cssm"}) {
+        const std::map<std::string, double>* table = committed.occluded_largest(method);
+        ASSERT_NE(table, nullptr);
+        for (const auto& [preset, promised] : *table) {
+            SCOPED_TRACE(method + " " + preset);
+            const auto& by_scene = cornell.at({method, preset});
+            EXPECT_EQ(by_scene.size(), 5u);
+            double largest = 0.0;
+            for (const auto& [scene, error] : by_scene) largest = std::max(largest, error);
+            EXPECT_NEAR(promised, largest, kRounding);
+        }
     }
+    EXPECT_EQ(committed.occluded_largest("vct"), nullptr);
+    EXPECT_EQ(committed.occluded_largest("direct"), nullptr);
 }
 
 // Held out, a scene's own figures count neither in the largest nor in the median: each prior is the
@@ -263,6 +270,7 @@ TEST(PlannerPriors, ADeploymentsFileReplacesWhatItMeasuredAndKeepsTheRest) {
     EXPECT_EQ(again.vct_second_largest, bench.vct_second_largest);
     EXPECT_EQ(again.vct_second_typical, bench.vct_second_typical);
     EXPECT_EQ(again.isr_occluded_largest, bench.isr_occluded_largest);
+    EXPECT_EQ(again.cssm_occluded_largest, bench.cssm_occluded_largest);
     EXPECT_EQ(again.vct_leaking_largest, bench.vct_leaking_largest);
     EXPECT_EQ(again.vct_leaking_typical, bench.vct_leaking_typical);
     EXPECT_EQ(again.vct_second_leaking_largest, bench.vct_second_leaking_largest);
@@ -282,6 +290,7 @@ TEST(PlannerPriors, ADeploymentsFileReplacesWhatItMeasuredAndKeepsTheRest) {
     EXPECT_EQ(*ours.typical_of("cssm", "low"), 0.25);
     EXPECT_EQ(*ours.largest_of("cssm", "draft"), *bench.largest_of("cssm", "draft"));
     EXPECT_EQ(ours.isr_occluded_largest, bench.isr_occluded_largest);
+    EXPECT_EQ(ours.cssm_occluded_largest, bench.cssm_occluded_largest);
     EXPECT_EQ(ours.source_of("cssm", "low"), "our atria (atria.json)");
     // What the file did not measure is still the bench's, and said to be.
     EXPECT_EQ(ours.source_of("cssm", "draft"), "the bench scenes");
@@ -339,7 +348,7 @@ TEST(PlannerPriors, AMalformedFileIsRefusedNamingTheEntry) {
               "p.json: isr_occluded_largest.huge: unknown preset 'huge'");
     EXPECT_EQ(refusal({{"largets", {}}}),
               "p.json: unknown field 'largets' (known: source, largest, typical, vct_second_largest, "
-              "vct_second_typical, isr_occluded_largest, vct_leaking_largest, vct_leaking_typical, "
+              "vct_second_typical, isr_occluded_largest, cssm_occluded_largest, vct_leaking_largest, vct_leaking_typical, "
               "vct_second_leaking_largest, vct_second_leaking_typical)");
     EXPECT_EQ(refusal(nlohmann::json::array()), "p.json: expected an object, not array");
 
