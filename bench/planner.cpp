@@ -97,12 +97,15 @@ std::vector<bench::BenchScene> planned_scenes(const Options& options) {
     return options.cornell ? bench::quality_scenes() : bench::corpus_scenes();
 }
 
+// The corpus' block of docs/benchmarks.md, and the Cornell variants' (--cornell).
 constexpr std::string_view kBegin = "<!-- planner: bench/planner writes it -->";
+constexpr std::string_view kCornellBegin = "<!-- planner on the Cornell variants: bench/planner --cornell writes it -->";
 
 // The key the planned frames and the spot checks file the scene's view by (FrameComparisons::add,
 // record_spot_check): every compared frame here is of the scene's own camera at one size.
 constexpr std::uint64_t kView = 1;
 constexpr std::string_view kEnd = "<!-- end of planner -->";
+constexpr std::string_view kCornellEnd = "<!-- end of planner on the Cornell variants -->";
 
 // A GPU idles at a fraction of its clock and raises it only after a while under load (an H200: 345
 // against 1980 MHz). Right after the reference's CPU-only frames, an H200 took five times as long
@@ -356,10 +359,11 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "bounce_bench_planner: --held-out needs an --out and a --markdown of its own\n");
         return 2;
     }
-    if (options.cornell && (options.held_out || options.out == Options{}.out || options.markdown == Options{}.markdown)) {
-        // The committed run is the corpus'; the Cornell variants are held out from its priors already.
-        std::fprintf(stderr, "bounce_bench_planner: --cornell needs an --out and a --markdown of its own, and no "
-                             "--held-out (no Cornell variant is in the corpus tables)\n");
+    if (options.cornell && (options.held_out || options.out == Options{}.out)) {
+        // bench/results/planner.csv is the corpus'; the Cornell variants are held out from its priors
+        // already. Their block of the markdown is their own.
+        std::fprintf(stderr, "bounce_bench_planner: --cornell needs an --out of its own (its files are not the corpus' "
+                             "bench/results/planner.csv), and no --held-out (no Cornell variant is in the corpus tables)\n");
         return 2;
     }
     try {
@@ -737,7 +741,8 @@ int main(int argc, char** argv) {
                                 holds, count, strictly);
         }
         std::ostringstream md;
-        md << kBegin << "\n\n## Budgets on the " << (options.cornell ? "Cornell variants" : "bench corpus")
+        const std::string_view begin = options.cornell ? kCornellBegin : kBegin, end = options.cornell ? kCornellEnd : kEnd;
+        md << begin << "\n\n## Budgets on the " << (options.cornell ? "Cornell variants" : "bench corpus")
            << " (bench/planner)\n\n"
            << "Written by `" << arguments.command() << "` on " << bench::today() << ".\n\n"
            << "- Machine: " << bench::machine_description() << "\n- GPU: " << renderer.gpu_info().summary() << "\n"
@@ -786,10 +791,11 @@ int main(int argc, char** argv) {
               "is timed, a small frame of another scene is rendered until the GPU is at the clock it runs the others "
               "at (warm_gpu_clock: an idle GPU clocks down, and right after the reference's CPU-only frames an H200 "
               "took five times as long).\n\n"
-           << held << ".\n\n![error against time: fixed plans, their Pareto front and the planner's frames]"
-              "(../bench/results/planner.png)\n\n" << table
-           << "\nWhat the planner's error model reads from the scene analysis:\n\n" << analysis_md << "\n" << kEnd << "\n";
-        bench::splice_block(options.markdown, kBegin, kEnd, md.str());
+           << held << ".\n\n![error against time: fixed plans, their Pareto front and the planner's frames]("
+           << (options.out.is_relative() ? "../" : "") << options.out.generic_string()
+           << "/planner.png)\n\n" << table
+           << "\nWhat the planner's error model reads from the scene analysis:\n\n" << analysis_md << "\n" << end << "\n";
+        bench::splice_block(options.markdown, begin, end, md.str());
         log::info("bench", "{}; wrote {} and {}", held, (options.out / "planner.csv").string(),
                   options.markdown.string());
         return 0;
