@@ -253,8 +253,9 @@ OwnErrorPriors OwnErrorPriors::from_json(const nlohmann::json& tables, const Own
     object_at(tables, where);
     static const std::vector<std::string> known = {"source", "largest", "typical", "vct_second_largest",
                                                    "vct_second_typical", "isr_occluded_largest",
-                                                   "cssm_occluded_largest", "vct_leaking_largest", "vct_leaking_typical",
-                                                   "vct_second_leaking_largest", "vct_second_leaking_typical"};
+                                                   "cssm_occluded_largest", "vct_leaking_largest",
+                                                   "vct_leaking_typical", "vct_second_leaking_largest",
+                                                   "vct_second_leaking_typical"};
     for (const auto& [name, value] : tables.items()) {
         if (std::find(known.begin(), known.end(), name) == known.end()) {
             throw InputError(

@@ -348,8 +348,8 @@ TEST(PlannerPriors, AMalformedFileIsRefusedNamingTheEntry) {
               "p.json: isr_occluded_largest.huge: unknown preset 'huge'");
     EXPECT_EQ(refusal({{"largets", {}}}),
               "p.json: unknown field 'largets' (known: source, largest, typical, vct_second_largest, "
-              "vct_second_typical, isr_occluded_largest, cssm_occluded_largest, vct_leaking_largest, vct_leaking_typical, "
-              "vct_second_leaking_largest, vct_second_leaking_typical)");
+              "vct_second_typical, isr_occluded_largest, cssm_occluded_largest, vct_leaking_largest, "
+              "vct_leaking_typical, vct_second_leaking_largest, vct_second_leaking_typical)");
     EXPECT_EQ(refusal(nlohmann::json::array()), "p.json: expected an object, not array");
 
     const auto path =
