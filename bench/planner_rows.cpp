@@ -65,4 +65,46 @@ BudgetRow changed_budget_row(int pass, const std::string& scene, std::string bud
     return row;
 }
 
+std::string how_budgets_are_judged() {
+    return "- A target error holds when it is met at no more than 1.5x the time of the cheapest fixed plan "
+           "(a method at a preset, or the reference at 4 to 256 spp) that meets it, that plan timed again right "
+           "after the planned frame (the time shown; `fixed_ms` in planner.csv is its first); a time budget T holds when "
+           "the frame takes at most 1.2 T with error no worse than the best fixed plan within T, by more than the "
+           "noise floor: the spread of the relMSEs of one plan's frames (the reference's traced with other seeds, "
+           "twice or more under 5 s, its relMSE the mean; a relit comparator's three frames, each after its own change of the "
+           "lights, its relMSE that of the frame of median time; `a ± b` is the mean and half the spread, shown from a spread of 0.001); "
+           "a frame of the comparator's own plan holds whatever it read.\n"
+           "- Frames under 0.5 s, fixed and planned, are rendered three times (under 20 ms, nine; references under 5 s, twice) "
+           "and the median time kept (one frame of a "
+           "few milliseconds on two loaded cores varies by more than the 1.2x the budgets are judged by); the "
+           "reference's own noise, about noise per sample / spp, is in every relMSE measured (under 0.0018 at 4096 "
+           "spp on these scenes).\n"
+           "- The planner plans after the fixed plans' frame times were recorded, as a daemon records its frames; "
+           "their errors are not given to it. It learns a GPU method's error on the scene by comparing its own "
+           "frames with its reference frames of the view: the planned frames, and the GPU probes it renders beside "
+           "a reference plan (planning::probes), and reads what its spot checks measured: where the plan for a target error is the "
+           "reference, the GPU plans it may replace are rendered first and compared with a reference traced at 1024 of the "
+           "frame's pixel centres, and the first whose bound is within the target is sent (marked `spot-checked`; its time "
+           "includes the check's trace and every frame tried). Pass 2 asks for the same budgets again. The two last passes "
+           "(`relit`) ask each time budget right after every light moved by about 1e-5 of the scene's extent, turned "
+           "by as many radians and brightened by 0.01% or more (bench::change_every_light: a change no comparison "
+           "sees, each frame scaled back by the brightening before it is measured, and no two alike): first as a "
+           "client that keeps its budget meets the change, its previous frames the same budget's (rendered as "
+           "they come, with the lights before the change, until one redoes nothing, three at most); then right after another budget's frame (`relit after another "
+           "budget`), where a plan that differs from the last one switches. The planner "
+           "prices what each plan's frame would redo (frame_change.hpp: the light's work, and every structure where "
+           "it switches method or preset), and "
+           "the frame is rendered as it comes, once, not warmed first; its comparator is the most accurate fixed "
+           "plan whose frame right after such a change (built; of three, the one of the median time, with its own "
+           "error) fits. The last pass (`camera moved`) asks each time budget of the scene's view right after a "
+           "frame of the same budget from a camera moved aside by 2% of the scene's diagonal (before it, the "
+           "plan a warm frame would have, then frames of the view as they come until one redoes nothing, "
+           "three at most): the frame back draws "
+           "each sun's view cascades again; its comparator is the most accurate fixed plan whose frame back so "
+           "(of three, the one of the median time) fits. Before any GPU frame "
+           "is timed, a small frame of another scene is rendered until the GPU is at the clock it runs the others "
+           "at (warm_gpu_clock: an idle GPU clocks down, and right after the reference's CPU-only frames an H200 "
+           "took five times as long).\n";
+}
+
 }  // namespace bounce::bench

@@ -59,6 +59,10 @@ bool same_plan(const Measured& a, const Measured& b);
 // it whatever it read.
 void judge_time_budget(BudgetRow& row, double budget, const std::vector<Measured>& comparators);
 
+// What a run's markdown says of how its budgets are judged (above), how its frames are timed, and
+// what each pass asks: the bullets after the machine and the frames' size, each ending in a newline.
+std::string how_budgets_are_judged();
+
 // A relMSE, with half its spread where that is 0.001 or more.
 std::string error_text(const Measured& m);
 
