@@ -87,8 +87,8 @@ struct Options {
     fs::path corpus_results = "bench/results/corpus";
     // With --cornell, the bench's Cornell variants (bench/quality's scenes: the closed box, its glossy
     // and indirectly lit versions, the thin wall and the doorway) in place of the corpus. None of them
-    // is in the corpus tables the priors come from, so every plan there is held out, but for isr
-    // where most indirect light is occluded (OwnErrorPriors::isr_occluded_largest, the variants' own).
+    // is in the corpus tables the priors come from, so every plan there is held out, but for isr and
+    // cssm where most indirect light is occluded (OwnErrorPriors::occluded_largest, the variants' own).
     bool cornell = false;
 };
 
@@ -99,13 +99,13 @@ std::vector<bench::BenchScene> planned_scenes(const Options& options) {
 
 // The corpus' block of docs/benchmarks.md, and the Cornell variants' (--cornell).
 constexpr std::string_view kBegin = "<!-- planner: bench/planner writes it -->";
+constexpr std::string_view kEnd = "<!-- end of planner -->";
 constexpr std::string_view kCornellBegin = "<!-- planner on the Cornell variants: bench/planner --cornell writes it -->";
+constexpr std::string_view kCornellEnd = "<!-- end of planner on the Cornell variants -->";
 
 // The key the planned frames and the spot checks file the scene's view by (FrameComparisons::add,
 // record_spot_check): every compared frame here is of the scene's own camera at one size.
 constexpr std::uint64_t kView = 1;
-constexpr std::string_view kEnd = "<!-- end of planner -->";
-constexpr std::string_view kCornellEnd = "<!-- end of planner on the Cornell variants -->";
 
 // A GPU idles at a fraction of its clock and raises it only after a while under load (an H200: 345
 // against 1980 MHz). Right after the reference's CPU-only frames, an H200 took five times as long

@@ -346,6 +346,8 @@ TEST(PlannerPriors, AMalformedFileIsRefusedNamingTheEntry) {
     EXPECT_EQ(refusal({{"largest", {{"isr", 0.1}}}}), "p.json: largest.isr: expected an object, not number");
     EXPECT_EQ(refusal({{"isr_occluded_largest", {{"huge", 0.1}}}}),
               "p.json: isr_occluded_largest.huge: unknown preset 'huge'");
+    EXPECT_EQ(refusal({{"cssm_occluded_largest", {{"draft", -1}}}}),
+              "p.json: cssm_occluded_largest.draft: -1 is not a relMSE (a finite number, at least 0)");
     EXPECT_EQ(refusal({{"largets", {}}}),
               "p.json: unknown field 'largets' (known: source, largest, typical, vct_second_largest, "
               "vct_second_typical, isr_occluded_largest, cssm_occluded_largest, vct_leaking_largest, "
