@@ -164,10 +164,43 @@ std::map<std::string, ThinWalls> thin_walls_of(const std::vector<BenchScene>& sc
 
 std::map<std::string, ThinWalls> corpus_thin_walls() { return thin_walls_of(corpus_scenes()); }
 
+std::map<std::string, ThinWalls> bench_thin_walls() {
+    std::map<std::string, ThinWalls> walls = corpus_thin_walls();
+    walls.merge(thin_walls_of(quality_scenes()));
+    return walls;
+}
+
+FurtherScenes cornell_vct_tables(const std::filesystem::path& results) { return {results, {"vct"}}; }
+
+namespace {
+
+// `errors` with `csv`'s rows of `methods`, their scenes beside its own; the scenes added.
+std::set<std::string> add_further(CorpusErrors& errors, const std::filesystem::path& csv,
+                                  const std::set<std::string>& methods, const std::map<std::string, ThinWalls>& walls,
+                                  int bounces = -1) {
+    std::set<std::string> added;
+    for (const auto& [key, by_scene] : read_corpus_errors(csv, bounces)) {
+        if (!methods.count(key.first)) continue;
+        std::map<std::string, double>& into = errors[key];
+        for (const auto& [scene, error] : by_scene) {
+            if (!walls.count(scene)) {
+                throw std::runtime_error(fmt::format("{}: no thin walls were found for scene '{}'", csv.string(), scene));
+            }
+            if (!into.emplace(scene, error).second) {
+                throw std::runtime_error(fmt::format("{}: scene '{}' is in the corpus too", csv.string(), scene));
+            }
+            added.insert(scene);
+        }
+    }
+    return added;
+}
+
+}  // namespace
+
 planning::OwnErrorPriors corpus_priors(const std::filesystem::path& directory,
                                        const std::map<std::string, ThinWalls>& walls,
                                        const std::set<std::string>& left_out, bool two_bounce_table,
-                                       const PlacementErrors& placements) {
+                                       const PlacementErrors& placements, const std::vector<FurtherScenes>& further) {
     const auto leaking = [&](const std::string& method, const std::string& preset) {
         std::set<std::string> scenes;
         if (method != "vct") return scenes;
@@ -177,9 +210,20 @@ planning::OwnErrorPriors corpus_priors(const std::filesystem::path& directory,
         return scenes;
     };
     planning::OwnErrorPriors priors;
-    for (const auto& [key, by_scene] : read_corpus_errors(directory / "quality.csv")) {
+    CorpusErrors one_bounce = read_corpus_errors(directory / "quality.csv");
+    std::set<std::string> further_scenes;
+    for (const FurtherScenes& more : further) {
+        further_scenes.merge(add_further(one_bounce, more.directory / "quality.csv", more.methods, walls));
+    }
+    // Further scenes count by their own frames alone: the placement files' rows of them are against
+    // jittered references, not the pixel centres their tables are measured through.
+    PlacementErrors placements_counted = placements;
+    for (auto& [key, by_scene] : placements_counted) {
+        for (const std::string& scene : further_scenes) by_scene.erase(scene);
+    }
+    for (const auto& [key, by_scene] : one_bounce) {
         if (const auto figures =
-                figures_of(by_scene, placed_of(placements, key), left_out, leaking(key.first, key.second))) {
+                figures_of(by_scene, placed_of(placements_counted, key), left_out, leaking(key.first, key.second))) {
             priors.largest[key] = figures->largest;
             priors.typical[key] = figures->median;
             if (figures->leaking) {
@@ -189,7 +233,12 @@ planning::OwnErrorPriors corpus_priors(const std::filesystem::path& directory,
         }
     }
     if (!two_bounce_table || !std::filesystem::exists(directory / "vct_two_bounce_quality.csv")) return priors;
-    for (const auto& [key, by_scene] : read_corpus_errors(directory / "vct_two_bounce_quality.csv", 2)) {
+    CorpusErrors two_bounces = read_corpus_errors(directory / "vct_two_bounce_quality.csv", 2);
+    for (const FurtherScenes& more : further) {
+        const std::filesystem::path csv = more.directory / "vct_two_bounce_quality.csv";
+        if (std::filesystem::exists(csv)) add_further(two_bounces, csv, more.methods, walls, 2);
+    }
+    for (const auto& [key, by_scene] : two_bounces) {
         if (key.first != "vct") continue;
         // No placements of the second bounce are measured: its own frames alone.
         if (const auto figures = figures_of(by_scene, {}, left_out, leaking(key.first, key.second))) {

@@ -80,15 +80,16 @@ struct Options {
     // lines, where before they raised them): what pricing the view cascades buys.
     bool camera_as_warm = false;
     // With --held-out, each scene is planned with the GPU methods' own-error priors of the other
-    // corpus scenes (bench/corpus_priors.hpp, from `corpus_results`): whether the promises hold on a
-    // scene the priors never saw. Without, the committed priors, which every scene here made. The
-    // placement files (bench/results/*_placement.csv) are read from beside `corpus_results`.
+    // corpus scenes, and for vct of the Cornell variants too (bench/corpus_priors.hpp, from
+    // `corpus_results` and the files beside it): whether the promises hold on a scene the priors never
+    // saw. Without, the committed priors, which every scene here made. The placement files
+    // (bench/results/*_placement.csv) are read from beside `corpus_results`.
     bool held_out = false;
     fs::path corpus_results = "bench/results/corpus";
     // With --cornell, the bench's Cornell variants (bench/quality's scenes: the closed box, its glossy
-    // and indirectly lit versions, the thin wall and the doorway) in place of the corpus. None of them
-    // is in the corpus tables the priors come from, so every plan there is held out, but for isr and
-    // cssm where most indirect light is occluded (OwnErrorPriors::occluded_largest, the variants' own).
+    // and indirectly lit versions, the thin wall and the doorway) in place of the corpus. They count in
+    // vct's priors (bench::cornell_vct_tables), and in isr's and cssm's where most indirect light is
+    // occluded (OwnErrorPriors::occluded_largest); isr's and cssm's other priors are the corpus' alone.
     bool cornell = false;
 };
 
@@ -360,10 +361,11 @@ int main(int argc, char** argv) {
         return 2;
     }
     if (options.cornell && (options.held_out || options.out == Options{}.out)) {
-        // bench/results/planner.csv is the corpus'; the Cornell variants are held out from its priors
-        // already. Their block of the markdown is their own.
+        // bench/results/planner.csv is the corpus'. Their block of the markdown is their own. Held out, the
+        // occluded tables they make would be left empty (corpus_priors makes no such tables).
         std::fprintf(stderr, "bounce_bench_planner: --cornell needs an --out of its own (its files are not the corpus' "
-                             "bench/results/planner.csv), and no --held-out (no Cornell variant is in the corpus tables)\n");
+                             "bench/results/planner.csv), and no --held-out (held out, the tables the Cornell variants "
+                             "make where light is occluded would be empty)\n");
         return 2;
     }
     try {
@@ -399,7 +401,7 @@ int main(int argc, char** argv) {
         Renderer renderer(gpu::DeviceChoice::resolve(std::nullopt));
         const planning::DeviceCosts device = planning::load_or_calibrate(renderer, options.cache);
         const std::map<std::string, ThinWalls> corpus_walls =
-            options.held_out ? bench::corpus_thin_walls() : std::map<std::string, ThinWalls>{};
+            options.held_out ? bench::bench_thin_walls() : std::map<std::string, ThinWalls>{};
         // The committed priors count each corpus scene over placements of cssm's atlas and vct's grid
         // (bench/corpus_priors.hpp); the held-out ones do too, from the placement files beside the corpus'.
         const bench::PlacementErrors corpus_placements =
@@ -455,7 +457,8 @@ int main(int argc, char** argv) {
                                                   {"direct", "vct", "isr", "cssm"}, &costs, &device)};
             const planning::OwnErrorPriors held_out_priors =
                 options.held_out ? bench::corpus_priors(options.corpus_results, corpus_walls, {bench_scene.name},
-                                                           /*two_bounce_table=*/true, corpus_placements)
+                                                        /*two_bounce_table=*/true, corpus_placements,
+                                                        {bench::cornell_vct_tables(options.corpus_results / "..")})
                                  : planning::OwnErrorPriors{};
             if (options.held_out) inputs.priors = &held_out_priors;
             // As the daemon plans: a plan the memory budget would refuse is ruled out.
@@ -750,7 +753,8 @@ int main(int argc, char** argv) {
                           "device costs calibrated in {3:.0f} ms (or read from the cache).\n",
                           options.size, options.reference_spp, options.reference_bounces, device.calibration_ms)
            << (options.held_out ? "- Held out: each scene planned with the GPU methods' own-error priors of the other "
-                                  "four corpus scenes (bench/corpus_priors.hpp), as if the bench had never seen it.\n"
+                                  "four corpus scenes, and for vct of the Cornell variants too (bench/corpus_priors.hpp), "
+                                  "as if the bench had never seen it.\n"
                                 : "")
            << bench::how_budgets_are_judged() << "\n"
            << held << ".\n\n![error against time: fixed plans, their Pareto front and the planner's frames]("

@@ -74,8 +74,8 @@ const OwnErrorPriors& OwnErrorPriors::bench() {
     static const OwnErrorPriors tables = [] {
         OwnErrorPriors priors;
         // relMSE against the reference with as many bounces (`rel_mse_same_bounces`), at 128x128 through
-        // pixel centres: the largest over the five corpus scenes (bench/results/corpus/quality.csv), leaving
-        // out vct where the analysis finds it leaking (counted apart, vct_leaking_largest below). The
+        // pixel centres: the largest over the five corpus scenes (bench/results/corpus/quality.csv) and, for
+        // vct, the Cornell variants (below), leaving out vct where the analysis finds it leaking (counted apart, vct_leaking_largest below). The
         // largest, not a typical value: a target error is a promise, and a scene's own error is not
         // known before its reference is. They are the corpus tables' figures (tests/unit/planner_priors_test.cpp checks them against the
         // committed files): measure the corpus again when a method changes, and these with it. Since the
@@ -98,11 +98,19 @@ const OwnErrorPriors& OwnErrorPriors::bench() {
         // made on puts its surfaces anywhere in the atlas or grid. cssm draft's largest rose from 0.0228
         // (the foliage's) to 0.0294 (the atrium's, 0.0176 at its own 12 texels), vct draft's and low's
         // from 0.050 and 0.062 to 0.066 and 0.109 (the street's).
+        // vct's count the five Cornell variants of bench/quality too (bench/results/quality.csv and
+        // vct_two_bounce_quality.csv, by their own frames: bench::cornell_vct_tables), since 2026-12-07:
+        // in the closed boxes its error is the voxels' and the cones', not the corpus', and bench/planner
+        // --cornell measured the corpus' promise broken (the indirectly lit box's vct draft at 2 bounces
+        // promised 0.073, measured 0.233). Its largest at draft and low rose from 0.066 and 0.109 to 0.306
+        // (the indirectly lit box's) and 0.353 (the thin wall's), at two bounces from 0.038 and 0.073 to
+        // 0.284 and 0.761 (the same); the doorway, where the analysis finds every preset leaking, gave the
+        // leaking tables their high and ultra.
         // clang-format off
         priors.largest = {
             {{"direct", "draft"}, 0.0664}, {{"direct", "low"}, 0.0560},   {{"direct", "medium"}, 0.0361},
             {{"direct", "high"}, 0.0287},  {{"direct", "ultra"}, 0.0247},
-            {{"vct", "draft"}, 0.0664},    {{"vct", "low"}, 0.1087},      {{"vct", "medium"}, 1.2549},
+            {{"vct", "draft"}, 0.3064},    {{"vct", "low"}, 0.3527},      {{"vct", "medium"}, 1.2549},
             {{"vct", "high"}, 0.5344},     {{"vct", "ultra"}, 0.5038},
             {{"isr", "draft"}, 0.0284},    {{"isr", "low"}, 0.0227},      {{"isr", "medium"}, 0.0225},
             {{"isr", "high"}, 0.0224},     {{"isr", "ultra"}, 0.0225},
@@ -114,22 +122,22 @@ const OwnErrorPriors& OwnErrorPriors::bench() {
         // leaving out the presets the analysis finds leaking): the leaves' gather adds its own error, so
         // the one-bounce table does not carry over.
         priors.vct_second_largest = {
-            {"draft", 0.0384}, {"low", 0.0729}, {"medium", 1.3364}, {"high", 0.5846}, {"ultra", 0.6442}};
-        // The median over the same five scenes (the same tables; for cssm and vct, of each scene's mean over
-        // its placements): what a spot check (spot_check.hpp) expects of a plan it tries, not a promise.
-        // vct's include the scenes where it leaks.
+            {"draft", 0.2841}, {"low", 0.7614}, {"medium", 1.3364}, {"high", 0.6923}, {"ultra", 0.6442}};
+        // The median over the same scenes (the same tables; for cssm and the corpus' vct, of each scene's
+        // mean over its placements): what a spot check (spot_check.hpp) expects of a plan it tries, not a
+        // promise. vct's include the scenes where it leaks.
         priors.typical = {
             {{"direct", "draft"}, 0.0463}, {{"direct", "low"}, 0.0129},   {{"direct", "medium"}, 0.0096},
             {{"direct", "high"}, 0.0041},  {{"direct", "ultra"}, 0.0019},
-            {{"vct", "draft"}, 0.0558},    {{"vct", "low"}, 0.0817},      {{"vct", "medium"}, 0.0816},
-            {{"vct", "high"}, 0.0523},     {{"vct", "ultra"}, 0.0418},
+            {{"vct", "draft"}, 0.0544},    {{"vct", "low"}, 0.1079},      {{"vct", "medium"}, 0.0732},
+            {{"vct", "high"}, 0.0448},     {{"vct", "ultra"}, 0.0595},
             {{"isr", "draft"}, 0.0192},    {{"isr", "low"}, 0.0136},      {{"isr", "medium"}, 0.0134},
             {{"isr", "high"}, 0.0134},     {{"isr", "ultra"}, 0.0129},
             {{"cssm", "draft"}, 0.0194},   {{"cssm", "low"}, 0.0153},     {{"cssm", "medium"}, 0.0083},
             {{"cssm", "high"}, 0.0077},    {{"cssm", "ultra"}, 0.0075},
         };
         priors.vct_second_typical = {
-            {"draft", 0.0384}, {"low", 0.0729}, {"medium", 0.1017}, {"high", 0.0811}, {"ultra", 0.0457}};
+            {"draft", 0.0832}, {"low", 0.1725}, {"medium", 0.1061}, {"high", 0.0819}, {"ultra", 0.0948}};
         // isr where most indirect light is occluded: the Cornell variants' largest (the thin wall's), from
         // low up (draft, without maps, is ruled out there).
         priors.isr_occluded_largest = {{"low", 0.1055}, {"medium", 0.0960}, {"high", 0.0797}, {"ultra", 0.0839}};
@@ -139,15 +147,19 @@ const OwnErrorPriors& OwnErrorPriors::bench() {
         priors.cssm_occluded_largest = {
             {"draft", 0.1938}, {"low", 0.1101}, {"medium", 0.0356}, {"high", 0.0300}, {"ultra", 0.0325}};
         // vct where the analysis finds its preset leaking (the furnished room at draft and low, the atrium
-        // to medium), from the same tables, since 2026-12-02: before, it was ruled out there, and the
-        // atrium within 50 ms got a reference without bounces (0.319) where vct draft measures 0.185
-        // against every bounce. Against the reference of as many bounces leaked light errs far more
+        // to medium, the thin wall at draft, the doorway at every preset), from the same tables, since
+        // 2026-12-02: before, it was ruled out there, and the atrium within 50 ms got a reference without
+        // bounces (0.319) where vct draft measures 0.185 against every bounce. Against the reference of as many bounces leaked light errs far more
         // (the furnished room's vct draft 0.76 to 2.7 over placements): never chosen before the
         // scene's own frames measure it, unless nothing else is predicted better.
-        priors.vct_leaking_largest = {{"draft", 2.7269}, {"low", 4.5595}, {"medium", 0.1944}};
-        priors.vct_leaking_typical = {{"draft", 0.9988}, {"low", 1.5825}, {"medium", 0.1566}};
-        priors.vct_second_leaking_largest = {{"draft", 0.8075}, {"low", 1.8630}, {"medium", 0.1966}};
-        priors.vct_second_leaking_typical = {{"draft", 0.5671}, {"low", 1.2020}, {"medium", 0.1966}};
+        priors.vct_leaking_largest = {
+            {"draft", 2.7269}, {"low", 4.5595}, {"medium", 0.1944}, {"high", 0.0374}, {"ultra", 0.0773}};
+        priors.vct_leaking_typical = {
+            {"draft", 0.3581}, {"low", 0.3692}, {"medium", 0.1107}, {"high", 0.0374}, {"ultra", 0.0773}};
+        priors.vct_second_leaking_largest = {
+            {"draft", 0.8075}, {"low", 1.8630}, {"medium", 0.1966}, {"high", 0.0826}, {"ultra", 0.2183}};
+        priors.vct_second_leaking_typical = {
+            {"draft", 0.5125}, {"low", 0.5410}, {"medium", 0.1536}, {"high", 0.0826}, {"ultra", 0.2183}};
         // clang-format on
         return priors;
     }();

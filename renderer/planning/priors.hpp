@@ -1,10 +1,11 @@
 // What the bench measured of each GPU method's own error, the planner's prior where a scene has
 // measured nothing of it (error_model.hpp): per method and preset, the relMSE against the reference
 // with as many bounces, at 128x128 through pixel centres, the largest (a promise) and the median (what
-// a spot check expects) over the bench corpus' scenes. The daemon plans with the committed tables
-// (bench()), or with a deployment's own (`bounced --priors FILE`, measured on its own scenes by
-// `bounce_bench_quality --gltf FILE --priors-out FILE`); bench/planner --held-out plans each scene
-// with the tables of the others, which says whether the promises hold on a scene the priors never saw.
+// a spot check expects) over the bench corpus' scenes, and for vct the Cornell variants' too. The
+// daemon plans with the committed tables (bench()), or with a deployment's own (`bounced --priors
+// FILE`, measured on its own scenes by `bounce_bench_quality --gltf FILE --priors-out FILE`);
+// bench/planner --held-out plans each scene with the tables of the others, which says whether the
+// promises hold on a scene the priors never saw.
 #pragma once
 
 #include <nlohmann/json.hpp>
