@@ -174,11 +174,9 @@ FurtherScenes cornell_vct_tables(const std::filesystem::path& results) { return 
 
 namespace {
 
-// `errors` with `csv`'s rows of `methods`, their scenes beside its own; the scenes added.
-std::set<std::string> add_further(CorpusErrors& errors, const std::filesystem::path& csv,
-                                  const std::set<std::string>& methods, const std::map<std::string, ThinWalls>& walls,
-                                  int bounces = -1) {
-    std::set<std::string> added;
+// `errors` with `csv`'s rows of `methods`, their scenes beside its own.
+void add_further(CorpusErrors& errors, const std::filesystem::path& csv, const std::set<std::string>& methods,
+                 const std::map<std::string, ThinWalls>& walls, int bounces = -1) {
     for (const auto& [key, by_scene] : read_corpus_errors(csv, bounces)) {
         if (!methods.count(key.first)) continue;
         std::map<std::string, double>& into = errors[key];
@@ -189,10 +187,8 @@ std::set<std::string> add_further(CorpusErrors& errors, const std::filesystem::p
             if (!into.emplace(scene, error).second) {
                 throw std::runtime_error(fmt::format("{}: scene '{}' is in the corpus too", csv.string(), scene));
             }
-            added.insert(scene);
         }
     }
-    return added;
 }
 
 }  // namespace
@@ -211,19 +207,10 @@ planning::OwnErrorPriors corpus_priors(const std::filesystem::path& directory,
     };
     planning::OwnErrorPriors priors;
     CorpusErrors one_bounce = read_corpus_errors(directory / "quality.csv");
-    std::set<std::string> further_scenes;
-    for (const FurtherScenes& more : further) {
-        further_scenes.merge(add_further(one_bounce, more.directory / "quality.csv", more.methods, walls));
-    }
-    // Further scenes count by their own frames alone: the placement files' rows of them are against
-    // jittered references, not the pixel centres their tables are measured through.
-    PlacementErrors placements_counted = placements;
-    for (auto& [key, by_scene] : placements_counted) {
-        for (const std::string& scene : further_scenes) by_scene.erase(scene);
-    }
+    for (const FurtherScenes& more : further) add_further(one_bounce, more.directory / "quality.csv", more.methods, walls);
     for (const auto& [key, by_scene] : one_bounce) {
         if (const auto figures =
-                figures_of(by_scene, placed_of(placements_counted, key), left_out, leaking(key.first, key.second))) {
+                figures_of(by_scene, placed_of(placements, key), left_out, leaking(key.first, key.second))) {
             priors.largest[key] = figures->largest;
             priors.typical[key] = figures->median;
             if (figures->leaking) {

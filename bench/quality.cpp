@@ -272,7 +272,8 @@ void write_preview(const fs::path& path, image::Frame frame) {
 
 // The planner's priors from this run's quality.csv: per GPU method and preset, the largest and the
 // median over the scenes measured (vct's presets left out where the analysis finds them leaking),
-// as bench/planner --held-out computes them from the corpus; `bounced --priors FILE` plans with
+// as the corpus' are computed (bench/corpus_priors.hpp; the committed tables also count the Cornell
+// variants for vct, which a run of the corpus alone does not); `bounced --priors FILE` plans with
 // them, and with the bench's where this run measured nothing. With --placements, each scene counts
 // by its largest over the placements measured of it (and their mean in the median), as the bench's
 // own priors do. The file is read back as the daemon reads it before it is written.

@@ -37,11 +37,12 @@ struct OwnErrorPriors {
     // The table above for `method` (nullptr for methods without one).
     const std::map<std::string, double>* occluded_largest(const std::string& method) const;
     // vct's presets where the analysis finds walls thinner than their voxels (ThinWalls::leaks), by
-    // preset: the largest and the median over the corpus scenes where that preset leaks (each, as the
+    // preset: the largest and the median over the bench scenes where that preset leaks (each, as the
     // tables above, over placements of its grid), and the same of its second bounce. Leaked light is
     // measured on few scenes and errs far more (vct draft in the furnished room 0.76 to 2.7 against
-    // the reference of one bounce), so what is promised there is that; a preset with no such table
-    // is ruled out where it leaks, until the scene's own frames measure it (error_model.hpp).
+    // the reference of one bounce), so what is promised there is that, and never less than the
+    // preset's table where it does not leak (largest_of); a preset with no such table is ruled out
+    // where it leaks, until the scene's own frames measure it (error_model.hpp).
     std::map<std::string, double> vct_leaking_largest, vct_leaking_typical;
     std::map<std::string, double> vct_second_leaking_largest, vct_second_leaking_typical;
     // Where the tables were measured, as a plan's `why` names them ("on the bench scenes"): every
@@ -60,7 +61,8 @@ struct OwnErrorPriors {
     // The largest at `bounces` where measured apart at that count (vct's second bounce), else at the
     // preset's own; nullopt for methods without one.
     // `leaking`: where the scene's walls are thinner than vct's voxels at the preset, the leaking
-    // tables (nullopt where they have no entry; methods other than vct have none).
+    // tables, and for the largest at least what the preset's table promises where it does not leak
+    // (nullopt where they have no entry; methods other than vct have none).
     std::optional<double> largest_of(const std::string& method, const std::string& preset, int bounces = 1,
                                      bool leaking = false) const;
     std::optional<double> typical_of(const std::string& method, const std::string& preset, int bounces = 1,
