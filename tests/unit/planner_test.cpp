@@ -273,7 +273,7 @@ TEST(ErrorModel, OccludedIsrIsRuledOutAndLeakingVctPromisedWhatLeakingScenesMeas
     analysis.visibility.pairs = 1000;
     analysis.visibility.occluded_fraction = 0.8;
     // Where vct draft leaks, it is promised the largest the bench's leaking scenes measured of it,
-    // and the basis says why; low, which does not leak, keeps the corpus' prior.
+    // and the basis says why; low, which does not leak, keeps the bench's prior.
     const planning::OwnErrorPriors& bench = planning::OwnErrorPriors::bench();
     const ErrorPrediction leaking = predict_error(analysis, "vct", "draft", {});
     EXPECT_FALSE(leaking.ruled_out.has_value());
