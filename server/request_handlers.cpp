@@ -594,6 +594,7 @@ void RequestHandlers::try_checked_plans(const std::shared_ptr<Request>& request,
                 plan["preset"] = frame.preset;
                 plan["knobs"] = frame.knobs;
                 plan["predicted_error"] = estimate.bound;
+                plan["promised_error"] = estimate.bound;
                 plan["meets_budget"] = true;
                 plan["spot_check"] = {{"pixels", estimate.pixels},
                                       {"spp", spot->estimates.samples},

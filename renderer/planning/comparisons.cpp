@@ -238,6 +238,9 @@ std::optional<Comparison> FrameComparisons::compare(const RenderResult& gpu_fram
     // counts as 0 (SceneMeasurements::own_error).
     c.own_error = std::max(-stopped_at(analysis, c.bounces),
                            c.rel_mse - noise_taken - c.bounce_gap + c.cross_term + c.cross_beyond);
+    // A promise does not count on the noise the statistic took out (Comparison::unsure).
+    double promised = c.cross_estimate ? c.own_error
+                                       : std::max(-stopped_at(analysis, c.bounces), c.own_error + noise_taken);
     // Against a reference lacking light the frame has, a frame that lacks light itself agrees better
     // than it would with the whole, by up to 2 sqrt(own x lacking) + lacking where the two are
     // missing in the same places (relMSE is a weighted squared norm: the triangle inequality). That
@@ -249,11 +252,16 @@ std::optional<Comparison> FrameComparisons::compare(const RenderResult& gpu_fram
     if (c.noise_bound) {
         if (c.rel_mse <= kBoundNoiseShare * c.reference_noise) return std::nullopt;
         c.own_error = std::max(0.0, c.own_error);
+        promised = std::max(c.own_error, promised);
         const std::optional<double> prior = own_error_prior(c.method, c.preset, c.bounces);
         if (!prior || c.own_error >= *prior) return std::nullopt;
     }
     const bool bound = extra_light > 0.0 || c.noise_bound;
-    if (extra_light > 0.0) c.own_error = std::pow(std::sqrt(std::max(c.own_error, 0.0)) + std::sqrt(extra_light), 2.0);
+    if (extra_light > 0.0) {
+        c.own_error = std::pow(std::sqrt(std::max(c.own_error, 0.0)) + std::sqrt(extra_light), 2.0);
+        promised = std::pow(std::sqrt(std::max(promised, 0.0)) + std::sqrt(extra_light), 2.0);
+    }
+    c.unsure = std::max(0.0, promised - c.own_error);
     if (view && !bound) {
         // What is uncertain of it: the noise taken out, or a cross estimate's two standard errors.
         // A cross estimate's cross term still comes from the one reference and the deeper frame it
@@ -261,9 +269,9 @@ std::optional<Comparison> FrameComparisons::compare(const RenderResult& gpu_fram
         const double uncertain = c.cross_estimate ? 2.0 * c.cross_standard_error + (deeper ? c.reference_noise : 0.0)
                                                   : c.reference_noise;
         measurements.record_own_estimate(c.method, c.preset, c.bounces, c.own_error, *view,
-                                         uncertain + c.bounce_gap + c.cross_beyond);
+                                         uncertain + c.bounce_gap + c.cross_beyond, c.unsure);
     } else {
-        measurements.record_own_error(c.method, c.preset, c.bounces, c.own_error, bound ? view : std::nullopt);
+        measurements.record_own_error(c.method, c.preset, c.bounces, c.own_error, bound ? view : std::nullopt, c.unsure);
     }
     return c;
 }
@@ -449,7 +457,7 @@ std::vector<Comparison> FrameComparisons::add(std::uint64_t view, std::shared_pt
     std::vector<Comparison> made;
     for (const auto& [gpu_frame, reference, deeper, partner, cross_only] : to_compare) {
         if (auto c = compare(*gpu_frame, *reference, analysis, measurements, deeper.get(), view, partner.get(), cross_only)) {
-            log::info("planner", "{} {} at {} bounces against this view's {}-bounce reference: relMSE {:.4f}, {}own error {:.4f}{}",
+            log::info("planner", "{} {} at {} bounces against this view's {}-bounce reference: relMSE {:.4f}, {}own error {:.4f}{}{}",
                       c->method, c->preset, c->bounces, modelled_bounces("reference", reference->stats.knobs), c->rel_mse,
                       deeper ? fmt::format("against the {}-bounce frame it was traced with (which adds {:.4f}) {:+.4f} "
                                            "and past it {:+.4f}, ",
@@ -463,7 +471,8 @@ std::vector<Comparison> FrameComparisons::add(std::uint64_t view, std::shared_pt
                                                         std::min(knob(partner->stats, "spp", 0.0), knob(reference->stats, "spp", 0.0)),
                                                         std::max(knob(partner->stats, "spp", 0.0), knob(reference->stats, "spp", 0.0)),
                                                         c->cross_rel_mse, c->cross_standard_error)
-                                          : "");
+                                          : "",
+                      c->unsure > 0.0 ? fmt::format(", promised {:.4f}", c->own_error + c->unsure) : "");
             made.push_back(std::move(*c));
         }
     }

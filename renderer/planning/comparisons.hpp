@@ -72,6 +72,10 @@ struct Comparison {
     bool cross_estimate = false;
     double cross_rel_mse = 0.0;
     double cross_standard_error = 0.0;
+    // What a target's promise adds to own_error (SceneMeasurements::OwnError::promised): the noise
+    // taken out by the reference's statistic (all of it for an estimate, the half of a bound), which
+    // the frame's relMSE need not have held. 0 for a cross estimate, whose two draws measure the noise.
+    double unsure = 0.0;
 };
 
 class FrameComparisons {

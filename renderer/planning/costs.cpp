@@ -426,27 +426,33 @@ std::optional<double> SceneMeasurements::least_noise_scale() const {
 }
 
 void SceneMeasurements::record_own_error(const std::string& method, const std::string& preset, int bounces, double rel_mse,
-                                         std::optional<std::uint64_t> bound_of_view) {
-    if (!std::isfinite(rel_mse)) return;
+                                         std::optional<std::uint64_t> bound_of_view, double unsure) {
+    if (!std::isfinite(rel_mse) || !(unsure >= 0.0)) return;
     const std::lock_guard lock(mutex_);
     auto& kept = own_errors_[{method, preset, bounces}];
     if (bound_of_view) {
         for (auto& recorded : kept) {
             if (recorded.view != bound_of_view) continue;
-            if (recorded.bound) recorded.rel_mse = std::min(recorded.rel_mse, rel_mse);
-            return;  // the least bound holds; an estimate of the view tells more than any bound
+            // The least bound holds, and the least promise of them; an estimate of the view tells more
+            // than any bound.
+            if (recorded.bound) {
+                const double promised = std::min(recorded.rel_mse + recorded.unsure, rel_mse + unsure);
+                recorded.rel_mse = std::min(recorded.rel_mse, rel_mse);
+                recorded.unsure = promised - recorded.rel_mse;
+            }
+            return;
         }
     }
-    kept.push_back({rel_mse, bound_of_view, bound_of_view.has_value(), 0.0});
+    kept.push_back({rel_mse, bound_of_view, bound_of_view.has_value(), 0.0, unsure});
     if (kept.size() > kKept) kept.pop_front();
 }
 
 void SceneMeasurements::record_own_estimate(const std::string& method, const std::string& preset, int bounces,
-                                            double rel_mse, std::uint64_t view, double taken_out) {
-    if (!std::isfinite(rel_mse) || !(taken_out >= 0.0)) return;
+                                            double rel_mse, std::uint64_t view, double taken_out, double unsure) {
+    if (!std::isfinite(rel_mse) || !(taken_out >= 0.0) || !(unsure >= 0.0)) return;
     const std::lock_guard lock(mutex_);
     auto& kept = own_errors_[{method, preset, bounces}];
-    const RecordedOwnError estimate{rel_mse, view, false, taken_out};
+    const RecordedOwnError estimate{rel_mse, view, false, taken_out, unsure};
     for (auto& recorded : kept) {
         if (recorded.view != view) continue;
         if (recorded.bound || taken_out < recorded.taken_out) recorded = estimate;
@@ -465,6 +471,13 @@ double largest_own_error(const Records& kept) {
     return largest;
 }
 
+template <typename Records>
+double largest_promise(const Records& kept) {
+    double largest = -std::numeric_limits<double>::infinity();
+    for (const auto& recorded : kept) largest = std::max(largest, recorded.rel_mse + recorded.unsure);
+    return largest;
+}
+
 }  // namespace
 
 // The largest, not the median: a target error is a promise, and views differ in what a method gets wrong.
@@ -472,25 +485,28 @@ std::optional<SceneMeasurements::OwnError> SceneMeasurements::own_error(const st
                                                                        int bounces) const {
     const std::lock_guard lock(mutex_);
     if (const auto it = own_errors_.find({method, preset, bounces}); it != own_errors_.end() && !it->second.empty()) {
-        return OwnError{largest_own_error(it->second), static_cast<int>(it->second.size()), true};
+        return OwnError{largest_own_error(it->second), static_cast<int>(it->second.size()), true,
+                        largest_promise(it->second)};
     }
     std::optional<OwnError> found;
     for (const auto& [key, kept] : own_errors_) {
         if (std::get<0>(key) != method || std::get<1>(key) != preset || std::get<2>(key) < bounces || kept.empty()) continue;
-        if (!found) found = OwnError{0.0, 0, false};
+        if (!found) found = OwnError{0.0, 0, false, 0.0};
         found->rel_mse = std::max(found->rel_mse, largest_own_error(kept));
+        found->promised = std::max(found->promised, largest_promise(kept));
         found->frames += static_cast<int>(kept.size());
     }
     return found;
 }
 
-std::map<std::string, double> SceneMeasurements::own_errors(const std::string& method, int at_least_bounces) const {
+std::map<std::string, double> SceneMeasurements::own_errors(const std::string& method, int at_least_bounces,
+                                                            bool promised) const {
     const std::lock_guard lock(mutex_);
     std::map<std::string, double> largest;
     for (const auto& [key, kept] : own_errors_) {
         if (std::get<0>(key) != method || std::get<2>(key) < at_least_bounces || kept.empty()) continue;
         double& value = largest[std::get<1>(key)];
-        value = std::max(value, largest_own_error(kept));
+        value = std::max(value, promised ? largest_promise(kept) : largest_own_error(kept));
     }
     return largest;
 }

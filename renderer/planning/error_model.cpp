@@ -28,9 +28,14 @@ namespace {
 // Where the analysis finds most of the scene's indirect light occluded, isr's and cssm's priors are
 // those of the Cornell variants (OwnErrorPriors::occluded_largest); where vct's preset leaks
 // (leaks_through_thin_walls), its priors are those of the bench's scenes where it leaks.
-std::pair<double, std::string> own_error(const SceneAnalysis& analysis, const std::string& method,
-                                         const std::string& preset, int bounces, const SceneMeasurements* measured,
-                                         const OwnErrorPriors& priors) {
+// The estimate, what a target is promised (SceneMeasurements::OwnError::promised: the same where it
+// is a prior), and where they come from.
+struct OwnErrorOf {
+    double estimate = 0.0, promised = 0.0;
+    std::string basis;
+};
+OwnErrorOf own_error(const SceneAnalysis& analysis, const std::string& method, const std::string& preset, int bounces,
+                     const SceneMeasurements* measured, const OwnErrorPriors& priors) {
     const std::map<std::string, double>* occluded_table =
         analysis.visibility.mostly_occluded() ? priors.occluded_largest(method) : nullptr;
     const bool occluded = occluded_table && occluded_table->count(preset);
@@ -45,14 +50,16 @@ std::pair<double, std::string> own_error(const SceneAnalysis& analysis, const st
                  : leaks_through_thin_walls(analysis, method, preset) ? priors.leaking_source
                                                                       : priors.source_of(method, preset, bounces));
     const double prior = prior_of(preset);
-    if (!measured) return {prior, bench};
+    if (!measured) return {prior, prior, bench};
     if (const auto own = measured->own_error(method, preset, bounces)) {
-        return {own->rel_mse, fmt::format("as {} comparison{} with this scene's reference frames measured{}", own->frames,
-                                          own->frames == 1 ? "" : "s", own->exact ? "" : " at other bounce counts")};
+        return {own->rel_mse, own->promised,
+                fmt::format("as {} comparison{} with this scene's reference frames measured{}", own->frames,
+                            own->frames == 1 ? "" : "s", own->exact ? "" : " at other bounce counts")};
     }
     const auto& order = methods::preset_names();
     const auto rank = [&](const std::string& name) { return std::find(order.begin(), order.end(), name) - order.begin(); };
     const std::map<std::string, double> measured_presets = measured->own_errors(method, bounces);
+    const std::map<std::string, double> promised_presets = measured->own_errors(method, bounces, /*promised=*/true);
     const std::pair<const std::string, double>* cheaper = nullptr;
     std::vector<double> ratios;
     for (const auto& entry : measured_presets) {
@@ -61,14 +68,15 @@ std::pair<double, std::string> own_error(const SceneAnalysis& analysis, const st
         if (rank(entry.first) > rank(preset) && other_prior > 0.0) ratios.push_back(entry.second / other_prior);
     }
     if (cheaper) {
-        return {cheaper->second, fmt::format("as this scene's {} {} measured (a costlier preset is not assumed better)",
-                                             method, cheaper->first)};
+        return {cheaper->second, promised_presets.at(cheaper->first),
+                fmt::format("as this scene's {} {} measured (a costlier preset is not assumed better)", method,
+                            cheaper->first)};
     }
-    if (ratios.empty() || prior <= 0.0) return {prior, bench};
+    if (ratios.empty() || prior <= 0.0) return {prior, prior, bench};
     const double ratio = median(std::move(ratios));
-    if (ratio <= 1.0) return {prior, bench};
-    return {prior * ratio, fmt::format("({:.3f} {} x {:.2f}, as this scene's costlier {} presets measured)", prior, bench,
-                                       ratio, method)};
+    if (ratio <= 1.0) return {prior, prior, bench};
+    return {prior * ratio, prior * ratio,
+            fmt::format("({:.3f} {} x {:.2f}, as this scene's costlier {} presets measured)", prior, bench, ratio, method)};
 }
 
 }  // namespace
@@ -133,6 +141,7 @@ ErrorPrediction predict_error(const SceneAnalysis& analysis, const std::string& 
         const ReferenceNoise expected = reference_noise(analysis, bounces, spp, measured, NoiseAgainst::every_bounce);
         const double noise = expected.rel_mse;
         prediction.rel_mse = stopped + noise;
+        prediction.promised_rel_mse = prediction.rel_mse;
         prediction.basis = fmt::format("{} bounces lack {:.3f}; noise {:.3f} at {:.0f} spp", bounces, stopped, noise, spp);
         if (expected.floor_bounces) {
             prediction.basis +=
@@ -149,10 +158,16 @@ ErrorPrediction predict_error(const SceneAnalysis& analysis, const std::string& 
                                            : ")";
         return prediction;
     }
-    const auto [own, own_basis] = own_error(analysis, method, preset, bounces, measured, priors);
-    prediction.rel_mse = std::max(0.0, stopped + own);  // own is negative where it fills in what the bounces lack
+    const OwnErrorOf own = own_error(analysis, method, preset, bounces, measured, priors);
+    prediction.rel_mse = std::max(0.0, stopped + own.estimate);  // negative where it fills in what the bounces lack
+    prediction.promised_rel_mse = std::max(prediction.rel_mse, stopped + own.promised);
     prediction.basis = fmt::format("{} bounce{} lack {:.3f}; {} {} adds {:.3f} {}", bounces, bounces == 1 ? "" : "s",
-                                   stopped, method, preset, own, own_basis);
+                                   stopped, method, preset, own.estimate, own.basis);
+    if (prediction.promised_rel_mse > prediction.rel_mse) {
+        prediction.basis += fmt::format(", {:.3f} with the reference noise its comparisons took out counted back, "
+                                        "which a target is promised",
+                                        stopped + own.promised);
+    }
     if (leaks_through_thin_walls(analysis, method, preset)) {
         // Promised what the bench's leaking scenes measured, or what this scene's frames did; with
         // neither, nothing is known of how far the light leaks.

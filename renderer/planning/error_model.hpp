@@ -35,6 +35,10 @@ namespace bounce::planning {
 
 struct ErrorPrediction {
     double rel_mse = 0.0;
+    // What a target error is promised: rel_mse, or more where the own error measured here took the
+    // reference's noise out by its statistic (SceneMeasurements::OwnError::promised). A reference's
+    // is its rel_mse.
+    double promised_rel_mse = 0.0;
     std::string basis;                   // how it was made, in words
     std::optional<std::string> ruled_out;  // why the plan cannot be trusted on this scene
 };

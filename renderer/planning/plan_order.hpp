@@ -13,6 +13,8 @@ std::string describe(const Candidate& candidate);
 bool faster(const Candidate& a, const Candidate& b);
 // Its typical price where its bound is not (Candidate::expected_ms), else the bound.
 double expected_ms(const Candidate& candidate);
+// What a target error is judged by: Candidate::promised_error, else predicted_error.
+double promised_error(const Candidate& candidate);
 // By predicted error, then predicted time.
 bool more_accurate(const Candidate& a, const Candidate& b);
 

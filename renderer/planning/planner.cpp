@@ -471,6 +471,7 @@ std::vector<Candidate> candidates(const PlanningInputs& inputs, std::vector<std:
         scales[1.0] = 0.0;
         for (const auto& [scale, resample_error] : scales) {
             Candidate candidate{method, preset, knobs, 0.0, error.rel_mse + resample_error, {}, error.basis, scale};
+            if (error.promised_rel_mse > error.rel_mse) candidate.promised_error = error.promised_rel_mse + resample_error;
             PlanningInputs scaled = inputs;
             std::tie(scaled.width, scaled.height) = scaled_size(inputs.width, inputs.height, scale);
             if (inputs.memory && method != "reference") {
@@ -771,6 +772,7 @@ nlohmann::json plan_json(const Plan& plan) {
             {"predicted_ms", plan.chosen.predicted_ms},
             {"expected_ms", expected_ms(plan.chosen)},
             {"predicted_error", plan.chosen.predicted_error},
+            {"promised_error", promised_error(plan.chosen)},
             {"redoes", to_string(plan.chosen.redoes)},
             {"meets_budget", plan.meets_budget},
             {"considered", plan.considered},

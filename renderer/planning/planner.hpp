@@ -43,13 +43,16 @@ struct Candidate {
     std::string preset;
     methods::KnobValues knobs;  // over the preset's
     double predicted_ms = 0.0;  // a bound where the scene has not measured what the plan costs
-    double predicted_error = 0.0;
+    double predicted_error = 0.0;  // the estimate: what a time budget ranks plans by
     std::string cost_basis, error_basis;
     double scale = 1.0;  // rendered at this fraction of the size and upsampled (resolution.hpp)
     FrameChange redoes = FrameChange::none;  // what its frame would redo now (PlanningInputs::change)
     // Where predicted_ms holds a bound on bounces the scene has not measured: the price at what such
     // bounces typically cost (typical_bounce_cost). Unset: the same as predicted_ms.
     std::optional<double> expected_ms;
+    // What a target error is judged by, where more than predicted_error (ErrorPrediction::
+    // promised_rel_mse). Unset: predicted_error.
+    std::optional<double> promised_error;
 };
 
 struct Plan {

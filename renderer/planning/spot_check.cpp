@@ -200,7 +200,7 @@ void record_spot_check(SceneMeasurements& measurements, const std::vector<double
 bool ruled_out_by_measurements(const SceneMeasurements& measured, const SceneAnalysis& analysis, const std::string& method,
                                const std::string& preset, const methods::KnobValues& knobs, double target) {
     if (!measured.own_error(method, preset, modelled_bounces(method, knobs))) return false;
-    return predict_error(analysis, method, preset, knobs, &measured).rel_mse > target;
+    return predict_error(analysis, method, preset, knobs, &measured).promised_rel_mse > target;
 }
 
 std::string describe(const SpotCheck& check, const SpotEstimate& estimate) {

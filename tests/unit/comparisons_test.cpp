@@ -167,6 +167,46 @@ TEST(OwnError, OfAViewsEstimatesTheOneThatTookOutLeastStands) {
     }
 }
 
+// A target is promised each comparison's own error with the noise its reference's statistic took out
+// counted back (SceneMeasurements::OwnError::promised), the largest of them; the estimate stays what a
+// time budget ranks by. The glossy box's vct draft at 2 bounces: 0.0697 once 0.0077 of noise was
+// taken out, measuring 0.077 against the truth. A promise is never under the estimate, a view's bounds
+// keep the least promise, and a promise carried to fewer bounces is the larger counts' largest.
+TEST(OwnError, ATargetIsPromisedTheEstimateWithTheNoiseItTookOutCountedBack) {
+    SceneMeasurements measured;
+    measured.record_own_estimate("vct", "draft", 2, 0.0697, 7, 0.0081, 0.0077);
+    auto own = measured.own_error("vct", "draft", 2);
+    ASSERT_TRUE(own);
+    EXPECT_DOUBLE_EQ(own->rel_mse, 0.0697);
+    EXPECT_DOUBLE_EQ(own->promised, 0.0697 + 0.0077);
+    // Another view whose estimate is larger but surer: each count is its own largest.
+    measured.record_own_estimate("vct", "draft", 2, 0.072, 8, 0.001, 0.001);
+    own = measured.own_error("vct", "draft", 2);
+    EXPECT_DOUBLE_EQ(own->rel_mse, 0.072);
+    EXPECT_DOUBLE_EQ(own->promised, 0.0697 + 0.0077);
+    EXPECT_EQ(measured.own_errors("vct"), (std::map<std::string, double>{{"draft", 0.072}}));
+    EXPECT_EQ(measured.own_errors("vct", 0, /*promised=*/true), (std::map<std::string, double>{{"draft", 0.0697 + 0.0077}}));
+    // Carried to fewer bounces: the larger counts' largest promise.
+    EXPECT_DOUBLE_EQ(measured.own_error("vct", "draft", 1)->promised, 0.0697 + 0.0077);
+    // Bounds of one view: the least, and the least promise of them.
+    measured.record_own_error("cssm", "low", 4, 0.05, 3, 0.02);
+    measured.record_own_error("cssm", "low", 4, 0.04, 3, 0.04);
+    own = measured.own_error("cssm", "low", 4);
+    EXPECT_DOUBLE_EQ(own->rel_mse, 0.04);
+    EXPECT_DOUBLE_EQ(own->promised, 0.07);
+    measured.record_own_error("cssm", "low", 4, 0.06, 3, 0.0);
+    own = measured.own_error("cssm", "low", 4);
+    EXPECT_DOUBLE_EQ(own->rel_mse, 0.04);
+    EXPECT_DOUBLE_EQ(own->promised, 0.06);
+    // Without what was taken out (a prior, a spot check's bound): the promise is the estimate. An
+    // unknown or negative share counted back records nothing.
+    measured.record_own_error("isr", "draft", 1, 0.01);
+    EXPECT_DOUBLE_EQ(measured.own_error("isr", "draft", 1)->promised, 0.01);
+    measured.record_own_error("isr", "draft", 1, 0.5, std::nullopt, std::nan(""));
+    measured.record_own_estimate("isr", "draft", 1, 0.5, 9, 0.0, -0.1);
+    EXPECT_DOUBLE_EQ(measured.own_error("isr", "draft", 1)->promised, 0.01);
+}
+
 TEST(OwnError, TheErrorModelUsesWhatTheSceneMeasuredAndNeverPredictsACostlierPresetBetter) {
     const SceneAnalysis analysis = made_up_analysis();
     SceneMeasurements measured;
@@ -200,6 +240,19 @@ TEST(OwnError, TheErrorModelUsesWhatTheSceneMeasuredAndNeverPredictsACostlierPre
     EXPECT_DOUBLE_EQ(predict_error(analysis, "cssm", "ultra", {{"bounces", 2}}, &measured).rel_mse, 0.1 / 4.0 + 0.01);
     // Another method keeps its prior.
     EXPECT_DOUBLE_EQ(predict_error(analysis, "vct", "low", {}, &measured).rel_mse, 0.1 / 2.0 + *own_error_prior("vct", "low"));
+    // A prior, or an own error that took nothing out, is promised as it is.
+    EXPECT_DOUBLE_EQ(draft.promised_rel_mse, draft.rel_mse);
+    EXPECT_DOUBLE_EQ(low.promised_rel_mse, low.rel_mse);
+    // What its comparison took out by the statistic is promised back, to its preset and to the
+    // costlier presets that take its error; the estimate is unchanged.
+    measured.record_own_estimate("cssm", "low", 2, 0.2 * prior_low, 5, 0.02, 0.01);
+    const ErrorPrediction unsure = predict_error(analysis, "cssm", "low", {{"bounces", 2}}, &measured);
+    EXPECT_DOUBLE_EQ(unsure.rel_mse, 0.1 / 4.0 + 0.25 * prior_low);
+    ASSERT_LT(0.05 * prior_low, 0.01);  // the unsure estimate's promise is the larger
+    EXPECT_DOUBLE_EQ(unsure.promised_rel_mse, 0.1 / 4.0 + 0.2 * prior_low + 0.01);
+    EXPECT_NE(unsure.basis.find("which a target is promised"), std::string::npos) << unsure.basis;
+    const ErrorPrediction unsure_medium = predict_error(analysis, "cssm", "medium", {{"bounces", 2}}, &measured);
+    EXPECT_DOUBLE_EQ(unsure_medium.promised_rel_mse, unsure.promised_rel_mse);
 }
 
 TEST(FrameComparisons, TheOwnErrorIsTheRelMseLessTheReferencesNoiseAndTheBouncesItLacks) {
@@ -217,6 +270,9 @@ TEST(FrameComparisons, TheOwnErrorIsTheRelMseLessTheReferencesNoiseAndTheBounces
     EXPECT_DOUBLE_EQ(made[0].reference_noise, noise);
     EXPECT_DOUBLE_EQ(made[0].bounce_gap, gap);
     EXPECT_NEAR(measured.own_error("cssm", "low", 2)->rel_mse, rel_mse - noise - gap, 1e-6);
+    // A target is promised the estimate with the noise the statistic took out counted back.
+    EXPECT_NEAR(made[0].unsure, noise, 1e-12);
+    EXPECT_NEAR(measured.own_error("cssm", "low", 2)->promised, rel_mse - gap, 1e-6);
     // A frame whose error is mostly the bounces it lacks says little of its own: not recorded.
     // (1.25 against 1.0: relMSE 0.062, of which 0.05 - 0.00625 is the light of bounces 1 to 4.)
     EXPECT_TRUE(comparisons.add(7, frame("vct", "high", {}, 1.25f), &analysis, measured).empty());
@@ -651,6 +707,9 @@ TEST(FrameComparisons, ANoiseOverAQuarterOfTheRelMseLeavesABoundNotAnEstimate) {
     EXPECT_LT(made[0].own_error, *own_error_prior("cssm", "low", 4));
     ASSERT_TRUE(measured.own_error("cssm", "low", 4));
     EXPECT_DOUBLE_EQ(measured.own_error("cssm", "low", 4)->rel_mse, made[0].own_error);
+    // Promised without the half of the noise it took out: the relMSE itself.
+    EXPECT_DOUBLE_EQ(made[0].unsure, FrameComparisons::kBoundNoiseShare * made[0].reference_noise);
+    EXPECT_NEAR(measured.own_error("cssm", "low", 4)->promised, made[0].rel_mse, 1e-12);
     EXPECT_TRUE(measured.compared("cssm", "low"));
     for (const float value : {1.25f, 1.05f}) {
         SceneMeasurements nothing;
@@ -778,6 +837,9 @@ TEST(FrameComparisons, ADrownedComparisonWithASecondDrawOfItsSeedTakesTheirCross
     EXPECT_NEAR(c.own_error, c.cross_rel_mse + c.cross_standard_error, 1e-12);
     ASSERT_TRUE(measured.own_error("cssm", "low", 4));
     EXPECT_DOUBLE_EQ(measured.own_error("cssm", "low", 4)->rel_mse, c.own_error);
+    // The two draws measured the noise: nothing taken out by the statistic, so nothing counted back.
+    EXPECT_EQ(c.unsure, 0.0);
+    EXPECT_DOUBLE_EQ(measured.own_error("cssm", "low", 4)->promised, c.own_error);
     EXPECT_TRUE(measured.compared("cssm", "low"));
     // An estimate: a bound of the view later does not replace it.
     measured.record_own_error("cssm", "low", 4, 0.001, 3);
