@@ -128,7 +128,7 @@ struct FrameOptions {
                                              "plan the most accurate frame predicted within this many ms (method auto "
                                              "unless --method names one)");
         target_error_given = command.add_option("--target-error", target_error,
-                                                "plan the fastest frame predicted within this relMSE against the reference");
+                                                "plan the fastest frame promised within this relMSE against the reference");
     }
 
     json body() const {

@@ -79,11 +79,11 @@ Plan choose(const std::vector<Candidate>& candidates, const Budget& budget) {
         plan.meets_budget = true;
         plan.chosen = *best;
         plan.why = budget.max_error
-                       ? fmt::format("the fastest of {} plans predicted within {}{}", plan.considered, error_text,
+                       ? fmt::format("the fastest of {} plans promised within {}{}", plan.considered, error_text,
                                      budget.max_ms ? " and " + time_text : "")
                        : fmt::format("the most accurate of {} plans predicted within {}", plan.considered, time_text);
         if (cheapest != fastest_bound) {
-            plan.why = fmt::format("of {} plans, the fastest at its expected price ({:.1f} ms) of those predicted within {} "
+            plan.why = fmt::format("of {} plans, the fastest at its expected price ({:.1f} ms) of those promised within {} "
                                    "whose bound on time is at most {:g}x the least ({} at {:.1f} ms)",
                                    plan.considered, expected_ms(*cheapest), error_text, kTargetTimeSlack,
                                    describe(*fastest_bound), fastest_bound->predicted_ms);
@@ -99,14 +99,17 @@ Plan choose(const std::vector<Candidate>& candidates, const Budget& budget) {
             if (within_time(c) && (!best || more_accurate(c, *best))) best = &c;
         }
         plan.chosen = *best;
-        plan.why = fmt::format("no plan is predicted within both {} and {}: the most accurate within {}", error_text,
+        plan.why = fmt::format("no plan is promised within {} and predicted within {}: the most accurate within {}", error_text,
                                time_text, time_text);
     } else if (budget.max_ms) {
         plan.chosen = *std::min_element(candidates.begin(), candidates.end(), faster);
         plan.why = fmt::format("no plan is predicted within {}: the fastest", time_text);
     } else {
-        plan.chosen = *std::min_element(candidates.begin(), candidates.end(), more_accurate);
-        plan.why = fmt::format("no plan is predicted within {}: the most accurate", error_text);
+        // The nearest to the target: the least promise, then the least estimate.
+        plan.chosen = *std::min_element(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) {
+            return promised_error(a) != promised_error(b) ? promised_error(a) < promised_error(b) : more_accurate(a, b);
+        });
+        plan.why = fmt::format("no plan is promised within {}: the least promised", error_text);
     }
     plan.why += fmt::format(", {}: {:.1f} ms ({}), relMSE {:.3f} ({})", describe(plan.chosen), plan.chosen.predicted_ms,
                             plan.chosen.cost_basis, plan.chosen.predicted_error, plan.chosen.error_basis);

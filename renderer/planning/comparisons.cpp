@@ -236,11 +236,11 @@ std::optional<Comparison> FrameComparisons::compare(const RenderResult& gpu_fram
     // both read 0, each promised the 0.094 its bounce lacks, and the worse won the tie within
     // 200 ms. Never below -stopped_error[b] (an error is not negative), and carried to other bounce
     // counts as 0 (SceneMeasurements::own_error).
-    c.own_error = std::max(-stopped_at(analysis, c.bounces),
-                           c.rel_mse - noise_taken - c.bounce_gap + c.cross_term + c.cross_beyond);
-    // A promise does not count on the noise the statistic took out (Comparison::unsure).
-    double promised = c.cross_estimate ? c.own_error
-                                       : std::max(-stopped_at(analysis, c.bounces), c.own_error + noise_taken);
+    const double with_noise = c.rel_mse - c.bounce_gap + c.cross_term + c.cross_beyond;
+    c.own_error = std::max(-stopped_at(analysis, c.bounces), with_noise - noise_taken);
+    // A promise does not count on the noise the statistic took out (Comparison::unsure); a cross
+    // estimate's two draws measured it.
+    double promised = c.cross_estimate ? c.own_error : std::max(-stopped_at(analysis, c.bounces), with_noise);
     // Against a reference lacking light the frame has, a frame that lacks light itself agrees better
     // than it would with the whole, by up to 2 sqrt(own x lacking) + lacking where the two are
     // missing in the same places (relMSE is a weighted squared norm: the triangle inequality). That
@@ -248,13 +248,14 @@ std::optional<Comparison> FrameComparisons::compare(const RenderResult& gpu_fram
     // (lacking 0.005) and measures 0.052 against the whole; the bound says 0.075.
     // A noise bound is kept only where the relMSE is more than the noise taken out (else the noise
     // expected is more than this draw's, and the rest says nothing), never below 0, and only where
-    // it says more than the prior, which it would otherwise replace.
+    // it says more than the prior, which it would otherwise replace. Its promise is never over that
+    // prior: a bound that tells less than the prior does not make the preset worse than unmeasured.
     if (c.noise_bound) {
         if (c.rel_mse <= kBoundNoiseShare * c.reference_noise) return std::nullopt;
         c.own_error = std::max(0.0, c.own_error);
-        promised = std::max(c.own_error, promised);
         const std::optional<double> prior = own_error_prior(c.method, c.preset, c.bounces);
         if (!prior || c.own_error >= *prior) return std::nullopt;
+        promised = std::clamp(promised, c.own_error, *prior);
     }
     const bool bound = extra_light > 0.0 || c.noise_bound;
     if (extra_light > 0.0) {

@@ -74,7 +74,10 @@ struct Comparison {
     double cross_standard_error = 0.0;
     // What a target's promise adds to own_error (SceneMeasurements::OwnError::promised): the noise
     // taken out by the reference's statistic (all of it for an estimate, the half of a bound), which
-    // the frame's relMSE need not have held. 0 for a cross estimate, whose two draws measure the noise.
+    // the frame's relMSE need not have held; less where own_error is clamped (at -stopped_error[b],
+    // or a bound's promise at the preset's prior), and through the triangle inequality where the
+    // reference lacks light the frame has ((sqrt(promise) + sqrt(l))^2 - (sqrt(own) + sqrt(l))^2).
+    // 0 for a cross estimate, whose two draws measure the noise.
     double unsure = 0.0;
 };
 

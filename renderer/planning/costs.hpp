@@ -251,10 +251,10 @@ public:
         // The largest of the same comparisons with the noise each took out by the statistic counted
         // back: what a target error is promised. The noise a reference adds to a frame's relMSE is
         // its statistic only on average over scenes and frames; where the frame errs most it may add
-        // less (in the glossy box vct draft at 2 bounces read 0.062 against a 192-sample reference of
-        // 2 bounces, 0.0697 once the cross term was added and the 0.0077 of noise expected taken out,
-        // was promised 0.096 for a target of 0.1 and measured 0.103: the noise had added next to
-        // none). A time budget ranks by rel_mse, the estimate.
+        // less (in the glossy box vct draft at 2 bounces read 0.062 against the 2-bounce prefix of a
+        // 192-sample reference of 6 bounces, 0.0697 once the cross term was added and the 0.0077 of
+        // noise expected taken out, was predicted 0.096 for a target of 0.1 and measured 0.103: the
+        // noise had added next to none). A time budget ranks by rel_mse, the estimate.
         double promised = 0.0;
     };
     // The largest of the last comparisons at this preset and bounce count, else at this preset's
@@ -299,7 +299,7 @@ private:
         std::optional<std::uint64_t> view;  // the view's frame it is of, where known
         bool bound = false;                 // a bound (record_own_error with a view), not an estimate
         double taken_out = 0.0;             // an estimate's: what its comparison took out
-        double unsure = 0.0;                // what a promise adds back (record_own_error)
+        double unsure = 0.0;                // what a promise adds back (record_own_error, record_own_estimate)
     };
     std::map<std::tuple<std::string, std::string, int>, std::deque<RecordedOwnError>> own_errors_;
     std::set<std::tuple<std::string, std::string, int>> compared_;

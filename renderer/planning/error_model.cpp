@@ -61,11 +61,14 @@ OwnErrorOf own_error(const SceneAnalysis& analysis, const std::string& method, c
     const std::map<std::string, double> measured_presets = measured->own_errors(method, bounces);
     const std::map<std::string, double> promised_presets = measured->own_errors(method, bounces, /*promised=*/true);
     const std::pair<const std::string, double>* cheaper = nullptr;
-    std::vector<double> ratios;
+    std::vector<double> ratios, promised_ratios;
     for (const auto& entry : measured_presets) {
         if (rank(entry.first) < rank(preset) && (!cheaper || rank(entry.first) > rank(cheaper->first))) cheaper = &entry;
         const double other_prior = prior_of(entry.first);
-        if (rank(entry.first) > rank(preset) && other_prior > 0.0) ratios.push_back(entry.second / other_prior);
+        if (rank(entry.first) > rank(preset) && other_prior > 0.0) {
+            ratios.push_back(entry.second / other_prior);
+            promised_ratios.push_back(promised_presets.at(entry.first) / other_prior);
+        }
     }
     if (cheaper) {
         return {cheaper->second, promised_presets.at(cheaper->first),
@@ -74,8 +77,10 @@ OwnErrorOf own_error(const SceneAnalysis& analysis, const std::string& method, c
     }
     if (ratios.empty() || prior <= 0.0) return {prior, prior, bench};
     const double ratio = median(std::move(ratios));
-    if (ratio <= 1.0) return {prior, prior, bench};
-    return {prior * ratio, prior * ratio,
+    // Promised as their promises measured, in the same proportion, never under the estimate.
+    const double promised = prior * std::max({1.0, ratio, median(std::move(promised_ratios))});
+    if (ratio <= 1.0) return {prior, promised, bench};
+    return {prior * ratio, promised,
             fmt::format("({:.3f} {} x {:.2f}, as this scene's costlier {} presets measured)", prior, bench, ratio, method)};
 }
 

@@ -13,7 +13,7 @@ std::string describe(const Candidate& candidate);
 bool faster(const Candidate& a, const Candidate& b);
 // Its typical price where its bound is not (Candidate::expected_ms), else the bound.
 double expected_ms(const Candidate& candidate);
-// What a target error is judged by: Candidate::promised_error, else predicted_error.
+// What a target error is judged by: the larger of Candidate::promised_error and predicted_error.
 double promised_error(const Candidate& candidate);
 // By predicted error, then predicted time.
 bool more_accurate(const Candidate& a, const Candidate& b);

@@ -2,14 +2,16 @@
 // measured frames and its analysis (error_model.hpp), it lists every plan it can predict, a method
 // with a preset and knobs, and chooses one for a budget:
 //
-//   max_error E: the fastest plan predicted at or under E, at expected prices among plans whose
+//   max_error E: the fastest plan promised at or under E (Candidate::promised_error: the predicted
+//                error with the reference noise its measurements took out counted back), at
+//                expected prices among plans whose
 //                bounds are within kTargetTimeSlack of the least bound, and of plans priced
 //                alike with it (kPriceTie) the most accurate (see choose());
 //   max_ms T:    the most accurate plan predicted within T;
 //   both:        the fastest meeting both (of those priced alike, the most accurate), else the
 //                most accurate within T.
 //
-// When no plan meets the budget it says so and takes the nearest: the most accurate (for E) or
+// When no plan meets the budget it says so and takes the nearest: the least promised (for E) or
 // the fastest (for T). Predicted times are of the frame as it would be rendered now: a warm frame, plus
 // what the frame would redo where the lights, the objects or the method's knobs changed since its
 // method's last frame (frame_change.hpp).
@@ -97,7 +99,7 @@ std::vector<Candidate> probes(const std::vector<Candidate>& all, const Candidate
 
 // A target error is judged against the cheapest plan that meets it: at most this many times its
 // time (bench/planner). For max_error alone, choose() takes the plan of least expected price
-// (Candidate::expected_ms) among those predicted within E whose predicted_ms, a bound, is at most
+// (Candidate::expected_ms) among those promised within E whose predicted_ms, a bound, is at most
 // this many times the least predicted_ms within E. A plan priced by a bound on bounces the scene
 // has not measured then wins where it typically costs less (the furnished room's cssm draft at 8
 // bounces, bound at 2.9 times its 1-bounce frames, took 1.25 to 1.9 times them, and lost its race to

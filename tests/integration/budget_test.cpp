@@ -80,6 +80,8 @@ TEST(Budget, AnAutoRenderCarriesItsPlanAndKeepsThePredictedTime) {
     // The expected price is never above the bound a time budget keeps.
     EXPECT_GT(plan["expected_ms"].get<double>(), 0.0) << plan.dump();
     EXPECT_LE(plan["expected_ms"].get<double>(), plan["predicted_ms"].get<double>()) << plan.dump();
+    // A promise is never under the estimate.
+    EXPECT_GE(plan["promised_error"].get<double>(), plan["predicted_error"].get<double>()) << plan.dump();
     EXPECT_GT(plan["considered"].get<int>(), 20);
     EXPECT_FALSE(plan["why"].get<std::string>().empty());
     // The frame is the plan's.

@@ -235,6 +235,14 @@ TEST(OwnError, TheErrorModelUsesWhatTheSceneMeasuredAndNeverPredictsACostlierPre
     const ErrorPrediction hard_draft = predict_error(analysis, "cssm", "draft", {{"bounces", 2}}, &harder);
     EXPECT_NEAR(hard_draft.rel_mse, 0.1 / 4.0 + 2.0 * prior_draft, 1e-12);
     EXPECT_NE(hard_draft.basis.find("as this scene's costlier cssm presets measured"), std::string::npos) << hard_draft.basis;
+    EXPECT_NEAR(hard_draft.promised_rel_mse, hard_draft.rel_mse, 1e-12);
+    // Promised as their promises measured: a costlier preset estimated under its prior but promised
+    // three times it leaves the cheaper one its prior as the estimate and three times it as the promise.
+    SceneMeasurements unsure_harder;
+    unsure_harder.record_own_estimate("cssm", "low", 2, 0.5 * prior_low, 1, 0.0, 2.5 * prior_low);
+    const ErrorPrediction unsure_draft = predict_error(analysis, "cssm", "draft", {{"bounces", 2}}, &unsure_harder);
+    EXPECT_NEAR(unsure_draft.rel_mse, 0.1 / 4.0 + prior_draft, 1e-12);
+    EXPECT_NEAR(unsure_draft.promised_rel_mse, 0.1 / 4.0 + 3.0 * prior_draft, 1e-12);
     // A measured costlier preset's own error is the nearest cheaper one's, not an older one's.
     measured.record_own_error("cssm", "high", 2, 0.01);
     EXPECT_DOUBLE_EQ(predict_error(analysis, "cssm", "ultra", {{"bounces", 2}}, &measured).rel_mse, 0.1 / 4.0 + 0.01);
@@ -518,7 +526,9 @@ TEST(FrameComparisons, AFrameThatFillsInTheLightItsBouncesLackAddsANegativeOwnEr
     const auto own = measured.own_error("direct", "high", 0);
     ASSERT_TRUE(own && own->exact);
     EXPECT_NEAR(own->rel_mse, -0.09 / 1.01 - noise, 1e-6);
+    EXPECT_NEAR(own->promised, -0.09 / 1.01, 1e-6);  // the noise taken out, counted back
     EXPECT_NEAR(predict_error(analysis, "direct", "high", {}, &measured).rel_mse, 0.1 - 0.09 / 1.01 - noise, 1e-6);
+    EXPECT_NEAR(predict_error(analysis, "direct", "high", {}, &measured).promised_rel_mse, 0.1 - 0.09 / 1.01, 1e-6);
     // Never below what the bounces lack: the error against every bounce is not negative.
     SceneMeasurements far;
     FrameComparisons other;
@@ -528,6 +538,8 @@ TEST(FrameComparisons, AFrameThatFillsInTheLightItsBouncesLackAddsANegativeOwnEr
     const auto floored = other.add(6, whole, &little_missing, far);
     ASSERT_EQ(floored.size(), 1u);
     EXPECT_DOUBLE_EQ(floored[0].own_error, -0.01);
+    // The floor took in the noise too: nothing is left to count back.
+    EXPECT_DOUBLE_EQ(floored[0].unsure, 0.0);
     EXPECT_DOUBLE_EQ(predict_error(little_missing, "direct", "high", {}, &far).rel_mse, 0.0);
     // Carried from 2 bounces to 1, a negative own error counts as 0.
     SceneMeasurements carried;

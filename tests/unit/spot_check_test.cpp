@@ -304,6 +304,13 @@ TEST(SpotCheck, AFailedTryRulesOutThePresetAtFewerBouncesAndNothingElse) {
     SceneMeasurements passed;
     record_spot_check(passed, analysis.bounces.stopped_error, "cssm", "draft", {{"bounces", 8}}, check, reading(0.01, 0.002));
     EXPECT_FALSE(ruled_out_by_measurements(passed, analysis, "cssm", "draft", {{"bounces", 6}}, 0.05));
+    // Estimated under the target by a comparison that took noise out, promised over it: ruled out
+    // (a target is judged by the promise).
+    SceneMeasurements unsure;
+    unsure.record_own_estimate("cssm", "draft", 8, 0.02, 1, 0.03, 0.03);
+    ASSERT_LT(predict_error(analysis, "cssm", "draft", {{"bounces", 8}}, &unsure).rel_mse, 0.05);
+    EXPECT_TRUE(ruled_out_by_measurements(unsure, analysis, "cssm", "draft", {{"bounces", 8}}, 0.05));
+    EXPECT_FALSE(ruled_out_by_measurements(unsure, analysis, "cssm", "draft", {{"bounces", 8}}, 0.06));
 }
 
 DeviceCosts costs_for_checks() {
