@@ -201,6 +201,7 @@ std::optional<Comparison> FrameComparisons::compare(const RenderResult& gpu_fram
     // reference's noise cancels: its own against the deeper frame carries it as the GPU frame's does.
     if (deeper && deeper->frame.width == gpu_frame.frame.width && deeper->frame.height == gpu_frame.frame.height &&
         c.bounce_gap == 0.0) {
+        c.crossed = true;
         c.later_light = image::compare(reference.frame, deeper->frame).rel_mse;
         c.cross_term = image::compare(gpu_frame.frame, deeper->frame).rel_mse - c.later_light - c.rel_mse;
         // The deeper frame stops too, and the light past it meets the frame's error as well: in the
@@ -270,7 +271,8 @@ std::optional<Comparison> FrameComparisons::compare(const RenderResult& gpu_fram
         const double uncertain = c.cross_estimate ? 2.0 * c.cross_standard_error + (deeper ? c.reference_noise : 0.0)
                                                   : c.reference_noise;
         measurements.record_own_estimate(c.method, c.preset, c.bounces, c.own_error, *view,
-                                         uncertain + c.bounce_gap + c.cross_beyond, c.unsure);
+                                         uncertain + c.bounce_gap + c.cross_beyond, c.unsure,
+                                         c.crossed ? std::optional(c.cross_term + c.cross_beyond) : std::nullopt);
     } else {
         measurements.record_own_error(c.method, c.preset, c.bounces, c.own_error, bound ? view : std::nullopt, c.unsure);
     }

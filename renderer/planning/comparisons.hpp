@@ -50,6 +50,7 @@ struct Comparison {
     // light of the later bounces beyond their sum (negative where the frame adds light where they do).
     double cross_term = 0.0;
     double later_light = 0.0;  // relMSE(reference, deeper): the later bounces' light, with their noise
+    bool crossed = false;      // measured against a deeper frame: cross_term and cross_beyond hold
     // The same past the deeper frame's D bounces: the term is linear in the later light, so bounce D's
     // part of it (cross_term less the same against the frame of D - 1 bounces) goes on as the later
     // bounces' light does, by the analysis' ratio r per bounce: x_D r / (1 - r), where x_D > 0, and

@@ -448,13 +448,24 @@ void SceneMeasurements::record_own_error(const std::string& method, const std::s
 }
 
 void SceneMeasurements::record_own_estimate(const std::string& method, const std::string& preset, int bounces,
-                                            double rel_mse, std::uint64_t view, double taken_out, double unsure) {
-    if (!std::isfinite(rel_mse) || !(taken_out >= 0.0) || !(unsure >= 0.0)) return;
+                                            double rel_mse, std::uint64_t view, double taken_out, double unsure,
+                                            std::optional<double> cross) {
+    if (!std::isfinite(rel_mse) || !(taken_out >= 0.0) || !(unsure >= 0.0) || (cross && !std::isfinite(*cross))) return;
     const std::lock_guard lock(mutex_);
     auto& kept = own_errors_[{method, preset, bounces}];
-    const RecordedOwnError estimate{rel_mse, view, false, taken_out, unsure};
+    RecordedOwnError estimate{rel_mse, view, false, taken_out, unsure, cross};
     for (auto& recorded : kept) {
         if (recorded.view != view) continue;
+        if (!recorded.bound) {
+            // One frame's error meets the later light alike, whichever reference measured the rest.
+            if (recorded.cross && !estimate.cross) {
+                estimate.rel_mse += *recorded.cross;
+                estimate.cross = recorded.cross;
+            } else if (estimate.cross && !recorded.cross) {
+                recorded.rel_mse += *estimate.cross;
+                recorded.cross = estimate.cross;
+            }
+        }
         if (recorded.bound || taken_out < recorded.taken_out) recorded = estimate;
         return;
     }

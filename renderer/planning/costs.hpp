@@ -242,8 +242,16 @@ public:
     // 0.0155 against a 16-sample reference (0.0085 taken out), then 0.0037 against a quieter one of
     // 4 bounces (0.0011), and measures 0.0134 whole, where the bounces it lacks make 0.010; kept, the
     // first priced out the cheapest plan that met 0.02 (the planner's took 2.7 times as long). It supersedes the view's bounds, which tell less.
+    // `cross`: the part of rel_mse that a deeper frame's later light measured (Comparison::cross_term
+    // and cross_beyond), where the reference was the bounce prefix of one. The view's frame meets
+    // that light whichever reference measures the rest, so an estimate without it takes the view's
+    // (and gives its own to one without): in the street isr draft read 0.0017 against the 1-bounce
+    // prefix of a 4-bounce reference (-0.0091 of cross term in it), then 0.0106 against a quieter
+    // reference of one bounce alone, which, standing alone, promised 0.0206 for 0.02 where the frame
+    // measures 0.0113 and priced the cheapest plan that met it out.
     void record_own_estimate(const std::string& method, const std::string& preset, int bounces, double rel_mse,
-                             std::uint64_t view, double taken_out, double unsure = 0.0);
+                             std::uint64_t view, double taken_out, double unsure = 0.0,
+                             std::optional<double> cross = std::nullopt);
     struct OwnError {
         double rel_mse = 0.0;
         int frames = 0;      // comparisons it is the largest of
@@ -300,6 +308,7 @@ private:
         bool bound = false;                 // a bound (record_own_error with a view), not an estimate
         double taken_out = 0.0;             // an estimate's: what its comparison took out
         double unsure = 0.0;                // what a promise adds back (record_own_error, record_own_estimate)
+        std::optional<double> cross;        // an estimate's part from a deeper frame's light (record_own_estimate)
     };
     std::map<std::tuple<std::string, std::string, int>, std::deque<RecordedOwnError>> own_errors_;
     std::set<std::tuple<std::string, std::string, int>> compared_;

@@ -167,6 +167,41 @@ TEST(OwnError, OfAViewsEstimatesTheOneThatTookOutLeastStands) {
     }
 }
 
+// A view's frame meets the later bounces' light alike whichever reference measured the rest: an
+// estimate without a deeper frame takes the cross term of the view's estimate that had one, and
+// gives it its own when it comes first. The street's isr draft: 0.0017 against the 1-bounce prefix
+// of a 4-bounce reference (a cross term of -0.0091 in it, 0.0011 taken out), then 0.0106 against a
+// 192-sample reference of one bounce alone (0.0008 taken out); it measures 0.0113 whole, of which
+// its bounce lacks 0.010.
+TEST(OwnError, AViewsEstimateKeepsTheCrossTermAQuieterReferenceCannotMeasure) {
+    for (const bool prefix_first : {true, false}) {
+        SCOPED_TRACE(prefix_first ? "the prefix first" : "the reference alone first");
+        SceneMeasurements measured;
+        const auto prefix = [&] { measured.record_own_estimate("isr", "draft", 1, 0.0017, 7, 0.0011, 0.0011, -0.0091); };
+        const auto alone = [&] { measured.record_own_estimate("isr", "draft", 1, 0.0106, 7, 0.0008, 0.0011); };
+        if (prefix_first) prefix(), alone();
+        else alone(), prefix();
+        const auto own = measured.own_error("isr", "draft", 1);
+        ASSERT_TRUE(own);
+        EXPECT_EQ(own->frames, 1);
+        EXPECT_NEAR(own->rel_mse, 0.0106 - 0.0091, 1e-12);  // the quieter reference, with the view's cross term
+        EXPECT_NEAR(own->promised, 0.0106 - 0.0091 + 0.0011, 1e-12);
+    }
+    // Both with a cross term, or neither: the one that took out least, as it is.
+    SceneMeasurements both;
+    both.record_own_estimate("isr", "draft", 1, 0.0017, 7, 0.0011, 0.0, -0.0091);
+    both.record_own_estimate("isr", "draft", 1, 0.0030, 7, 0.0005, 0.0, -0.0050);
+    EXPECT_DOUBLE_EQ(both.own_error("isr", "draft", 1)->rel_mse, 0.0030);
+    // Another view's cross term is not this view's.
+    SceneMeasurements views;
+    views.record_own_estimate("isr", "draft", 1, 0.0017, 7, 0.0011, 0.0, -0.0091);
+    views.record_own_estimate("isr", "draft", 1, 0.0106, 8, 0.0008, 0.0);
+    EXPECT_DOUBLE_EQ(views.own_error("isr", "draft", 1)->rel_mse, 0.0106);
+    // A cross term that is not a number records nothing.
+    views.record_own_estimate("isr", "draft", 1, 0.5, 9, 0.0, 0.0, std::nan(""));
+    EXPECT_DOUBLE_EQ(views.own_error("isr", "draft", 1)->rel_mse, 0.0106);
+}
+
 // A target is promised each comparison's own error with the noise its reference's statistic took out
 // counted back (SceneMeasurements::OwnError::promised), the largest of them; the estimate stays what a
 // time budget ranks by. The glossy box's vct draft at 2 bounces: 0.0697 once 0.0077 of noise was
