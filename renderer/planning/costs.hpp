@@ -248,7 +248,8 @@ public:
     // (and gives its own to one without): in the street isr draft read 0.0017 against the 1-bounce
     // prefix of a 4-bounce reference (-0.0091 of cross term in it), then 0.0106 against a quieter
     // reference of one bounce alone, which, standing alone, promised 0.0206 for 0.02 where the frame
-    // measures 0.0113 and priced the cheapest plan that met it out.
+    // measures 0.0113 and priced the cheapest plan that met it out. A reading against every bounce
+    // (a spot check's) passes a cross of 0: it holds the later light already.
     void record_own_estimate(const std::string& method, const std::string& preset, int bounces, double rel_mse,
                              std::uint64_t view, double taken_out, double unsure = 0.0,
                              std::optional<double> cross = std::nullopt);

@@ -189,8 +189,11 @@ void record_spot_check(SceneMeasurements& measurements, const std::vector<double
     if (lacking > 0.5 * estimate.rel_mse) return;
     const double own = estimate.rel_mse + kSpotConfidence * estimate.standard_error - std::max(lacking, 0.0);
     if (view) {
+        // Against (nearly) every bounce: the later light is in the reading, and a cross term of 0 keeps
+        // the view's comparisons from adding theirs to it (SceneMeasurements::record_own_estimate).
         measurements.record_own_estimate(method, preset, bounces, std::max(own, 0.0), *view,
-                                         kSpotConfidence * estimate.standard_error + std::max(lacking, 0.0));
+                                         kSpotConfidence * estimate.standard_error + std::max(lacking, 0.0),
+                                         /*unsure=*/0.0, /*cross=*/0.0);
     } else {
         measurements.record_own_error(method, preset, bounces, std::max(own, 0.0));
     }

@@ -280,6 +280,17 @@ TEST(SpotCheck, ACheckOfAViewIsNotRaisedByThatViewsBounds) {
     EXPECT_NEAR(measured.own_error("cssm", "draft", 5)->rel_mse, checked, 1e-12);
     measured.record_own_error("cssm", "draft", 5, 0.3, /*bound_of_view=*/8);
     EXPECT_NEAR(measured.own_error("cssm", "draft", 5)->rel_mse, 0.3, 1e-12);
+    // A check reads the frame against every bounce: a comparison of the view that measured a cross
+    // term against a deeper frame does not add it to the check's reading, before or after it.
+    for (const bool comparison_first : {true, false}) {
+        SCOPED_TRACE(comparison_first ? "the comparison first" : "the check first");
+        SceneMeasurements crossed;
+        const auto compared = [&] { crossed.record_own_estimate("cssm", "draft", 5, 0.01, 7, 0.05, 0.0, -0.03); };
+        if (comparison_first) compared();
+        record_spot_check(crossed, stopped, "cssm", "draft", {{"bounces", 5}}, check, read, /*view=*/7);
+        if (!comparison_first) compared();
+        EXPECT_NEAR(crossed.own_error("cssm", "draft", 5)->rel_mse, checked, 1e-12);  // it took out less
+    }
 
     SceneMeasurements unfiled;
     record_spot_check(unfiled, stopped, "cssm", "draft", {{"bounces", 5}}, check, read);
