@@ -386,6 +386,7 @@ void Renderer::install(SceneResources& resources, const std::string& method,
 
 RenderResult Renderer::render(SceneResources& resources, const RenderRequest& request, const std::atomic<bool>* cancelled) {
     const auto start = Clock::now();
+    const std::size_t programs_before = shaders_.size();
     RenderResult result;
     with_frame(resources, request, precompute_, [&](methods::Method& method, const methods::FrameContext& frame,
                                                     const methods::KnobValues& knobs) {
@@ -424,6 +425,7 @@ RenderResult Renderer::render(SceneResources& resources, const RenderRequest& re
         }
     }, cancelled);
     result.stats.render_ms = ms_since(start);
+    result.stats.programs_compiled = shaders_.size() - programs_before;
     return result;
 }
 

@@ -55,6 +55,10 @@ struct FrameStats {
     std::size_t resident_bytes = 0;
     std::map<std::string, double> method_statistics;  // Method::statistics() after this frame
     FrameChange change = FrameChange::none;  // GPU frames: what it redid against its method's last frame
+    // GPU frames: programs this frame compiled, each once per daemon (gpu::ShaderCache). Its time
+    // and its passes' include theirs (a driver may compile at a program's first draw), which no later
+    // frame of the same work pays: the planner keeps no time of such a frame (record_frame).
+    std::size_t programs_compiled = 0;
 
     // The GPU time of the frame's passes named `name` (0 where none ran: shadow_maps runs only in
     // frames that drew maps).

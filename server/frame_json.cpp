@@ -56,6 +56,7 @@ json frame_json(const RenderResult& result, std::uint64_t scene_version, std::st
     body["height"] = result.frame.height;
     body["format"] = format;
     body["redid"] = to_string(result.stats.change);
+    body["programs_compiled"] = result.stats.programs_compiled;
     body["timings_ms"] = {{"queue", ms_between(clock.received, clock.started)},
                           {"render", ms_between(clock.started, clock.rendered)},
                           {"gpu", result.stats.gpu_ms},

@@ -218,8 +218,10 @@ double predicted_ms(const PlanningInputs& inputs, const std::string& method, con
 std::optional<double> baseline_ms(const SceneAnalysis* analysis, const DeviceCosts& device, const std::string& method,
                                   const std::string& preset, const methods::KnobValues& knobs, int width, int height);
 
-// Records a rendered frame in the scene's measurements: its time against baseline_ms(), and for
-// reference frames of at least 4 samples, their noise per sample.
+// Records a rendered frame in the scene's measurements: its time against baseline_ms(), the shadow
+// maps' passes it timed, and for reference frames of at least 4 samples, their noise per sample. A
+// frame that compiled programs (FrameStats::programs_compiled) keeps no time: it paid what the
+// daemon pays once, and a change is priced by the frames that redid it alone.
 void record_frame(SceneMeasurements& measurements, const SceneAnalysis* analysis, const DeviceCosts& device,
                   const FrameStats& stats, int width, int height);
 // The same for a whole result: also the noise of its byproducts (a reference's frames of fewer

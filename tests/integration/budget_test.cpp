@@ -404,6 +404,9 @@ TEST(Budget, AFrameAfterALightChangeSaysWhatItRedoesAndIsPricedWithIt) {
     const auto warm = d.render(budget);
     EXPECT_EQ(warm.body["plan"]["redoes"], "none") << warm.body["plan"].dump();
     EXPECT_EQ(warm.body["redid"], "none");
+    // Its programs were compiled by the frames before it, once (the planner keeps no time of a frame
+    // that compiled any).
+    EXPECT_EQ(warm.body["programs_compiled"], 0) << warm.body.dump();
     // 0.5 W/sr as it is, in candela as files give it: 341.5 cd; dimmed by a fifth.
     d.client.request(MessageType::light_set, {{"scene", "cornell"}, {"light", "ceiling_light"}, {"intensity", 273.2}});
     const auto relit = d.render(budget);
