@@ -109,6 +109,32 @@ CorpusErrors read_corpus_errors(const std::filesystem::path& csv, int bounces) {
     return errors;
 }
 
+std::map<std::string, double> denoised_bounds(const std::filesystem::path& csv) {
+    std::ifstream in(csv);
+    if (!in) throw std::runtime_error(fmt::format("cannot read {}", csv.string()));
+    std::string line;
+    std::getline(in, line);
+    const std::vector<std::string> header = split(line);
+    const std::size_t scene = column_of(header, "scene", csv), noisy = column_of(header, "noisy_rel_mse", csv),
+                      denoised = column_of(header, "denoised_rel_mse", csv);
+    std::map<std::string, double> bounds;
+    for (int number_of_line = 2; std::getline(in, line); ++number_of_line) {
+        const std::vector<std::string> fields = split(line);
+        if (fields.size() < header.size()) {
+            throw std::runtime_error(fmt::format("{}:{}: {} fields where the header has {}", csv.string(), number_of_line,
+                                                 fields.size(), header.size()));
+        }
+        const double n = std::stod(fields[noisy]), d = std::stod(fields[denoised]);
+        if (!(n > 0.0) || !(d >= 0.0)) {
+            throw std::runtime_error(fmt::format("{}:{}: relMSE {} and {} are not a noisy frame's and a denoised one's",
+                                                 csv.string(), number_of_line, fields[noisy], fields[denoised]));
+        }
+        double& k = bounds[fields[scene]];
+        k = std::max(k, d / std::pow(n, planning::kDenoisedNoiseExponent));
+    }
+    return bounds;
+}
+
 PlacementErrors read_placement_errors(const std::vector<std::filesystem::path>& csvs) {
     PlacementErrors errors;
     for (const auto& csv : csvs) {
@@ -206,6 +232,11 @@ planning::OwnErrorPriors corpus_priors(const std::filesystem::path& directory,
         return scenes;
     };
     planning::OwnErrorPriors priors;
+    if (const auto denoise = directory / ".." / "denoise_scenes.csv"; std::filesystem::exists(denoise)) {
+        for (const auto& [scene, k] : denoised_bounds(denoise)) {
+            if (!left_out.count(scene)) priors.denoised_largest = std::max(priors.denoised_largest, k);
+        }
+    }
     CorpusErrors one_bounce = read_corpus_errors(directory / "quality.csv");
     for (const FurtherScenes& more : further) add_further(one_bounce, more.directory / "quality.csv", more.methods, walls);
     for (const auto& [key, by_scene] : one_bounce) {

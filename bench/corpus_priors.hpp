@@ -40,6 +40,11 @@ CorpusErrors read_corpus_errors(const std::filesystem::path& csv, int bounces = 
 // rel_mse_same_bounces). Throws std::runtime_error, naming the file, as read_corpus_errors does.
 PlacementErrors read_placement_errors(const std::vector<std::filesystem::path>& csvs);
 
+// Per scene of bench/denoise --every-scene's table, the least k for which its denoised frames' relMSE
+// is at most k n^kDenoisedNoiseExponent at every sample count (n the noisy frame's). Throws
+// std::runtime_error, naming the file, as read_corpus_errors does.
+std::map<std::string, double> denoised_bounds(const std::filesystem::path& csv);
+
 // The committed placement files under `results` (bench/results): cssm's atlas, vct's grid.
 std::vector<std::filesystem::path> placement_files(const std::filesystem::path& results);
 
@@ -77,7 +82,9 @@ FurtherScenes cornell_vct_tables(const std::filesystem::path& results);
 // one draw (cssm draft's in the atrium 0.018, 0.018 to 0.029 over five), and a promise must hold
 // wherever a scene's surfaces fall in the atlas or grid. `further` adds other bench scenes' tables
 // for the methods each names; `walls` must hold those scenes too (std::runtime_error naming the
-// scene where it does not, or where a scene is in both).
+// scene where it does not, or where a scene is in both). Where `directory`/../denoise_scenes.csv is
+// (bench/denoise --every-scene), the denoiser's bound too (OwnErrorPriors::denoised_largest): the
+// largest of denoised_bounds() over the scenes not left out.
 planning::OwnErrorPriors corpus_priors(const std::filesystem::path& directory,
                                        const std::map<std::string, ThinWalls>& walls,
                                        const std::set<std::string>& left_out = {}, bool two_bounce_table = true,

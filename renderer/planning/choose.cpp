@@ -1,6 +1,7 @@
 #include "renderer/planning/plan_order.hpp"
 
 #include "renderer/base/error.hpp"
+#include "renderer/methods/knobs.hpp"
 
 #include <algorithm>
 
@@ -27,6 +28,10 @@ double promised_error(const Candidate& candidate) {
 }
 bool more_accurate(const Candidate& a, const Candidate& b) {
     return a.predicted_error != b.predicted_error ? a.predicted_error < b.predicted_error : a.predicted_ms < b.predicted_ms;
+}
+
+bool denoised(const Candidate& candidate) {
+    return candidate.method == "reference" && methods::knob_or(candidate.knobs, "denoise", 0.0) != 0.0;
 }
 
 namespace {

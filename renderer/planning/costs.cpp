@@ -182,6 +182,19 @@ std::optional<double> SceneMeasurements::maps_ms(bool view_only, int cascades, i
     return std::nullopt;
 }
 
+void SceneMeasurements::record_denoise(double ms, double pixels) {
+    if (!(ms >= 0.0) || !(pixels > 0.0)) return;
+    const std::lock_guard lock(mutex_);
+    denoise_ms_per_pixel_.push_back(ms / pixels);
+    if (denoise_ms_per_pixel_.size() > kKept) denoise_ms_per_pixel_.pop_front();
+}
+
+std::optional<double> SceneMeasurements::denoise_ms_per_pixel() const {
+    const std::lock_guard lock(mutex_);
+    if (denoise_ms_per_pixel_.empty()) return std::nullopt;
+    return *std::max_element(denoise_ms_per_pixel_.begin(), denoise_ms_per_pixel_.end());
+}
+
 void SceneMeasurements::record_shadow_maps(int size, int cascades, double ms) { record_maps({false, cascades, size}, ms); }
 
 std::optional<double> SceneMeasurements::shadow_maps_ms(int size, int cascades) const {

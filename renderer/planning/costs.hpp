@@ -196,6 +196,12 @@ public:
     void record_view_cascades(int size, int cascades, double ms);
     std::optional<double> view_cascades_ms(int size, int cascades) const;
 
+    // The reference's denoiser (`denoise` 1), per pixel: its frames' filter time (the reference
+    // method's `denoise_ms`), which their recorded time leaves out; denoise_ms_per_pixel(): the
+    // largest of the last kKept, nullopt before any.
+    void record_denoise(double ms, double pixels);
+    std::optional<double> denoise_ms_per_pixel() const;
+
     // A reference frame's noise per sample (methods::reference::noise_per_sample) at a bounce count,
     // as a multiple of what the analysis measured there: over a whole frame's samples it meets rare
     // bright paths that the analysis' few samples miss. Of `spp` samples: a frame's statistic weighs
@@ -303,6 +309,7 @@ private:
     void record_maps(MapsKey key, double ms);
     std::optional<double> maps_ms(bool view_only, int cascades, int size) const;
     std::deque<double> noise_scales_, compared_noise_scales_;
+    std::deque<double> denoise_ms_per_pixel_;
     struct RecordedOwnError {
         double rel_mse = 0.0;
         std::optional<std::uint64_t> view;  // the view's frame it is of, where known

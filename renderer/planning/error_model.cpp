@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <map>
 #include <utility>
 #include <vector>
@@ -146,8 +147,24 @@ ErrorPrediction predict_error(const SceneAnalysis& analysis, const std::string& 
         const ReferenceNoise expected = reference_noise(analysis, bounces, spp, measured, NoiseAgainst::every_bounce);
         const double noise = expected.rel_mse;
         prediction.rel_mse = stopped + noise;
-        prediction.promised_rel_mse = prediction.rel_mse;
         prediction.basis = fmt::format("{} bounces lack {:.3f}; noise {:.3f} at {:.0f} spp", bounces, stopped, noise, spp);
+        if (methods::knob_or(knobs, "denoise", 0.0) != 0.0) {
+            // What the filter leaves of the noise, and adds: at most the bench's bound of it.
+            if (!(priors.denoised_largest > 0.0)) {
+                prediction.ruled_out = "no bound of the denoiser's error is known";
+                return prediction;
+            }
+            // The filter darkens (a firefly is left out by its neighbours), as the bounces it lacks do:
+            // the two add as errors of one sign may, by the triangle inequality, not apart.
+            const double left = priors.denoised_largest * std::pow(noise, kDenoisedNoiseExponent);
+            prediction.rel_mse = std::pow(std::sqrt(stopped) + std::sqrt(left), 2.0);
+            prediction.basis = fmt::format("{} bounces lack {:.3f}; denoised, {:.3f} at most of the noise {:.3f} at {:.0f} "
+                                           "spp ({:.3g} n^{:g} on {}), added to what the bounces lack as errors of one "
+                                           "sign add",
+                                           bounces, stopped, left, noise, spp, priors.denoised_largest,
+                                           kDenoisedNoiseExponent, priors.denoised_source);
+        }
+        prediction.promised_rel_mse = prediction.rel_mse;
         if (expected.floor_bounces) {
             prediction.basis +=
                 fmt::format(" (the noise of {} bounces, which more do not lessen", *expected.floor_bounces);

@@ -35,9 +35,13 @@ void record_frame(SceneMeasurements& measurements, const SceneAnalysis* analysis
     if (const auto baseline = baseline_ms(analysis, device, stats.method, stats.preset, stats.knobs, width, height)) {
         // A light dimmed as the camera moved drew the view cascades too: a change of power is kept
         // without them (they are priced as the camera's, from the pass recorded below).
+        // A denoised reference is kept as its trace, the filter apart (its time is the pixels').
+        const auto filter = stats.method_statistics.find("denoise_ms");
+        const double filter_ms = filter != stats.method_statistics.end() ? filter->second : 0.0;
+        if (filter_ms > 0.0) measurements.record_denoise(filter_ms, static_cast<double>(width) * height);
         const double measured_ms = stats.change == FrameChange::light_power
                                        ? std::max(0.0, stats.render_ms - stats.pass_ms("shadow_view_cascades"))
-                                       : stats.render_ms;
+                                       : std::max(0.0, stats.render_ms - filter_ms);
         const int bounces = static_cast<int>(methods::knob_or(stats.knobs, "bounces", -1.0));  // -1: no such knob
         measurements.record(stats.method, stats.preset, bounces, measured_ms, *baseline, static_cast<double>(width) * height,
                             stats.change);

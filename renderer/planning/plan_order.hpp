@@ -17,5 +17,7 @@ double expected_ms(const Candidate& candidate);
 double promised_error(const Candidate& candidate);
 // By predicted error, then predicted time.
 bool more_accurate(const Candidate& a, const Candidate& b);
+// A reference plan whose frame is filtered (`denoise` 1): no frame is compared with it.
+bool denoised(const Candidate& candidate);
 
 }  // namespace bounce::planning

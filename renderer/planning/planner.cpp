@@ -417,6 +417,16 @@ double redone_ms(const PlanningInputs& inputs, const std::string& method, const 
 double predicted_ms(const PlanningInputs& inputs, const std::string& method, const std::string& preset,
                     const methods::KnobValues& knobs, std::string* basis) {
     const double warm = warm_ms(inputs, method, preset, knobs, basis);
+    if (method == "reference" && methods::knob_or(knobs, "denoise", 0.0) != 0.0 && std::isfinite(warm)) {
+        // The filter works per pixel, whatever the samples: this scene's filters, else the bench's.
+        const auto measured = inputs.scene ? inputs.scene->denoise_ms_per_pixel() : std::nullopt;
+        const double filter = measured.value_or(kDenoiseMsPerPixel) * inputs.width * inputs.height;
+        if (basis) {
+            *basis += fmt::format("; + {:.1f} ms to denoise ({})", filter,
+                                  measured ? "as this scene's filters took" : "the bench's filter, per pixel");
+        }
+        return warm + filter;
+    }
     if (!std::isfinite(warm) || !inputs.change || method == "reference") return warm;
     const FrameChange change = inputs.change(method, preset, knobs, inputs.width, inputs.height);
     if (change == FrameChange::none) return warm;
@@ -524,6 +534,16 @@ std::vector<Candidate> candidates(const PlanningInputs& inputs, std::vector<std:
                     (ms <= *fill_ms ? below : above) = spp;
                 }
                 if (below > within) add(method, "medium", reference_knobs(below, bounces));
+                // Denoised, at the samples the denoiser's bound was measured at (OwnErrorPriors::denoised_largest).
+                if (inputs.own_error_priors().denoised_largest > 0.0 &&
+                    std::min(inputs.width, inputs.height) >= kDenoisedLeastSide) {
+                    for (const int spp : kReferenceSpp) {
+                        if (spp < kDenoisedLeastSpp || spp > kDenoisedMostSpp) continue;
+                        methods::KnobValues knobs = reference_knobs(spp, bounces);
+                        knobs["denoise"] = 1;
+                        add(method, "medium", knobs);
+                    }
+                }
             }
             continue;
         }
@@ -574,7 +594,9 @@ Plan plan(const PlanningInputs& inputs, const Budget& budget) {
 
 std::optional<Checks> spot_checks(const std::vector<Candidate>& all, const Candidate& chosen, const Budget& budget,
                                   const PlanningInputs& inputs) {
-    if (!budget.max_error || budget.max_ms || chosen.method != "reference" || chosen.scale != 1.0) return std::nullopt;
+    if (!budget.max_error || budget.max_ms || chosen.method != "reference" || chosen.scale != 1.0 || denoised(chosen)) {
+        return std::nullopt;
+    }
     const double target = *budget.max_error;
     const SceneAnalysis& analysis = inputs.analysis;
     Checks checks;
@@ -652,8 +674,9 @@ std::vector<const Candidate*> one_plan_per_preset(const std::vector<Candidate>& 
 
 std::vector<Candidate> probes(const std::vector<Candidate>& all, const Candidate& chosen, const SceneMeasurements* scene,
                               const SceneAnalysis* analysis, int prefix_bounces) {
-    // Only full-size frames are compared: an upsampled one's error is not its method's.
-    if (chosen.method != "reference" || chosen.scale != 1.0) return {};
+    // Only full-size frames are compared: an upsampled one's error is not its method's; nor with a
+    // denoised reference, whose error is the filter's too (FrameComparisons leaves such frames out).
+    if (chosen.method != "reference" || chosen.scale != 1.0 || denoised(chosen)) return {};
     const double share_ms = kProbeShare * chosen.predicted_ms;
     // Companions. A probe is compared only where the reference's noise and the light of the bounces
     // the probe lacks (both predicted) come to less than its own error (FrameComparisons::compare);

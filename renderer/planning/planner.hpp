@@ -94,6 +94,11 @@ struct Plan {
 // none where the chosen reference's own frame of the probe's bounce count (its bounce prefix, below
 // `prefix_bounces`: methods::reference::Accumulator) is predicted to leave it measurable.
 inline constexpr double kProbeShare = 1.0;
+
+// The reference's denoiser, per pixel, where the scene has timed none (SceneMeasurements::
+// denoise_ms_per_pixel): the largest of bench/denoise --every-scene's 30 filters (16 ms at 128x128 on
+// an AMD EPYC, 2 threads), rounded up. Its time does not depend on the samples.
+inline constexpr double kDenoiseMsPerPixel = 1.0e-3;
 std::vector<Candidate> probes(const std::vector<Candidate>& all, const Candidate& chosen, const SceneMeasurements* scene,
                               const SceneAnalysis* analysis = nullptr, int prefix_bounces = 0);
 

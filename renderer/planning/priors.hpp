@@ -19,6 +19,18 @@
 
 namespace bounce::planning {
 
+// The exponent of the denoiser's bound (OwnErrorPriors::denoised_largest): of 0.5 to 1, the one that
+// spread the bench scenes' k least (2.6x at 0.7, 3.6x at 0.5, 9.4x at 1).
+inline constexpr double kDenoisedNoiseExponent = 0.7;
+// The samples per pixel the denoiser's bound was measured at: a denoised reference is offered there
+// alone, and in frames at least as large as it was measured in, 128 pixels a side. The filter's
+// holes reach 16 pixels and its last pass 32 either side whatever the frame's size: in a smaller
+// frame they blur across more of the scene (at 48x48 the Cornell box's denoised frame of one
+// bounce erred 0.102 where 0.099 was promised).
+inline constexpr int kDenoisedLeastSpp = 4;
+inline constexpr int kDenoisedMostSpp = 64;
+inline constexpr int kDenoisedLeastSide = 128;
+
 struct OwnErrorPriors {
     using Table = std::map<std::pair<std::string, std::string>, double>;  // by (method, preset)
     Table largest, typical;
@@ -45,6 +57,13 @@ struct OwnErrorPriors {
     // where it leaks, until the scene's own frames measure it (error_model.hpp).
     std::map<std::string, double> vct_leaking_largest, vct_leaking_typical;
     std::map<std::string, double> vct_second_leaking_largest, vct_second_leaking_typical;
+    // The reference's denoiser (`denoise` 1): what it leaves of a frame's noise n (the relMSE the
+    // noisy frame would have), and adds, is at most denoised_largest * n^kDenoisedNoiseExponent, the
+    // largest k over the bench scenes at 4 to 64 spp, 8 bounces, 128x128 through pixel centres
+    // (bench/denoise --every-scene: bench/results/denoise_scenes.csv). 0: not known, and the planner
+    // offers no denoised reference.
+    double denoised_largest = 0.0;
+    std::string denoised_source = "the bench scenes";
     // Where the tables were measured, as a plan's `why` names them ("on the bench scenes"): every
     // entry's, or, where `from_file` is not empty, the entries it lists (a file's), the others
     // `base_source`'s.
@@ -75,7 +94,7 @@ struct OwnErrorPriors {
     // The tables as JSON: {"source", "largest": {METHOD: {PRESET: relMSE}}, "typical": {...},
     // "vct_second_largest": {PRESET: relMSE}, "vct_second_typical", "isr_occluded_largest", "cssm_occluded_largest",
     // "vct_leaking_largest", "vct_leaking_typical", "vct_second_leaking_largest",
-    // "vct_second_leaking_typical"}; the tables left empty are left out.
+    // "vct_second_leaking_typical", "denoised_largest": k}; the tables left empty (and k at 0) are left out.
     nlohmann::json to_json() const;
     // `base` (one source's tables, as bench() is) with what `file` measured in its place, entry by
     // entry (a file may give some methods or presets alone); its `source` names the file's scenes in

@@ -98,6 +98,25 @@ TEST(PlannerPriors, AreTheCorpusTablesLargestAndMedianErrors) {
     }
 }
 
+// The denoiser's bound is the largest k over bench/denoise --every-scene's scenes, each scene's the
+// least that bounds its frames at every sample count; held out, the other scenes'.
+TEST(PlannerPriors, TheDenoisersBoundIsTheLargestOverTheBenchScenes) {
+    const auto bounds = bench::denoised_bounds(BOUNCE_SOURCE_DIR "/bench/results/denoise_scenes.csv");
+    ASSERT_EQ(bounds.size(), 10u);  // the five Cornell variants and the five corpus scenes
+    double largest = 0.0;
+    for (const auto& [scene, k] : bounds) largest = std::max(largest, k);
+    EXPECT_NEAR(planning::OwnErrorPriors::bench().denoised_largest, largest, kRounding);
+    EXPECT_NEAR(committed_corpus_priors().denoised_largest, largest, 1e-12);
+    for (const auto& [scene, k] : bounds) {
+        SCOPED_TRACE(scene);
+        double others = 0.0;
+        for (const auto& [other, k_other] : bounds) {
+            if (other != scene) others = std::max(others, k_other);
+        }
+        EXPECT_DOUBLE_EQ(committed_corpus_priors({scene}).denoised_largest, others);
+    }
+}
+
 TEST(PlannerPriors, VctsSecondBounceIsItsTwoBounceCorpusTable) {
     const planning::OwnErrorPriors corpus = committed_corpus_priors();
     const planning::OwnErrorPriors& committed = planning::OwnErrorPriors::bench();
@@ -431,8 +450,11 @@ TEST(PlannerPriors, AMalformedFileIsRefusedNamingTheEntry) {
     EXPECT_EQ(refusal({{"largets", {}}}),
               "p.json: unknown field 'largets' (known: source, largest, typical, vct_second_largest, "
               "vct_second_typical, isr_occluded_largest, cssm_occluded_largest, vct_leaking_largest, "
-              "vct_leaking_typical, vct_second_leaking_largest, vct_second_leaking_typical)");
+              "vct_leaking_typical, vct_second_leaking_largest, vct_second_leaking_typical, denoised_largest)");
     EXPECT_EQ(refusal(nlohmann::json::array()), "p.json: expected an object, not array");
+    EXPECT_EQ(refusal({{"denoised_largest", "big"}}),
+              "p.json: denoised_largest: \"big\" is not a relMSE (a finite number, at least 0)");
+    EXPECT_EQ(refusal({{"denoised_largest", 0.2}}), "(accepted)");
 
     const auto path =
         std::filesystem::temp_directory_path() / fmt::format("bounce-priors-not-json-{}.json", ::getpid());
@@ -461,6 +483,7 @@ TEST(PlannerPriors, TheBenchsFileOfTheCorpusReadsBackAsTheCommittedTables) {
         EXPECT_NEAR(read.vct_second_largest.at(preset), figure, kRounding) << preset;
         EXPECT_NEAR(read.vct_second_typical.at(preset), bench.vct_second_typical.at(preset), kRounding) << preset;
     }
+    EXPECT_NEAR(read.denoised_largest, bench.denoised_largest, kRounding);
 }
 
 // A frame bench/quality could not measure (values not finite: its relMSE written as nan) makes no

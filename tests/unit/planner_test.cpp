@@ -246,6 +246,17 @@ TEST(Planner, AnEmptyTableOrABudgetWithoutLimitsIsRefused) {
 
 }  // namespace
 
+// The bench's priors without the denoiser's bound: no denoised reference is offered, for tests of
+// what the plain reference and the GPU plans do (spot_check_test.cpp takes it too).
+const OwnErrorPriors& priors_without_denoiser() {
+    static const OwnErrorPriors priors = [] {
+        OwnErrorPriors without = OwnErrorPriors::bench();
+        without.denoised_largest = 0.0;
+        return without;
+    }();
+    return priors;
+}
+
 // An analysis made up for the arithmetic (spot_check_test.cpp takes it too): stopping at k bounces loses 0.1 / 2^k, and one sample of
 // the reference has relMSE 0.5 at every bounce count.
 SceneAnalysis made_up_analysis() {
@@ -261,6 +272,77 @@ SceneAnalysis made_up_analysis() {
 }
 
 namespace {
+
+// A denoised reference (`denoise` 1) lacks its missing bounces plus what the filter leaves of its
+// noise n, and adds: promised the bench's bound, k n^0.7 (bench/denoise --every-scene), at the
+// samples that bound was measured at alone (4 to 64); without a bound, none is offered. Its price is
+// the trace's plus the filter's per pixel (the bench's, until the scene's frames time it), and no
+// frame is compared with it: no probe, no spot check.
+TEST(Planner, ADenoisedReferenceIsPromisedTheBenchsBoundOfWhatTheFilterLeaves) {
+    const SceneAnalysis analysis = made_up_analysis();
+    const methods::KnobValues knobs = {{"spp", 16}, {"bounces", 4}, {"pixel_jitter", 0}, {"denoise", 1}};
+    const ErrorPrediction filtered = predict_error(analysis, "reference", "medium", knobs);
+    ASSERT_FALSE(filtered.ruled_out);
+    const double k = OwnErrorPriors::bench().denoised_largest;
+    EXPECT_GT(k, 0.0);
+    // Added to what the bounces lack as errors of one sign add: the filter darkens, as they do.
+    EXPECT_DOUBLE_EQ(filtered.rel_mse,
+                     std::pow(std::sqrt(0.1 / 16.0) + std::sqrt(k * std::pow(0.5 / 16.0, kDenoisedNoiseExponent)), 2.0));
+    EXPECT_DOUBLE_EQ(filtered.promised_rel_mse, filtered.rel_mse);
+    EXPECT_LT(filtered.rel_mse, 0.1 / 16.0 + 0.5 / 16.0);
+    EXPECT_NE(filtered.basis.find("denoised"), std::string::npos) << filtered.basis;
+    EXPECT_TRUE(predict_error(analysis, "reference", "medium", knobs, nullptr, priors_without_denoiser()).ruled_out);
+
+    DeviceCosts device("test");
+    SceneMeasurements scene;
+    PlanningInputs inputs{analysis, device, &scene, 128, 128, std::nullopt};
+    methods::KnobValues plain = knobs;
+    plain.erase("denoise");
+    EXPECT_DOUBLE_EQ(predicted_ms(inputs, "reference", "medium", knobs),
+                     predicted_ms(inputs, "reference", "medium", plain) + 128.0 * 128.0 * kDenoiseMsPerPixel);
+    // A denoised frame recorded: its filter prices the next, and its trace is kept without it.
+    FrameStats frame;
+    frame.method = "reference";
+    frame.preset = "medium";
+    frame.knobs = knobs;
+    frame.render_ms = 30.0;
+    frame.method_statistics = {{"denoise_ms", 8.192}, {"noise_per_sample", 0.5}};
+    record_frame(scene, &analysis, device, frame, 128, 128);
+    ASSERT_TRUE(scene.denoise_ms_per_pixel());
+    EXPECT_DOUBLE_EQ(*scene.denoise_ms_per_pixel(), 8.192 / 16384.0);
+    EXPECT_NEAR(predicted_ms(inputs, "reference", "medium", knobs) - predicted_ms(inputs, "reference", "medium", plain),
+                8.192, 1e-9);
+
+    std::set<int> offered;
+    for (const Candidate& c : candidates(inputs)) {
+        if (denoised(c)) offered.insert(static_cast<int>(c.knobs.at("spp")));
+    }
+    ASSERT_FALSE(offered.empty());
+    EXPECT_EQ(*offered.begin(), kDenoisedLeastSpp);
+    EXPECT_EQ(*offered.rbegin(), kDenoisedMostSpp);
+    inputs.priors = &priors_without_denoiser();
+    for (const Candidate& c : candidates(inputs)) EXPECT_FALSE(denoised(c)) << describe(c);
+    inputs.priors = nullptr;
+    // Nor in a frame smaller than the bound was measured in.
+    inputs.height = kDenoisedLeastSide - 1;
+    for (const Candidate& c : candidates(inputs)) EXPECT_FALSE(denoised(c)) << describe(c);
+    inputs.height = 128;
+
+    // Nothing else is on offer here but the reference: a target takes the denoised one where it is
+    // the cheapest promised, with nothing probed or checked beside it.
+    inputs.method = "reference";
+    const Plan target = plan(inputs, {std::nullopt, 0.02});
+    ASSERT_TRUE(denoised(target.chosen)) << target.why;
+    EXPECT_LE(target.chosen.predicted_error, 0.02);
+    EXPECT_TRUE(target.probes.empty());
+    EXPECT_TRUE(target.checks.empty());
+    EXPECT_FALSE(target.spot_check);
+    EXPECT_EQ(plan_json(target)["knobs"]["denoise"].get<double>(), 1.0);
+    // The same frame undenoised costs more samples: the target's plain plan is slower.
+    inputs.priors = &priors_without_denoiser();
+    const Plan unfiltered = plan(inputs, {std::nullopt, 0.02});
+    EXPECT_GT(unfiltered.chosen.predicted_ms, target.chosen.predicted_ms) << unfiltered.why;
+}
 
 TEST(ErrorModel, TheReferenceLacksItsMissingBouncesPlusNoiseOverItsSamples) {
     const SceneAnalysis analysis = made_up_analysis();
@@ -449,7 +531,8 @@ TEST(Planner, VctIsOfferedWithItsSecondBounce) {
 TEST(Planner, ATimeBudgetIsFilledWithTheReferencesSamples) {
     const SceneAnalysis analysis = made_up_analysis();
     DeviceCosts device("test");
-    const PlanningInputs inputs{analysis, device, nullptr, 64, 64, std::string("reference")};
+    PlanningInputs inputs{analysis, device, nullptr, 64, 64, std::string("reference")};
+    inputs.priors = &priors_without_denoiser();  // a denoised frame's samples are a ladder's alone
     const auto spp_of = [](const Candidate& c) { return static_cast<int>(c.knobs.at("spp")); };
     const auto ms_at = [&](int spp, int bounces) {
         return predicted_ms(inputs, "reference", "medium", {{"spp", spp}, {"bounces", bounces}, {"pixel_jitter", 0}});
@@ -1326,6 +1409,7 @@ TEST(Planner, ATimeBudgetCountsWhatTheFrameWouldRedo) {
     SceneMeasurements scene;
     for (const char* preset : {"draft", "low", "medium", "high", "ultra"}) scene.record_own_error("vct", preset, 1, 1e-4);
     PlanningInputs inputs{analysis, device, &scene, 64, 64, std::nullopt};
+    inputs.priors = &priors_without_denoiser();  // the GPU plans' prices, not the reference's
     const Budget within_50{50.0, std::nullopt};
     const Plan warm = plan(inputs, within_50);
     ASSERT_EQ(warm.chosen.method, "vct") << warm.why;  // one bounce: more accurate than direct

@@ -21,6 +21,8 @@ namespace bounce::planning {
 // planner_test.cpp's: stopping at k bounces loses 0.1 / 2^k; one sample's relMSE is 0.5; a sample of
 // k bounces takes (k + 1) microseconds.
 SceneAnalysis made_up_analysis();
+// planner_test.cpp's: the bench's priors with no denoised reference offered.
+const OwnErrorPriors& priors_without_denoiser();
 
 namespace {
 
@@ -341,7 +343,8 @@ DeviceCosts costs_for_checks() {
 TEST(Planner, ATargetErrorTriesPlausibleGpuPlansWithASpotCheckBeforeTheReference) {
     const SceneAnalysis analysis = made_up_analysis();
     const DeviceCosts device = costs_for_checks();
-    const PlanningInputs inputs{analysis, device, nullptr, 128, 128, std::nullopt};
+    PlanningInputs inputs{analysis, device, nullptr, 128, 128, std::nullopt};
+    inputs.priors = &priors_without_denoiser();  // a denoised reference would be the plan, and none is checked beside it
     constexpr double kTarget = 0.02;
     const Plan plan = planning::plan(inputs, {std::nullopt, kTarget});
     ASSERT_EQ(plan.chosen.method, "reference");
@@ -383,7 +386,8 @@ TEST(Planner, ATargetErrorTriesPlausibleGpuPlansWithASpotCheckBeforeTheReference
     SceneMeasurements measured;
     const Candidate first = plan.checks.front();
     measured.record_own_error(first.method, first.preset, modelled_bounces(first.method, first.knobs), 0.2);
-    const PlanningInputs with_measured{analysis, device, &measured, 128, 128, std::nullopt};
+    PlanningInputs with_measured{analysis, device, &measured, 128, 128, std::nullopt};
+    with_measured.priors = inputs.priors;
     const Plan again = planning::plan(with_measured, {std::nullopt, 0.05});
     ASSERT_FALSE(again.checks.empty()) << again.why;
     for (const Candidate& c : again.checks) EXPECT_FALSE(c.method == first.method && c.preset == first.preset && c.knobs == first.knobs);
@@ -401,7 +405,7 @@ TEST(Planner, ATargetErrorTriesPlausibleGpuPlansWithASpotCheckBeforeTheReference
 TEST(Planner, ASpotCheckExpectsOfLeakingVctWhatLeakingScenesMeasured) {
     SceneAnalysis analysis = made_up_analysis();
     const DeviceCosts device = costs_for_checks();
-    OwnErrorPriors priors = OwnErrorPriors::bench();
+    OwnErrorPriors priors = priors_without_denoiser();
     for (auto& [key, largest] : priors.largest) largest = 1.0;  // nothing promised: the reference is the plan
     for (auto& [preset, largest] : priors.vct_second_largest) largest = 1.0;
     priors.vct_second_typical["draft"] = 0.001;  // with the 0.025 that 2 bounces lack, within 0.05
