@@ -236,6 +236,7 @@ planning::OwnErrorPriors corpus_priors(const std::filesystem::path& directory,
         for (const auto& [scene, k] : denoised_bounds(denoise)) {
             if (!left_out.count(scene)) priors.denoised_largest = std::max(priors.denoised_largest, k);
         }
+        if (!left_out.empty()) priors.denoised_source = "the other bench scenes";
     }
     CorpusErrors one_bounce = read_corpus_errors(directory / "quality.csv");
     for (const FurtherScenes& more : further) add_further(one_bounce, more.directory / "quality.csv", more.methods, walls);

@@ -9,6 +9,10 @@
 
 namespace bounce::planning {
 
+methods::KnobValues reference_knobs(int spp, int bounces) {
+    return {{"spp", spp}, {"bounces", bounces}, {"pixel_jitter", 0}};
+}
+
 std::string describe(const Candidate& candidate) {
     std::string text = candidate.method == "reference" ? "reference" : candidate.method + " " + candidate.preset;
     for (const auto& [knob, value] : candidate.knobs) {

@@ -1,11 +1,17 @@
 #pragma once
-// How plans are ordered and named: choose() and the planner's probes and checks share these.
+// How plans are ordered and named, and the reference plans' knobs: choose(), the candidates and the
+// planner's probes and checks share these.
 
 #include "renderer/planning/planner.hpp"
 
 #include <string>
 
 namespace bounce::planning {
+
+// The bounce counts the reference is offered at.
+inline constexpr int kReferenceBounces[] = {0, 1, 2, 3, 4, 6, 8, 12};
+// A reference plan's knobs: through pixel centres, as the raster methods shade.
+methods::KnobValues reference_knobs(int spp, int bounces);
 
 // "cssm medium bounces=2", "reference spp=12 bounces=1", with " at 1/2 size, upsampled" when scaled.
 std::string describe(const Candidate& candidate);

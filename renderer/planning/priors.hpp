@@ -61,7 +61,8 @@ struct OwnErrorPriors {
     // noisy frame would have), and adds, is at most denoised_largest * n^kDenoisedNoiseExponent, the
     // largest k over the bench scenes at 4 to 64 spp, 8 bounces, 128x128 through pixel centres
     // (bench/denoise --every-scene: bench/results/denoise_scenes.csv). 0: not known, and the planner
-    // offers no denoised reference.
+    // offers no denoised reference; to_json() leaves it out then, so that a file of tables measured
+    // without it keeps the base's.
     double denoised_largest = 0.0;
     std::string denoised_source = "the bench scenes";
     // Where the tables were measured, as a plan's `why` names them ("on the bench scenes"): every

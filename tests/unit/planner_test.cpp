@@ -310,6 +310,9 @@ TEST(Planner, ADenoisedReferenceIsPromisedTheBenchsBoundOfWhatTheFilterLeaves) {
     record_frame(scene, &analysis, device, frame, 128, 128);
     ASSERT_TRUE(scene.denoise_ms_per_pixel());
     EXPECT_DOUBLE_EQ(*scene.denoise_ms_per_pixel(), 8.192 / 16384.0);
+    const auto traces = scene.frames("reference", "medium", 4);
+    ASSERT_EQ(traces.size(), 1u);
+    EXPECT_NEAR(traces.front().measured_ms, 30.0 - 8.192, 1e-9);
     EXPECT_NEAR(predicted_ms(inputs, "reference", "medium", knobs) - predicted_ms(inputs, "reference", "medium", plain),
                 8.192, 1e-9);
 
@@ -328,20 +331,46 @@ TEST(Planner, ADenoisedReferenceIsPromisedTheBenchsBoundOfWhatTheFilterLeaves) {
     for (const Candidate& c : candidates(inputs)) EXPECT_FALSE(denoised(c)) << describe(c);
     inputs.height = 128;
 
-    // Nothing else is on offer here but the reference: a target takes the denoised one where it is
-    // the cheapest promised, with nothing probed or checked beside it.
-    inputs.method = "reference";
+    // GPU plans at 5 ms, none promised within 0.02 (their priors and the bounces they lack): a target
+    // takes the denoised reference, the cheapest promised, with nothing probed beside it, where the
+    // plain reference it replaces had GPU presets probed beside it.
+    for (const char* method : {"direct", "vct", "isr", "cssm"}) {
+        for (const char* preset : {"draft", "low", "medium", "high", "ultra"}) device.set(method, preset, {5.0, 0.0});
+    }
     const Plan target = plan(inputs, {std::nullopt, 0.02});
     ASSERT_TRUE(denoised(target.chosen)) << target.why;
     EXPECT_LE(target.chosen.predicted_error, 0.02);
     EXPECT_TRUE(target.probes.empty());
-    EXPECT_TRUE(target.checks.empty());
-    EXPECT_FALSE(target.spot_check);
     EXPECT_EQ(plan_json(target)["knobs"]["denoise"].get<double>(), 1.0);
     // The same frame undenoised costs more samples: the target's plain plan is slower.
     inputs.priors = &priors_without_denoiser();
     const Plan unfiltered = plan(inputs, {std::nullopt, 0.02});
+    ASSERT_EQ(unfiltered.chosen.method, "reference") << unfiltered.why;
+    EXPECT_FALSE(denoised(unfiltered.chosen));
     EXPECT_GT(unfiltered.chosen.predicted_ms, target.chosen.predicted_ms) << unfiltered.why;
+    EXPECT_FALSE(unfiltered.probes.empty()) << unfiltered.why;
+}
+
+// A probe that lacks bounces is measured beside a companion reference of its own bounce count; a
+// denoised reference, compared with nothing, is never one, however cheap and quiet it is predicted.
+TEST(Planner, AProbesCompanionIsNeverADenoisedReference) {
+    const SceneAnalysis analysis = made_up_analysis();  // one bounce lacks 0.05, eight 0.0004
+    const auto reference = [&](int bounces, int spp, bool filtered, double ms, double error) {
+        Candidate c{"reference", "medium", reference_knobs(spp, bounces), ms, error};
+        if (filtered) c.knobs["denoise"] = 1;
+        return c;
+    };
+    const Candidate chosen = reference(8, 64, false, 1000.0, 0.1 / 256.0 + 0.5 / 64.0);
+    const Candidate isr{"isr", "draft", {}, 10.0, 0.05 + 0.028};  // its own 0.028 drowned by the 0.05 it lacks
+    const Candidate plain = reference(1, 64, false, 100.0, 0.05 + 0.5 / 64.0);
+    const Candidate filtered = reference(1, 16, true, 30.0, 0.05 + 0.001);
+    const std::vector<Candidate> all = {chosen, isr, plain, filtered};
+    const std::vector<Candidate> probed = probes(all, chosen, nullptr, &analysis, 0);
+    ASSERT_EQ(probed.size(), 2u);
+    EXPECT_EQ(probed[0].method, "isr");
+    EXPECT_EQ(probed[1].knobs, plain.knobs);
+    // Beside a denoised reference chosen, nothing is probed: no frame is compared with it.
+    EXPECT_TRUE(probes(all, reference(8, 16, true, 1000.0, 0.01), nullptr, &analysis, 0).empty());
 }
 
 TEST(ErrorModel, TheReferenceLacksItsMissingBouncesPlusNoiseOverItsSamples) {
