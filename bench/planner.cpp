@@ -253,10 +253,11 @@ Measured render_as_it_comes(Renderer& renderer, SceneResources& resources, const
                       plan.method, plan.preset,
                       plan.knobs};
     measured.scale = plan.scale;
-    // A reference's error is a draw of its noise, as a warm one's is (render_plan): its spread is
-    // measured by tracing it again with another seed, not timed and not recorded (a daemon would not
-    // trace it). The frame sent keeps its own error. After a change of the lights, a reference of no
-    // bounce read 0.52380 in the indirectly lit box where direct high read 0.52377, the same light.
+    // A reference's error is a draw of its noise, as a warm one's is (render_plan, which traces it
+    // with several seeds): its spread is measured by tracing it again with another seed, not timed
+    // and not recorded (a daemon would not trace it), so that the noise floor judges it as it judges
+    // the others. The frame sent keeps its own error. Only the moved-camera pass renders a reference
+    // as it comes.
     if (plan.method == "reference" && frame_plan.site == FrameSite::cpu) {
         RenderRequest again = request;
         again.knobs["seed"] = 1001;
