@@ -341,6 +341,10 @@ TEST(Planner, ADenoisedReferenceIsPromisedTheBenchsBoundOfWhatTheFilterLeaves) {
     ASSERT_TRUE(denoised(target.chosen)) << target.why;
     EXPECT_LE(target.chosen.predicted_error, 0.02);
     EXPECT_TRUE(target.probes.empty());
+    // GPU plans the bench's typical errors put within 0.02 are still spot-checked first: the check
+    // traces its own reference, not the denoised frame.
+    ASSERT_TRUE(target.spot_check.has_value()) << target.why;
+    EXPECT_FALSE(target.checks.empty());
     EXPECT_EQ(plan_json(target)["knobs"]["denoise"].get<double>(), 1.0);
     // The same frame undenoised costs more samples: the target's plain plan is slower.
     inputs.priors = &priors_without_denoiser();
